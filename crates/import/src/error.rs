@@ -1,0 +1,179 @@
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use rigport_model::SkeletonProblem;
+
+/// Where in an input a problem is: the file, and a line and column, a JSON path or a byte
+/// offset when known.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    /// The file.
+    pub path: PathBuf,
+    /// 1-based line number.
+    pub line: Option<usize>,
+    /// 1-based column (only with `line`).
+    pub column: Option<usize>,
+    /// JSON pointer-like path (`/skins/0/joints/3`) for JSON-based formats.
+    pub json_path: Option<String>,
+    /// Byte offset for binary formats.
+    pub byte_offset: Option<u64>,
+}
+
+impl Location {
+    /// The whole file.
+    pub fn file(path: &Path) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            line: None,
+            column: None,
+            json_path: None,
+            byte_offset: None,
+        }
+    }
+
+    /// A 1-based line of the file.
+    pub fn line(path: &Path, line: usize) -> Self {
+        Self {
+            line: Some(line),
+            ..Self::file(path)
+        }
+    }
+
+    /// A 1-based line and column of the file.
+    pub fn line_column(path: &Path, line: usize, column: usize) -> Self {
+        Self {
+            line: Some(line),
+            column: Some(column),
+            ..Self::file(path)
+        }
+    }
+
+    /// A JSON path inside the file.
+    pub fn json(path: &Path, json_path: impl Into<String>) -> Self {
+        Self {
+            json_path: Some(json_path.into()),
+            ..Self::file(path)
+        }
+    }
+
+    /// A byte offset inside the file.
+    pub fn byte(path: &Path, offset: u64) -> Self {
+        Self {
+            byte_offset: Some(offset),
+            ..Self::file(path)
+        }
+    }
+}
+
+impl fmt::Display for Location {
+    /// `file:line:column`, `file:line`, `file: at /json/path`, `file: at byte N`, or `file`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.path.display())?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+            if let Some(col) = self.column {
+                write!(f, ":{col}")?;
+            }
+        }
+        if let Some(p) = &self.json_path {
+            write!(f, ": at {p}")?;
+        }
+        if let Some(b) = self.byte_offset {
+            write!(f, ": at byte {b}")?;
+        }
+        Ok(())
+    }
+}
+
+/// What is wrong with an input.
+#[derive(Debug, thiserror::Error)]
+pub enum Problem {
+    /// The file could not be read.
+    #[error("cannot read: {0}")]
+    Io(#[source] std::io::Error),
+    /// The file is empty (or holds only blank lines and comments).
+    #[error("the file is empty")]
+    Empty,
+    /// A token was not what the format requires here.
+    #[error("expected {expected}, found {found:?}")]
+    Syntax {
+        /// What the format requires.
+        expected: String,
+        /// What the file has (as written, shortened if long).
+        found: String,
+    },
+    /// A well-formed value that breaks a rule of the format (out of range, NaN, negative
+    /// weight, wrong count, ...).
+    #[error("{0}")]
+    Invalid(String),
+    /// The skeleton's parent structure is broken; every problem is listed.
+    #[error("invalid skeleton: {}", join(.0))]
+    Skeleton(Vec<SkeletonProblem>),
+    /// The file is truncated: it ends before the data it declares.
+    #[error("truncated: {0}")]
+    Truncated(String),
+}
+
+fn join(problems: &[SkeletonProblem]) -> String {
+    problems
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// An input that could not be imported: where, and what is wrong.
+///
+/// Displays as `walk.bvh:12:5: expected OFFSET, found "CHANNELS"`.
+#[derive(Debug, thiserror::Error)]
+#[error("{location}: {problem}")]
+pub struct ImportError {
+    /// Where.
+    pub location: Location,
+    /// What.
+    pub problem: Problem,
+}
+
+impl ImportError {
+    /// An error at `location`.
+    pub fn new(location: Location, problem: Problem) -> Self {
+        Self { location, problem }
+    }
+
+    /// An [`Problem::Invalid`] error at `location`.
+    pub fn invalid(location: Location, message: impl Into<String>) -> Self {
+        Self::new(location, Problem::Invalid(message.into()))
+    }
+
+    /// A [`Problem::Syntax`] error at `location`.
+    pub fn syntax(location: Location, expected: impl Into<String>, found: &str) -> Self {
+        let mut found = found.to_string();
+        if found.chars().count() > 40 {
+            found = found.chars().take(40).collect::<String>() + "...";
+        }
+        Self::new(
+            location,
+            Problem::Syntax {
+                expected: expected.into(),
+                found,
+            },
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn displays_file_line_column() {
+        let e = ImportError::syntax(
+            Location::line_column(Path::new("walk.bvh"), 12, 5),
+            "OFFSET",
+            "CHANNELS",
+        );
+        assert_eq!(e.to_string(), "walk.bvh:12:5: expected OFFSET, found \"CHANNELS\"");
+        let e = ImportError::invalid(Location::json(Path::new("a.gltf"), "/skins/0"), "bad");
+        assert_eq!(e.to_string(), "a.gltf: at /skins/0: bad");
+    }
+}

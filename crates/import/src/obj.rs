@@ -1,0 +1,1 @@
+//! obj importer (being written).

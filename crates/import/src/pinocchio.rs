@@ -1,0 +1,1 @@
+//! pinocchio importer (being written).

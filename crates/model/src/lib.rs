@@ -1,0 +1,28 @@
+//! Plain rig data for rigport: skeletons, meshes, sparse skin influences and clips.
+//!
+//! This crate holds data and the rules that make it valid; it does no I/O. Every importer
+//! produces an [`Asset`], the evaluator reads one, every exporter writes one.
+//! The conventions every value follows are written down once, in [`conventions`].
+#![warn(missing_docs)]
+
+pub mod conventions;
+mod asset;
+mod clip;
+mod index;
+mod mesh;
+mod skeleton;
+mod skin;
+mod transform;
+mod warning;
+
+pub use asset::{Asset, AssetError};
+pub use clip::{Clip, Interpolation, Track, TrackTarget};
+pub use index::{JointIndex, MeshIndex};
+pub use mesh::{Mesh, MorphTarget};
+pub use skeleton::{parents_first_order, Joint, Skeleton, SkeletonProblem};
+pub use skin::{Influence, Influences, SkinBinding};
+pub use transform::Transform;
+pub use warning::Warning;
+
+/// Re-exported so downstream crates use the same math types.
+pub use glam;

@@ -1,0 +1,117 @@
+use glam::Mat4;
+
+use crate::{JointIndex, MeshIndex};
+
+/// One joint's weight on a vertex. `joint` indexes the owning [`SkinBinding::joints`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Influence {
+    /// Index into the binding's joint palette.
+    pub joint: u32,
+    /// Weight, non-negative.
+    pub weight: f32,
+}
+
+/// Sparse per-vertex influences of any count, stored compressed (CSR).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Influences {
+    /// `offsets[v]..offsets[v + 1]` is vertex `v`'s range in `entries`; `len = vertices + 1`.
+    offsets: Vec<u32>,
+    entries: Vec<Influence>,
+}
+
+impl Influences {
+    /// Builds from one list per vertex.
+    pub fn from_rows<I, R>(rows: I) -> Self
+    where
+        I: IntoIterator<Item = R>,
+        R: IntoIterator<Item = Influence>,
+    {
+        let mut out = Self {
+            offsets: vec![0],
+            entries: Vec::new(),
+        };
+        for row in rows {
+            out.entries.extend(row);
+            out.offsets.push(out.entries.len() as u32);
+        }
+        out
+    }
+
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// The influences on vertex `v`.
+    ///
+    /// # Panics
+    /// If `v >= vertex_count()`.
+    pub fn vertex(&self, v: usize) -> &[Influence] {
+        &self.entries[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    }
+
+    /// Every vertex's influences, in vertex order.
+    pub fn rows(&self) -> impl ExactSizeIterator<Item = &[Influence]> + '_ {
+        self.offsets
+            .windows(2)
+            .map(|w| &self.entries[w[0] as usize..w[1] as usize])
+    }
+
+    /// All influences of all vertices, flat.
+    pub fn entries(&self) -> &[Influence] {
+        &self.entries
+    }
+
+    /// The largest number of influences on one vertex.
+    pub fn max_per_vertex(&self) -> usize {
+        self.offsets
+            .windows(2)
+            .map(|w| (w[1] - w[0]) as usize)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Reorders or duplicates vertices: output vertex `i` gets the influences of input
+    /// vertex `map[i]`.
+    ///
+    /// # Panics
+    /// If an entry of `map` is out of range.
+    pub fn remap_vertices(&self, map: &[u32]) -> Self {
+        Self::from_rows(map.iter().map(|&v| self.vertex(v as usize).iter().copied()))
+    }
+}
+
+/// Binds a mesh to joints of the asset's skeleton with linear blend skinning data.
+///
+/// A vertex's skinned position is `Σ wᵢ · model(joints[jᵢ]) · inv_bind[jᵢ] · p`, with `p`
+/// the mesh's bind-space position (glTF's and UsdSkel's rule, geomBindTransform = identity).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkinBinding {
+    /// The skinned mesh.
+    pub mesh: MeshIndex,
+    /// The joint palette: influence `joint` values index this list.
+    pub joints: Vec<JointIndex>,
+    /// Inverse of each palette joint's model-space bind matrix (same length as `joints`).
+    pub inv_bind: Vec<Mat4>,
+    /// Per-vertex influences, one row per mesh vertex.
+    pub influences: Influences,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csr_rows_round_trip() {
+        let inf = |j, w| Influence { joint: j, weight: w };
+        let rows = vec![vec![inf(0, 1.0)], vec![], vec![inf(1, 0.25), inf(2, 0.75)]];
+        let s = Influences::from_rows(rows.clone());
+        assert_eq!(s.vertex_count(), 3);
+        assert_eq!(s.max_per_vertex(), 2);
+        let back: Vec<Vec<Influence>> = s.rows().map(|r| r.to_vec()).collect();
+        assert_eq!(back, rows);
+        let r = s.remap_vertices(&[2, 2, 0]);
+        assert_eq!(r.vertex(1), rows[2].as_slice());
+        assert_eq!(r.vertex(2), rows[0].as_slice());
+    }
+}
