@@ -1,1 +1,19 @@
-//! placeholder
+//! The rigport rig evaluator: forward kinematics, poses and skinning.
+//!
+//! Each step is a *job* in the ozz-animation sense: a struct of documented inputs and
+//! caller-owned output slices with `validate()` (sizes and references, checked once) and
+//! `run()` (no allocation). The evaluator knows no file format; skinning sees matrices and
+//! influences, not a skeleton. Parallelism is the caller's choice.
+#![warn(missing_docs)]
+
+mod error;
+pub mod fk;
+pub mod pose;
+pub mod rig;
+pub mod skinning;
+
+pub use error::EvalError;
+pub use fk::LocalToModelJob;
+pub use pose::Pose;
+pub use rig::{Rig, RigOutput};
+pub use skinning::{skinning_matrices, LbsJob};

@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 
 mod error;
+pub mod demo;
 pub mod gltf;
 pub mod obj;
 pub mod pinocchio;

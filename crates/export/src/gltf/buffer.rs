@@ -1,0 +1,199 @@
+//! The single binary buffer: buffer views and accessors appended as data is written.
+
+use gltf_json as json;
+use json::accessor::{ComponentType, GenericComponentType, Type};
+use json::buffer::Target;
+use json::validation::{Checked, USize64};
+use json::Index;
+
+/// Buffer views start on multiples of this (glTF 2.0 §3.6.2.4: an accessor's offset must be
+/// a multiple of its component size, at most 4; vertex attributes need 4-byte alignment).
+const VIEW_ALIGN: usize = 4;
+
+/// Builds the JSON document and the one binary buffer it refers to (buffer 0).
+pub(crate) struct Builder {
+    /// The document; `buffers` is filled in by the caller once the data is complete.
+    pub root: json::Root,
+    /// The buffer's bytes, little-endian.
+    pub bin: Vec<u8>,
+}
+
+/// Per-component bounds of float data, for `accessor.min` / `accessor.max`.
+pub(crate) enum Bounds {
+    /// No `min`/`max` (not required for this accessor).
+    None,
+    /// Compute and write `min`/`max`.
+    MinMax,
+}
+
+impl Builder {
+    /// An empty document with the given `asset` header.
+    pub(crate) fn new(asset: json::Asset) -> Self {
+        Self {
+            root: json::Root {
+                asset,
+                ..Default::default()
+            },
+            bin: Vec::new(),
+        }
+    }
+
+    /// Appends a buffer view holding what `write` appends to the buffer, 4-byte aligned.
+    fn view(
+        &mut self,
+        target: Option<Target>,
+        write: impl FnOnce(&mut Vec<u8>),
+    ) -> Index<json::buffer::View> {
+        let pad = self.bin.len().wrapping_neg() % VIEW_ALIGN;
+        self.bin.resize(self.bin.len() + pad, 0);
+        let offset = self.bin.len();
+        write(&mut self.bin);
+        let len = self.bin.len() - offset;
+        self.root.push(json::buffer::View {
+            buffer: Index::new(0),
+            byte_length: USize64::from(len),
+            byte_offset: (offset > 0).then(|| USize64::from(offset)),
+            // One accessor per view, tightly packed: no byteStride needed (glTF 2.0 §3.6.2.4).
+            byte_stride: None,
+            name: None,
+            target: target.map(Checked::Valid),
+            extensions: None,
+            extras: None,
+        })
+    }
+
+    /// Appends an accessor at offset 0 of `view`.
+    fn accessor(
+        &mut self,
+        view: Index<json::buffer::View>,
+        count: usize,
+        component: ComponentType,
+        type_: Type,
+        bounds: Option<(json::Value, json::Value)>,
+    ) -> Index<json::Accessor> {
+        let (min, max) = match bounds {
+            Some((lo, hi)) => (Some(lo), Some(hi)),
+            None => (None, None),
+        };
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: USize64::from(count),
+            component_type: Checked::Valid(GenericComponentType(component)),
+            extensions: None,
+            extras: None,
+            type_: Checked::Valid(type_),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+        })
+    }
+
+    /// A `FLOAT` accessor of `type_` elements over `data` (`data.len()` must be a multiple of
+    /// the element size; the count is `data.len() / size`).
+    pub(crate) fn floats(
+        &mut self,
+        data: &[f32],
+        type_: Type,
+        target: Option<Target>,
+        bounds: Bounds,
+    ) -> Index<json::Accessor> {
+        let width = type_.multiplicity();
+        let bounds = match bounds {
+            Bounds::None => None,
+            Bounds::MinMax => Some(min_max(data, width)),
+        };
+        let view = self.view(target, |bin| {
+            bin.reserve(data.len() * 4);
+            for v in data {
+                bin.extend_from_slice(&v.to_le_bytes());
+            }
+        });
+        self.accessor(view, data.len() / width, ComponentType::F32, type_, bounds)
+    }
+
+    /// An `UNSIGNED_BYTE` accessor (`data.len() / size` elements of `type_`).
+    pub(crate) fn u8s(
+        &mut self,
+        data: &[u8],
+        type_: Type,
+        target: Option<Target>,
+    ) -> Index<json::Accessor> {
+        let view = self.view(target, |bin| bin.extend_from_slice(data));
+        self.accessor(
+            view,
+            data.len() / type_.multiplicity(),
+            ComponentType::U8,
+            type_,
+            None,
+        )
+    }
+
+    /// An `UNSIGNED_SHORT` accessor (`data.len() / size` elements of `type_`).
+    pub(crate) fn u16s(
+        &mut self,
+        data: &[u16],
+        type_: Type,
+        target: Option<Target>,
+    ) -> Index<json::Accessor> {
+        let view = self.view(target, |bin| {
+            for v in data {
+                bin.extend_from_slice(&v.to_le_bytes());
+            }
+        });
+        self.accessor(
+            view,
+            data.len() / type_.multiplicity(),
+            ComponentType::U16,
+            type_,
+            None,
+        )
+    }
+
+    /// An `UNSIGNED_INT` accessor (`data.len() / size` elements of `type_`).
+    pub(crate) fn u32s(
+        &mut self,
+        data: &[u32],
+        type_: Type,
+        target: Option<Target>,
+    ) -> Index<json::Accessor> {
+        let view = self.view(target, |bin| {
+            for v in data {
+                bin.extend_from_slice(&v.to_le_bytes());
+            }
+        });
+        self.accessor(
+            view,
+            data.len() / type_.multiplicity(),
+            ComponentType::U32,
+            type_,
+            None,
+        )
+    }
+}
+
+/// Per-component min and max of `data` viewed as elements of `width` floats.
+///
+/// Each bound is written as the exact `f64` value of the `f32` (e.g. `0.10000000149011612`,
+/// not `0.1`): the validator compares the declared bound with the data read as `f32`, so the
+/// JSON number must parse back to the very same value whatever the reader's precision.
+fn min_max(data: &[f32], width: usize) -> (json::Value, json::Value) {
+    let mut lo = vec![f32::INFINITY; width];
+    let mut hi = vec![f32::NEG_INFINITY; width];
+    for element in data.chunks_exact(width) {
+        for (c, &v) in element.iter().enumerate() {
+            lo[c] = lo[c].min(v);
+            hi[c] = hi[c].max(v);
+        }
+    }
+    let to_json = |v: Vec<f32>| {
+        json::Value::Array(
+            v.into_iter()
+                .map(|x| json::Value::from(f64::from(x)))
+                .collect(),
+        )
+    };
+    (to_json(lo), to_json(hi))
+}

@@ -1,0 +1,623 @@
+//! Asset -> glTF JSON + binary buffer: nodes, meshes, skins (animations in `animation.rs`).
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+use gltf_json as json;
+use json::accessor::Type;
+use json::buffer::Target;
+use json::mesh::{Mode, Semantic};
+use json::validation::Checked;
+use json::Index;
+use rigport_model::{
+    Asset, AssetError, Interpolation, Mesh, Skeleton, SkinBinding, TrackTarget, Warning,
+};
+
+use super::animation;
+use super::buffer::{Bounds, Builder};
+use super::{quat_length, unit_quat};
+use crate::weights::{self, SET_SLOTS};
+use crate::{ExportError, GltfOptions, Problem};
+
+/// Name of the node inserted above all skeleton roots when a skin's joints have no common
+/// ancestor (see [`build`]).
+pub(crate) const EXTRA_ROOT_NAME: &str = "rigport_root";
+
+/// A quaternion shorter than this has no meaningful direction (it is noise or a zeroed
+/// value) and is rejected rather than normalized.
+const MIN_QUAT_LENGTH: f64 = 1e-6;
+
+/// Largest deviation of an inverse bind matrix's last row from `(0, 0, 0, 1)` that is
+/// treated as rounding noise. Inverting an affine `f32` matrix leaves errors around 1e-7;
+/// anything larger is a projective component glTF cannot represent, and is reported.
+const IBM_LAST_ROW_TOLERANCE: f32 = 1e-5;
+
+/// The finished document (without its `buffers` entry) and its binary data.
+pub(crate) struct Built {
+    /// The JSON document; views refer to buffer 0, which the caller adds if `bin` is not
+    /// empty.
+    pub root: json::Root,
+    /// The binary buffer, a multiple of 4 bytes long.
+    pub bin: Vec<u8>,
+    /// Lossy or repairing steps taken.
+    pub warnings: Vec<Warning>,
+}
+
+/// Builds the glTF document for `asset`.
+///
+/// Layout: node `i` is skeleton joint `i` (so joint indices are node indices), then the
+/// optional [`EXTRA_ROOT_NAME`] node, then one node per mesh in mesh order.
+///
+/// `rigport_root` exists because glTF requires every skin's joints to share a common root
+/// (validator: `SKIN_NO_COMMON_ROOT`), and `skin.skeleton`, when set, to be that root. A
+/// skin whose palette spans several skeleton roots has none; an identity node above all the
+/// roots provides one without changing any world transform.
+///
+/// # Errors
+/// [`ExportError::MaxInfluences`] for a bad option, [`ExportError::Invalid`] with every
+/// problem found in the asset.
+pub(crate) fn build(asset: &Asset, opts: &GltfOptions) -> Result<Built, ExportError> {
+    if !(1..=weights::MAX_SLOTS).contains(&opts.max_influences) {
+        return Err(ExportError::MaxInfluences {
+            max_influences: opts.max_influences,
+        });
+    }
+    let problems = check(asset);
+    if !problems.is_empty() {
+        return Err(ExportError::Invalid { problems });
+    }
+
+    let mut b = Builder::new(json::Asset {
+        generator: Some(format!("rigport {}", env!("CARGO_PKG_VERSION"))),
+        version: "2.0".into(),
+        ..Default::default()
+    });
+    let mut warnings = Vec::new();
+    let skeleton = &asset.skeleton;
+    let joint_count = skeleton.len();
+
+    // Joint nodes, node index = joint index.
+    let mut nodes: Vec<json::Node> = skeleton.joints().iter().map(joint_node).collect();
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); joint_count];
+    let mut skeleton_roots = Vec::new();
+    for (i, joint) in skeleton.joints().iter().enumerate() {
+        match joint.parent {
+            Some(p) => children[p.get()].push(i),
+            None => skeleton_roots.push(i),
+        }
+    }
+
+    // Skin roots, and the extra root when some palette has no common ancestor.
+    let skin_roots: Vec<Option<usize>> = asset
+        .skins
+        .iter()
+        .map(|s| common_ancestor(skeleton, &s.joints))
+        .collect();
+    let mut scene_roots = Vec::new();
+    let extra_root = if skin_roots.iter().any(Option::is_none) {
+        let index = nodes.len();
+        nodes.push(json::Node {
+            name: Some(EXTRA_ROOT_NAME.into()),
+            ..Default::default()
+        });
+        children.push(skeleton_roots.clone());
+        scene_roots.push(index);
+        Some(index)
+    } else {
+        scene_roots.extend_from_slice(&skeleton_roots);
+        None
+    };
+
+    // Meshes and their nodes.
+    let mut skin_of_mesh: BTreeMap<usize, usize> = BTreeMap::new();
+    for (si, skin) in asset.skins.iter().enumerate() {
+        skin_of_mesh.insert(skin.mesh.get(), si);
+    }
+    let mut mesh_nodes = Vec::with_capacity(asset.meshes.len());
+    for (mi, mesh) in asset.meshes.iter().enumerate() {
+        let skin = skin_of_mesh.get(&mi).map(|&si| (si, &asset.skins[si]));
+        let gltf_mesh = write_mesh(&mut b, asset, mi, mesh, skin, opts, &mut warnings)?;
+        let node = nodes.len();
+        nodes.push(json::Node {
+            name: non_empty(&mesh.name),
+            mesh: Some(gltf_mesh),
+            skin: skin.map(|(si, _)| Index::new(si as u32)),
+            ..Default::default()
+        });
+        children.push(Vec::new());
+        // A skinned mesh is placed by its joints alone: at the scene root with no transform
+        // (glTF 2.0 §3.7.3 "Skins"; validator NODE_SKINNED_MESH_NON_ROOT / _LOCAL_TRANSFORMS).
+        match (skin, mesh.attached_to) {
+            (None, Some(joint)) => children[joint.get()].push(node),
+            _ => scene_roots.push(node),
+        }
+        mesh_nodes.push(node);
+    }
+
+    // Skins.
+    for (si, skin) in asset.skins.iter().enumerate() {
+        let skeleton_node = skin_roots[si].or(extra_root);
+        write_skin(&mut b, asset, si, skin, skeleton_node, &mut warnings);
+    }
+
+    animation::write_animations(&mut b, asset, &mesh_nodes, &mut warnings);
+
+    for (node, kids) in nodes.iter_mut().zip(children) {
+        if !kids.is_empty() {
+            node.children = Some(kids.into_iter().map(|k| Index::new(k as u32)).collect());
+        }
+    }
+    b.root.nodes = nodes;
+    b.root.scenes.push(json::Scene {
+        extensions: None,
+        extras: None,
+        name: non_empty(&asset.name),
+        nodes: scene_roots
+            .into_iter()
+            .map(|n| Index::new(n as u32))
+            .collect(),
+    });
+    b.root.scene = Some(Index::new(0));
+
+    let pad = b.bin.len().wrapping_neg() % 4;
+    b.bin.resize(b.bin.len() + pad, 0);
+    Ok(Built {
+        root: b.root,
+        bin: b.bin,
+        warnings,
+    })
+}
+
+/// `Some(name)` unless empty.
+fn non_empty(name: &str) -> Option<String> {
+    (!name.is_empty()).then(|| name.to_owned())
+}
+
+/// How warnings name a mesh: its name, or `#index` when it has none.
+pub(crate) fn mesh_label(index: usize, mesh: &Mesh) -> String {
+    if mesh.name.is_empty() {
+        format!("#{index}")
+    } else {
+        mesh.name.clone()
+    }
+}
+
+/// A joint's node: name and rest TRS, identity components omitted (they are the defaults).
+fn joint_node(joint: &rigport_model::Joint) -> json::Node {
+    let t = &joint.rest_local;
+    // Checked non-degenerate in `check`; the validator requires unit length (ROTATION_NON_UNIT).
+    let q = unit_quat(t.rotation.to_array());
+    json::Node {
+        name: Some(joint.name.clone()),
+        translation: (t.translation != Vec3::ZERO).then(|| t.translation.to_array()),
+        // (0, 0, 0, ±1) is the identity rotation.
+        rotation: (q[..3] != [0.0; 3]).then_some(json::scene::UnitQuaternion(q)),
+        scale: (t.scale != Vec3::ONE).then(|| t.scale.to_array()),
+        ..Default::default()
+    }
+}
+
+/// The nearest common ancestor of `joints` (a joint counts as its own ancestor), or `None`
+/// when they lie under different roots or the list is empty.
+pub(crate) fn common_ancestor(
+    skeleton: &Skeleton,
+    joints: &[rigport_model::JointIndex],
+) -> Option<usize> {
+    let parents: Vec<Option<usize>> = skeleton.parents().map(|p| p.map(|p| p.get())).collect();
+    // Parents come first, so depths are one pass.
+    let mut depth = vec![0_usize; parents.len()];
+    for i in 0..parents.len() {
+        if let Some(p) = parents[i] {
+            depth[i] = depth[p] + 1;
+        }
+    }
+    let mut iter = joints.iter().map(|j| j.get());
+    let mut acc = iter.next()?;
+    for mut other in iter {
+        let mut a = acc;
+        while depth[a] > depth[other] {
+            a = parents[a]?;
+        }
+        while depth[other] > depth[a] {
+            other = parents[other]?;
+        }
+        while a != other {
+            a = parents[a]?;
+            other = parents[other]?;
+        }
+        acc = a;
+    }
+    Some(acc)
+}
+
+/// The palette index a vertex without influence is bound to: the first palette joint whose
+/// parent is not in the palette, i.e. the root of (the first tree of) the skin. Such a vertex
+/// then follows the skeleton as a whole rather than an arbitrary bone.
+pub(crate) fn fallback_palette_index(
+    skeleton: &Skeleton,
+    palette: &[rigport_model::JointIndex],
+) -> usize {
+    let mut in_palette = vec![false; skeleton.len()];
+    for j in palette {
+        in_palette[j.get()] = true;
+    }
+    palette
+        .iter()
+        .position(|j| match skeleton.joint(*j).parent {
+            None => true,
+            Some(p) => !in_palette[p.get()],
+        })
+        .unwrap_or(0)
+}
+
+/// `1 vertex`, `2 vertices`.
+fn vertices(n: usize) -> String {
+    format!("{n} {}", if n == 1 { "vertex" } else { "vertices" })
+}
+
+/// Flattens vectors to floats.
+fn flat3(v: &[Vec3]) -> Vec<f32> {
+    v.iter().flat_map(|p| p.to_array()).collect()
+}
+
+/// Writes one mesh as a glTF mesh with one primitive; returns its index.
+fn write_mesh(
+    b: &mut Builder,
+    asset: &Asset,
+    mi: usize,
+    mesh: &Mesh,
+    skin: Option<(usize, &SkinBinding)>,
+    opts: &GltfOptions,
+    warnings: &mut Vec<Warning>,
+) -> Result<Index<json::Mesh>, ExportError> {
+    let label = mesh_label(mi, mesh);
+    let mut attributes = BTreeMap::new();
+    let array = Some(Target::ArrayBuffer);
+
+    let positions = b.floats(&flat3(&mesh.positions), Type::Vec3, array, Bounds::MinMax);
+    attributes.insert(Checked::Valid(Semantic::Positions), positions);
+
+    // Normals must be unit length (validator ACCESSOR_VECTOR3_NON_UNIT).
+    let normals = match &mesh.normals {
+        None => mesh.compute_normals(),
+        Some(given) => {
+            let mut computed: Option<Vec<Vec3>> = None;
+            let mut repaired = 0;
+            let out = given
+                .iter()
+                .enumerate()
+                .map(|(v, n)| {
+                    n.try_normalize().unwrap_or_else(|| {
+                        repaired += 1;
+                        computed.get_or_insert_with(|| mesh.compute_normals())[v]
+                    })
+                })
+                .collect();
+            if repaired > 0 {
+                warnings.push(Warning::Repaired {
+                    location: format!("mesh {label:?}"),
+                    message: format!(
+                        "{repaired} zero-length normal{} replaced by computed ones",
+                        if repaired == 1 { "" } else { "s" }
+                    ),
+                });
+            }
+            out
+        }
+    };
+    let normals = b.floats(&flat3(&normals), Type::Vec3, array, Bounds::None);
+    attributes.insert(Checked::Valid(Semantic::Normals), normals);
+
+    if let Some(uvs) = &mesh.uvs {
+        let flat: Vec<f32> = uvs.iter().flat_map(|t| t.to_array()).collect();
+        let acc = b.floats(&flat, Type::Vec2, array, Bounds::None);
+        attributes.insert(Checked::Valid(Semantic::TexCoords(0)), acc);
+    }
+
+    if let Some((si, skin)) = skin {
+        let fallback = fallback_palette_index(&asset.skeleton, &skin.joints);
+        // Palette size <= 65536 is checked in `check`.
+        let packed = weights::pack(&skin.influences, opts.max_influences, fallback as u16);
+        let sets = if packed.uses_second_set() { 2 } else { 1 };
+        for set in 0..sets {
+            let slots = set * SET_SLOTS..(set + 1) * SET_SLOTS;
+            let joints: Vec<u16> = packed
+                .rows
+                .iter()
+                .flat_map(|r| r.joints[slots.clone()].to_vec())
+                .collect();
+            // JOINTS_n: UNSIGNED_BYTE when every palette index fits, else UNSIGNED_SHORT.
+            let joints_acc = if skin.joints.len() <= 256 {
+                let small: Vec<u8> = joints.iter().map(|&j| j as u8).collect();
+                b.u8s(&small, Type::Vec4, array)
+            } else {
+                b.u16s(&joints, Type::Vec4, array)
+            };
+            let weights: Vec<f32> = packed
+                .rows
+                .iter()
+                .flat_map(|r| r.weights[slots.clone()].to_vec())
+                .collect();
+            let weights_acc = b.floats(&weights, Type::Vec4, array, Bounds::None);
+            attributes.insert(Checked::Valid(Semantic::Joints(set as u32)), joints_acc);
+            attributes.insert(Checked::Valid(Semantic::Weights(set as u32)), weights_acc);
+        }
+        let s = packed.stats;
+        if s.limited_vertices > 0 {
+            warnings.push(Warning::InfluencesDropped {
+                mesh: label.clone(),
+                max_influences: opts.max_influences,
+                vertices: s.limited_vertices,
+                max_dropped_weight: s.max_dropped_weight,
+            });
+        }
+        if s.renormalized_rows > 0 {
+            warnings.push(Warning::WeightsRenormalized {
+                source: format!("mesh {label:?} (skin {si})"),
+                rows: s.renormalized_rows,
+                max_row_sum_error: s.max_row_sum_error,
+            });
+        }
+        if s.unbound_vertices > 0 {
+            let root = asset.skeleton.joint(skin.joints[fallback]);
+            warnings.push(Warning::Repaired {
+                location: format!("mesh {label:?} (skin {si})"),
+                message: format!(
+                    "{} had no influence; bound with weight 1 to the skin's root joint {:?}",
+                    vertices(s.unbound_vertices),
+                    root.name
+                ),
+            });
+        }
+    }
+
+    // Indices: UNSIGNED_SHORT while every index stays below 65535, the primitive restart
+    // value that the validator rejects (ACCESSOR_INDEX_PRIMITIVE_RESTART).
+    let flat: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    let element = Some(Target::ElementArrayBuffer);
+    let indices = if mesh.vertex_count() <= usize::from(u16::MAX) {
+        let small: Vec<u16> = flat.iter().map(|&i| i as u16).collect();
+        b.u16s(&small, Type::Scalar, element)
+    } else {
+        b.u32s(&flat, Type::Scalar, element)
+    };
+
+    // Morph targets. If any target has normal deltas, every target gets a NORMAL accessor
+    // (zeros where absent) so all targets carry the same attributes.
+    let with_normals = mesh.morph_targets.iter().any(|t| t.normal_deltas.is_some());
+    let mut targets = Vec::with_capacity(mesh.morph_targets.len());
+    for target in &mesh.morph_targets {
+        // glTF 2.0 §3.7.2.2: POSITION targets require min/max.
+        let positions = b.floats(
+            &flat3(&target.position_deltas),
+            Type::Vec3,
+            array,
+            Bounds::MinMax,
+        );
+        let normals = with_normals.then(|| {
+            let flat = match &target.normal_deltas {
+                Some(d) => flat3(d),
+                None => vec![0.0; 3 * mesh.vertex_count()],
+            };
+            b.floats(&flat, Type::Vec3, array, Bounds::None)
+        });
+        targets.push(json::mesh::MorphTarget {
+            positions: Some(positions),
+            normals,
+            tangents: None,
+        });
+    }
+
+    let (weights, extras) = if mesh.morph_targets.is_empty() {
+        (None, None)
+    } else {
+        let weights = if mesh.morph_weights.is_empty() {
+            vec![0.0; mesh.morph_targets.len()]
+        } else {
+            mesh.morph_weights.clone()
+        };
+        // The de facto convention for target names (Blender, three.js, Babylon.js).
+        let names: Vec<&str> = mesh.morph_targets.iter().map(|t| t.name.as_str()).collect();
+        let text = serde_json::to_string(&serde_json::json!({ "targetNames": names }))?;
+        (
+            Some(weights),
+            Some(json::extras::RawValue::from_string(text)?),
+        )
+    };
+
+    let primitive = json::mesh::Primitive {
+        attributes,
+        extensions: None,
+        extras: None,
+        indices: Some(indices),
+        material: None,
+        mode: Checked::Valid(Mode::Triangles),
+        targets: (!targets.is_empty()).then_some(targets),
+    };
+    Ok(b.root.push(json::Mesh {
+        extensions: None,
+        extras,
+        name: non_empty(&mesh.name),
+        primitives: vec![primitive],
+        weights,
+    }))
+}
+
+/// Writes skin `si`: palette nodes, inverse bind matrices, skeleton root.
+fn write_skin(
+    b: &mut Builder,
+    asset: &Asset,
+    si: usize,
+    skin: &SkinBinding,
+    skeleton_node: Option<usize>,
+    warnings: &mut Vec<Warning>,
+) {
+    let mut projective = 0;
+    let mut ibm = Vec::with_capacity(16 * skin.inv_bind.len());
+    for m in &skin.inv_bind {
+        // Column-major: elements 3, 7, 11, 15 are the last row. glTF requires it to be
+        // exactly (0, 0, 0, 1) (validator ACCESSOR_INVALID_IBM); force it.
+        let mut cols = m.to_cols_array();
+        let dev = [cols[3], cols[7], cols[11], cols[15] - 1.0]
+            .iter()
+            .fold(0.0_f32, |a, d| a.max(d.abs()));
+        if dev > IBM_LAST_ROW_TOLERANCE {
+            projective += 1;
+        }
+        cols[3] = 0.0;
+        cols[7] = 0.0;
+        cols[11] = 0.0;
+        cols[15] = 1.0;
+        ibm.extend_from_slice(&cols);
+    }
+    let mesh = &asset.meshes[skin.mesh.get()];
+    if projective > 0 {
+        warnings.push(Warning::Repaired {
+            location: format!("skin {si} (mesh {:?})", mesh_label(skin.mesh.get(), mesh)),
+            message: format!(
+                "{projective} inverse bind matrices had a last row other than (0, 0, 0, 1); forced to it"
+            ),
+        });
+    }
+    let ibm = b.floats(&ibm, Type::Mat4, None, Bounds::None);
+    b.root.push(json::Skin {
+        extensions: None,
+        extras: None,
+        inverse_bind_matrices: Some(ibm),
+        joints: skin.joints.iter().map(|j| Index::new(j.0)).collect(),
+        name: non_empty(&mesh.name),
+        skeleton: skeleton_node.map(|n| Index::new(n as u32)),
+    });
+}
+
+/// Whether a quaternion is too short (or not finite) to normalize meaningfully.
+fn degenerate(q: [f32; 4]) -> bool {
+    let length = quat_length(q);
+    !length.is_finite() || length < MIN_QUAT_LENGTH
+}
+
+/// Everything that makes an asset unexportable: [`Asset::validate`]'s problems, then the
+/// exporter's own checks (written to be safe on an asset that failed validation).
+pub(crate) fn check(asset: &Asset) -> Vec<Problem> {
+    let mut problems: Vec<Problem> = match asset.validate() {
+        Ok(()) => Vec::new(),
+        Err(errs) => errs.into_iter().map(Problem::Asset).collect(),
+    };
+    for (mi, mesh) in asset.meshes.iter().enumerate() {
+        let n = mesh.vertex_count();
+        if n == 0 || mesh.triangles.is_empty() {
+            problems.push(Problem::EmptyMesh {
+                mesh: mi,
+                vertices: n,
+                triangles: mesh.triangles.len(),
+            });
+        }
+        let non_finite = |what: String| Problem::Asset(AssetError::NonFinite { what });
+        if mesh
+            .normals
+            .as_ref()
+            .is_some_and(|v| v.iter().any(|x| !x.is_finite()))
+        {
+            problems.push(non_finite(format!("mesh {mi} normals")));
+        }
+        if mesh
+            .uvs
+            .as_ref()
+            .is_some_and(|v| v.iter().any(|x| !x.is_finite()))
+        {
+            problems.push(non_finite(format!("mesh {mi} uvs")));
+        }
+        for (ti, target) in mesh.morph_targets.iter().enumerate() {
+            if let Some(d) = &target.normal_deltas {
+                if d.len() != n {
+                    problems.push(Problem::Asset(AssetError::AttributeLength {
+                        mesh: mi,
+                        attribute: "morph target normals",
+                        found: d.len(),
+                        expected: n,
+                    }));
+                }
+                if d.iter().any(|x| !x.is_finite()) {
+                    problems.push(non_finite(format!("mesh {mi} morph target {ti} normals")));
+                }
+            }
+        }
+        if !mesh.morph_weights.is_empty() && mesh.morph_weights.len() != mesh.morph_targets.len() {
+            problems.push(Problem::MorphWeightCount {
+                mesh: mi,
+                found: mesh.morph_weights.len(),
+                expected: mesh.morph_targets.len(),
+            });
+        }
+        if mesh.morph_weights.iter().any(|w| !w.is_finite()) {
+            problems.push(non_finite(format!("mesh {mi} default morph weights")));
+        }
+    }
+
+    let mut skin_of_mesh: BTreeMap<usize, usize> = BTreeMap::new();
+    for (si, skin) in asset.skins.iter().enumerate() {
+        if let Some(&first) = skin_of_mesh.get(&skin.mesh.get()) {
+            problems.push(Problem::SharedSkinMesh {
+                mesh: skin.mesh.get(),
+                first_skin: first,
+                second_skin: si,
+            });
+        } else {
+            skin_of_mesh.insert(skin.mesh.get(), si);
+        }
+        if skin.joints.is_empty() {
+            problems.push(Problem::EmptyPalette { skin: si });
+        }
+        if skin.joints.len() > 1 << 16 {
+            problems.push(Problem::PaletteTooLarge {
+                skin: si,
+                joints: skin.joints.len(),
+            });
+        }
+        let mut sorted = skin.joints.clone();
+        sorted.sort_unstable();
+        for w in sorted.windows(2) {
+            if w[0] == w[1] {
+                problems.push(Problem::DuplicatePaletteJoint {
+                    skin: si,
+                    joint: w[0],
+                });
+            }
+        }
+    }
+
+    for (index, joint) in asset.skeleton.joints().iter().enumerate() {
+        if degenerate(joint.rest_local.rotation.to_array()) {
+            problems.push(Problem::DegenerateRestRotation {
+                joint: index,
+                name: joint.name.clone(),
+            });
+        }
+    }
+
+    for clip in &asset.clips {
+        for (ti, track) in clip.tracks.iter().enumerate() {
+            if !matches!(track.target, TrackTarget::Rotation(_)) {
+                continue;
+            }
+            let (stride, offset) = match track.interpolation {
+                Interpolation::CubicSpline => (12, 4),
+                _ => (4, 0),
+            };
+            for key in 0..track.times.len() {
+                let start = key * stride + offset;
+                let Some(&[x, y, z, w]) = track.values.get(start..start + 4) else {
+                    break; // a value-count problem, already reported by validate()
+                };
+                if degenerate([x, y, z, w]) {
+                    problems.push(Problem::DegenerateRotationKey {
+                        clip: clip.name.clone(),
+                        track: ti,
+                        key,
+                    });
+                }
+            }
+        }
+    }
+    problems
+}

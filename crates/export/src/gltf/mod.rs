@@ -1,0 +1,359 @@
+//! glTF 2.0 output: `.glb` (one binary file) or `.gltf` + `.bin`.
+//!
+//! What the document holds (node `i` is skeleton joint `i`):
+//! - one node per joint, named after it, with its rest TRS (identity components omitted)
+//!   and children from the parent links; skeleton roots are scene roots;
+//! - an extra identity root node named `rigport_root` above all skeleton roots, only when a
+//!   skin's joints have no common ancestor (glTF requires one; validator
+//!   `SKIN_NO_COMMON_ROOT`);
+//! - one mesh per model [`Mesh`](rigport_model::Mesh), one `TRIANGLES` primitive each, with
+//!   `POSITION` (min/max), unit `NORMAL` (given or computed), `TEXCOORD_0`, `JOINTS_n` /
+//!   `WEIGHTS_n` for skinned meshes, and morph targets (`POSITION` with min/max, `NORMAL`),
+//!   target names in `mesh.extras.targetNames`;
+//! - one node per mesh: at the scene root without transform for a skinned mesh, else a
+//!   child of the joint it is attached to (or a scene root);
+//! - one skin per binding, `skeleton` = the palette's nearest common ancestor;
+//! - one animation per clip, one sampler per track.
+//!
+//! Everything binary lives in one buffer; output bytes depend only on the input (no hash
+//! order, no time stamps).
+
+mod animation;
+mod buffer;
+pub(crate) mod document;
+#[cfg(test)]
+mod tests;
+
+use std::path::{Path, PathBuf};
+
+use gltf_json as json;
+use json::validation::USize64;
+use rigport_model::{Asset, Warning};
+
+use crate::atomic::TempFile;
+use crate::ExportError;
+
+/// Options for the glTF exporters.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GltfOptions {
+    /// Most joint influences kept per vertex, `1..=8`. Up to 4 fit in `JOINTS_0` /
+    /// `WEIGHTS_0`; 5 to 8 add `JOINTS_1` / `WEIGHTS_1` (written only when some vertex
+    /// actually uses a fifth influence). Many viewers read only the first set, which always
+    /// holds each vertex's 4 largest weights. Default 4.
+    pub max_influences: usize,
+}
+
+impl Default for GltfOptions {
+    fn default() -> Self {
+        Self { max_influences: 4 }
+    }
+}
+
+/// A binary glTF (`.glb`) file in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Exported {
+    /// The complete `.glb` file: 12-byte header, JSON chunk (space-padded to 4 bytes), then
+    /// a BIN chunk (zero-padded) when the asset has any binary data.
+    pub glb: Vec<u8>,
+    /// Lossy or repairing steps taken (dropped influences, repaired vertices, dropped
+    /// tracks...), in the order they happened.
+    pub warnings: Vec<Warning>,
+}
+
+/// A JSON glTF (`.gltf`) file and its binary buffer, in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExportedSplit {
+    /// The `.gltf` JSON, UTF-8, pretty-printed (stable field order).
+    pub json: Vec<u8>,
+    /// The buffer the JSON refers to by the `bin_uri` given (a multiple of 4 bytes long).
+    /// Empty when the asset has no binary data; the JSON then declares no buffer.
+    pub bin: Vec<u8>,
+    /// As [`Exported::warnings`].
+    pub warnings: Vec<Warning>,
+}
+
+/// Length of a quaternion `[x, y, z, w]`, in `f64`.
+///
+/// Quaternion arithmetic here is scalar `f64`, not glam's `Vec4` (SIMD on some targets,
+/// with a different summation order), so the output bytes are the same on every platform.
+pub(crate) fn quat_length(q: [f32; 4]) -> f64 {
+    q.iter()
+        .map(|&c| f64::from(c) * f64::from(c))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// `q / |q|`, computed in `f64` (see [`quat_length`]); `q` must not be degenerate.
+pub(crate) fn unit_quat(q: [f32; 4]) -> [f32; 4] {
+    let len = quat_length(q);
+    q.map(|c| (f64::from(c) / len) as f32)
+}
+
+/// The dot product of two quaternions, in `f64`.
+pub(crate) fn quat_dot(a: [f32; 4], b: [f32; 4]) -> f64 {
+    a.iter()
+        .zip(&b)
+        .map(|(&x, &y)| f64::from(x) * f64::from(y))
+        .sum()
+}
+
+/// GLB header magic `glTF` (glTF 2.0 §4, "GLB File Format Specification").
+const GLB_MAGIC: u32 = 0x4654_6C67;
+/// GLB container version.
+const GLB_VERSION: u32 = 2;
+/// Chunk type `JSON`.
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+/// Chunk type `BIN\0`.
+const CHUNK_BIN: u32 = 0x004E_4942;
+
+/// Exports `asset` as one binary glTF (`.glb`) file in memory.
+///
+/// The asset is checked first ([`Asset::validate`] plus the exporter's own rules); nothing
+/// is built unless it passes.
+///
+/// # Errors
+/// [`ExportError::MaxInfluences`], [`ExportError::Invalid`] listing every problem,
+/// [`ExportError::TooLarge`] when the data exceeds GLB's 32-bit lengths,
+/// [`ExportError::Json`] if serialization fails.
+pub fn to_glb(asset: &Asset, opts: &GltfOptions) -> Result<Exported, ExportError> {
+    let mut built = document::build(asset, opts)?;
+    if !built.bin.is_empty() {
+        built.root.buffers.push(buffer_entry(built.bin.len(), None));
+    }
+    let json = built.root.to_vec()?;
+    let glb = glb_container(json, &built.bin)?;
+    Ok(Exported {
+        glb,
+        warnings: built.warnings,
+    })
+}
+
+/// Exports `asset` as a JSON glTF document and its binary buffer, in memory.
+///
+/// `bin_uri` is written verbatim as the buffer's `uri`: a relative URI reference, already
+/// percent-encoded (e.g. `"walk.bin"`, `"my%20rig.bin"`). [`write_gltf`] encodes file names
+/// itself.
+///
+/// # Errors
+/// As [`to_glb`], except that there is no size limit.
+pub fn to_gltf(
+    asset: &Asset,
+    opts: &GltfOptions,
+    bin_uri: &str,
+) -> Result<ExportedSplit, ExportError> {
+    let mut built = document::build(asset, opts)?;
+    if !built.bin.is_empty() {
+        built
+            .root
+            .buffers
+            .push(buffer_entry(built.bin.len(), Some(bin_uri.to_owned())));
+    }
+    let mut json = built.root.to_vec_pretty()?;
+    json.push(b'\n');
+    Ok(ExportedSplit {
+        json,
+        bin: built.bin,
+        warnings: built.warnings,
+    })
+}
+
+/// Exports `asset` to `path`: a `.glb` file, or a `.gltf` file plus `<stem>.bin` beside it
+/// (chosen by the extension, case-insensitive). Same as [`prepare_gltf`] followed by
+/// [`PreparedGltf::write`].
+///
+/// # Errors
+/// Those of [`prepare_gltf`] and [`PreparedGltf::write`]. On error no output or temporary
+/// file is left (see [`PreparedGltf::write`] for the one exception).
+pub fn write_gltf(
+    asset: &Asset,
+    path: &Path,
+    opts: &GltfOptions,
+) -> Result<Vec<Warning>, ExportError> {
+    let prepared = prepare_gltf(asset, path, opts)?;
+    prepared.write()?;
+    Ok(prepared.warnings)
+}
+
+/// An export to a file, built in memory and not yet written, so that the caller can look at
+/// the warnings (and, say, refuse to write under `--deny-warnings`) before any file changes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedGltf {
+    path: PathBuf,
+    files: Files,
+    warnings: Vec<Warning>,
+}
+
+/// The bytes of a prepared export.
+#[derive(Clone, Debug, PartialEq)]
+enum Files {
+    /// One `.glb`.
+    Glb(Vec<u8>),
+    /// `.gltf` JSON and, unless empty, the `.bin` to write at `bin_path`.
+    Split {
+        json: Vec<u8>,
+        bin: Vec<u8>,
+        bin_path: PathBuf,
+    },
+}
+
+/// Builds the export of `asset` to `path` in memory: `.glb`, or `.gltf` whose buffer is
+/// `<stem>.bin` beside it (the URI percent-encoded), chosen by the extension
+/// (case-insensitive). Nothing is written until [`PreparedGltf::write`].
+///
+/// # Errors
+/// [`ExportError::UnsupportedExtension`] for any other extension (checked before any work),
+/// and the errors of [`to_glb`] / [`to_gltf`].
+pub fn prepare_gltf(
+    asset: &Asset,
+    path: &Path,
+    opts: &GltfOptions,
+) -> Result<PreparedGltf, ExportError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let (files, warnings) = match ext.as_deref() {
+        Some("glb") => {
+            let out = to_glb(asset, opts)?;
+            (Files::Glb(out.glb), out.warnings)
+        }
+        Some("gltf") => {
+            let bin_path = path.with_extension("bin");
+            let bin_name = bin_path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let out = to_gltf(asset, opts, &percent_encode(&bin_name))?;
+            let files = Files::Split {
+                json: out.json,
+                bin: out.bin,
+                bin_path,
+            };
+            (files, out.warnings)
+        }
+        _ => {
+            return Err(ExportError::UnsupportedExtension {
+                path: PathBuf::from(path),
+            })
+        }
+    };
+    Ok(PreparedGltf {
+        path: path.to_path_buf(),
+        files,
+        warnings,
+    })
+}
+
+impl PreparedGltf {
+    /// Lossy or repairing steps taken, as [`Exported::warnings`].
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+
+    /// The main output file (`.glb` or `.gltf`).
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Writes the files atomically: each goes to a temporary file in the same directory,
+    /// then is renamed over its target. For `.gltf` both temporary files are written first,
+    /// then the `.bin` is renamed, then the `.gltf`, so a reader that finds the new `.gltf`
+    /// finds its buffer. No `.bin` is written when the asset has no binary data.
+    ///
+    /// # Errors
+    /// [`ExportError::Io`] naming the file that could not be written. No output or
+    /// temporary file is left then, except in one case: if the final `.gltf` rename fails
+    /// after the `.bin` rename succeeded, the new `.bin` is removed (best effort) and any
+    /// previous `.bin` is lost.
+    pub fn write(&self) -> Result<(), ExportError> {
+        let io_err = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| ExportError::Io { path, source }
+        };
+        let path = self.path.as_path();
+        match &self.files {
+            Files::Glb(glb) => crate::write_atomic(path, glb).map_err(io_err(path)),
+            Files::Split {
+                json,
+                bin,
+                bin_path,
+            } => {
+                let json_tmp = TempFile::create_beside(path, json).map_err(io_err(path))?;
+                let bin_tmp = if bin.is_empty() {
+                    None
+                } else {
+                    Some(TempFile::create_beside(bin_path, bin).map_err(io_err(bin_path))?)
+                };
+                let wrote_bin = bin_tmp.is_some();
+                if let Some(tmp) = bin_tmp {
+                    tmp.persist(bin_path).map_err(io_err(bin_path))?;
+                }
+                if let Err(e) = json_tmp.persist(path) {
+                    if wrote_bin {
+                        let _ = std::fs::remove_file(bin_path);
+                    }
+                    return Err(io_err(path)(e));
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// The one buffer entry.
+fn buffer_entry(len: usize, uri: Option<String>) -> json::Buffer {
+    json::Buffer {
+        byte_length: USize64::from(len),
+        name: None,
+        uri,
+        extensions: None,
+        extras: None,
+    }
+}
+
+/// Wraps JSON and binary data in a GLB container (glTF 2.0 §4).
+fn glb_container(mut json: Vec<u8>, bin: &[u8]) -> Result<Vec<u8>, ExportError> {
+    // Chunks start and end on 4-byte boundaries: JSON padded with spaces, BIN with zeros.
+    let pad = json.len().wrapping_neg() % 4;
+    json.resize(json.len() + pad, b' ');
+    let bin_padded = bin.len() + bin.len().wrapping_neg() % 4;
+    let bin_chunk = if bin.is_empty() { 0 } else { 8 + bin_padded };
+    let total = 12 + 8 + json.len() + bin_chunk;
+    let too_large = || ExportError::TooLarge {
+        bytes: total as u64,
+    };
+    let total32 = u32::try_from(total).map_err(|_| too_large())?;
+
+    let mut out = Vec::with_capacity(total);
+    for word in [GLB_MAGIC, GLB_VERSION, total32] {
+        out.extend_from_slice(&word.to_le_bytes());
+    }
+    // Lengths fit: each is smaller than `total`.
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&CHUNK_JSON.to_le_bytes());
+    out.extend_from_slice(&json);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin_padded as u32).to_le_bytes());
+        out.extend_from_slice(&CHUNK_BIN.to_le_bytes());
+        out.extend_from_slice(bin);
+        out.resize(total, 0);
+    }
+    Ok(out)
+}
+
+/// Percent-encodes a file name for use as a relative URI reference (RFC 3986): unreserved
+/// characters and a few safe sub-delimiters stay, everything else (space, `%`, `#`, `?`,
+/// `:`, non-ASCII bytes of the UTF-8 encoding) is escaped. `:` is escaped so the name is never
+/// read as a scheme.
+fn percent_encode(name: &str) -> String {
+    let mut out = String::with_capacity(name.len());
+    for byte in name.bytes() {
+        let keep = byte.is_ascii_alphanumeric() || b"-._~!$&'()*+,;=@".contains(&byte);
+        if keep {
+            out.push(char::from(byte));
+        } else {
+            out.push_str(&format!("%{byte:02X}"));
+        }
+    }
+    out
+}

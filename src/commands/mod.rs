@@ -1,0 +1,71 @@
+//! One module per subcommand; `run` dispatches.
+
+mod convert;
+mod demo;
+mod eval;
+mod inspect;
+
+use anyhow::Result;
+use rigport_model::Warning;
+
+use crate::cli::{Cli, Command};
+use crate::exit::DeniedWarnings;
+
+/// Settings every command shares.
+pub struct Context {
+    /// Print nothing but errors and warnings.
+    pub quiet: bool,
+    /// Fail on warnings.
+    pub deny_warnings: bool,
+}
+
+impl Context {
+    /// Prints warnings (and notes) to stderr; with `--deny-warnings`, fails if there is any
+    /// warning. Notes ([`Warning::Note`]: facts, nothing lost or repaired) never fail.
+    pub fn report(&self, warnings: &[Warning]) -> Result<()> {
+        let mut count = 0;
+        for w in warnings {
+            if matches!(w, Warning::Note { .. }) {
+                if !self.quiet {
+                    eprintln!("note: {w}");
+                }
+            } else {
+                count += 1;
+                eprintln!("warning: {w}");
+            }
+        }
+        if self.deny_warnings && count > 0 {
+            return Err(DeniedWarnings { count }.into());
+        }
+        Ok(())
+    }
+
+    /// Runs `f` under a spinner on stderr (shown only on a terminal, never with --quiet).
+    pub fn step<T>(&self, message: &str, f: impl FnOnce() -> T) -> T {
+        use std::io::IsTerminal;
+        // No spinner thread at all unless someone can see it.
+        if self.quiet || !std::io::stderr().is_terminal() {
+            return f();
+        }
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.set_message(message.to_string());
+        bar.enable_steady_tick(std::time::Duration::from_millis(100));
+        let out = f();
+        bar.finish_and_clear();
+        out
+    }
+}
+
+/// Runs the parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    let ctx = Context {
+        quiet: cli.quiet,
+        deny_warnings: cli.deny_warnings,
+    };
+    match cli.command {
+        Command::Convert(args) => convert::run(&ctx, &args),
+        Command::Inspect(args) => inspect::run(&ctx, &args),
+        Command::Eval(args) => eval::run(&ctx, &args),
+        Command::Demo(args) => demo::run(&ctx, &args),
+    }
+}

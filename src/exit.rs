@@ -1,0 +1,59 @@
+//! Exit codes, documented in `rigport --help`.
+
+/// Success.
+#[allow(dead_code)]
+pub const OK: u8 = 0;
+/// An input could not be read or is invalid (the message names file and line).
+pub const BAD_INPUT: u8 = 1;
+/// Usage error: unknown flag, missing argument (clap's own code).
+#[allow(dead_code)]
+pub const USAGE: u8 = 2;
+/// An output could not be written.
+pub const OUTPUT: u8 = 3;
+/// Warnings were reported and `--deny-warnings` was given.
+pub const DENIED_WARNINGS: u8 = 4;
+
+/// The exit-code table shown by `--help`.
+pub const HELP: &str = "\
+Exit codes:
+  0  success
+  1  an input could not be read or is invalid (the message names file and line)
+  2  usage error (unknown flag, missing argument)
+  3  an output could not be written (nothing partial is left behind)
+  4  warnings were reported and --deny-warnings was given";
+
+/// Marks an error as an output failure.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {path}")]
+pub struct OutputError {
+    /// The output path.
+    pub path: String,
+}
+
+/// Marks warnings turned into an error by `--deny-warnings`.
+#[derive(Debug, thiserror::Error)]
+#[error("{count} warning(s) reported and --deny-warnings was given")]
+pub struct DeniedWarnings {
+    /// How many.
+    pub count: usize,
+}
+
+/// The exit code for an error, from the markers in its chain.
+pub fn code_for(err: &anyhow::Error) -> u8 {
+    // anyhow's downcast sees context values at every layer as well as the root error.
+    if err.downcast_ref::<DeniedWarnings>().is_some() {
+        DENIED_WARNINGS
+    } else if err.downcast_ref::<OutputError>().is_some() {
+        OUTPUT
+    } else {
+        BAD_INPUT
+    }
+}
+
+/// Whether the error is a closed stdout (`rigport inspect x | head`), which is success.
+pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}

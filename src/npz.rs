@@ -1,0 +1,104 @@
+//! A minimal `.npz` writer (a zip of `.npy` arrays, as `numpy.savez` writes) for `eval` dumps.
+//!
+//! NPY format 1.0: magic, version, a little-endian u16 header length, a Python-literal
+//! header dict padded with spaces to a multiple of 64 bytes and ending in `\n`, then the raw
+//! C-order data (numpy's `lib/format.py` documents it).
+
+use std::io::{Cursor, Write};
+
+/// One array's element type and bytes.
+pub enum Data {
+    /// little-endian f32
+    F32(Vec<f32>),
+    /// little-endian i32
+    I32(Vec<i32>),
+    /// fixed-width unicode strings (numpy `<U n`)
+    Str(Vec<String>),
+}
+
+/// Builds an `.npz` file in memory; arrays are stored uncompressed, in insertion order,
+/// with a fixed timestamp so the bytes are deterministic.
+#[derive(Default)]
+pub struct NpzWriter {
+    arrays: Vec<(String, Vec<usize>, Data)>,
+}
+
+impl NpzWriter {
+    /// Adds an array of the given shape (C order). The product of `shape` must equal the
+    /// element count; the caller guarantees it.
+    pub fn add(&mut self, name: &str, shape: &[usize], data: Data) {
+        self.arrays.push((name.to_string(), shape.to_vec(), data));
+    }
+
+    /// The `.npz` bytes.
+    pub fn finish(self) -> std::io::Result<Vec<u8>> {
+        let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
+        let opts = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Stored)
+            .large_file(false);
+        for (name, shape, data) in &self.arrays {
+            zip.start_file(format!("{name}.npy"), opts)
+                .map_err(std::io::Error::other)?;
+            zip.write_all(&npy(shape, data))?;
+        }
+        Ok(zip.finish().map_err(std::io::Error::other)?.into_inner())
+    }
+}
+
+fn npy(shape: &[usize], data: &Data) -> Vec<u8> {
+    let (descr, body) = match data {
+        Data::F32(v) => ("<f4".to_string(), v.iter().flat_map(|x| x.to_le_bytes()).collect()),
+        Data::I32(v) => ("<i4".to_string(), v.iter().flat_map(|x| x.to_le_bytes()).collect()),
+        Data::Str(v) => {
+            let width = v.iter().map(|s| s.chars().count()).max().unwrap_or(0).max(1);
+            let mut body = Vec::with_capacity(v.len() * width * 4);
+            for s in v {
+                let n = s.chars().count();
+                for c in s.chars().chain(std::iter::repeat_n('\0', width - n)) {
+                    body.extend_from_slice(&(c as u32).to_le_bytes());
+                }
+            }
+            (format!("<U{width}"), body)
+        }
+    };
+    let shape_text = match shape {
+        [n] => format!("({n},)"),
+        dims => format!(
+            "({})",
+            dims.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")
+        ),
+    };
+    let mut header =
+        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape_text}, }}");
+    // magic(6) + version(2) + len(2) + header + '\n' must be a multiple of 64.
+    let unpadded = 10 + header.len() + 1;
+    header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
+    header.push('\n');
+    let mut out = Vec::with_capacity(10 + header.len() + body.len());
+    out.extend_from_slice(b"\x93NUMPY\x01\x00");
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(&body);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_is_aligned_and_literal() {
+        let bytes = npy(&[2, 3], &Data::F32(vec![0.0; 6]));
+        assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+        let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+        assert_eq!((10 + hlen) % 64, 0);
+        let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
+        assert!(header.starts_with("{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }"));
+        assert!(header.ends_with('\n'));
+        assert_eq!(bytes.len(), 10 + hlen + 24);
+        let s = npy(&[2], &Data::Str(vec!["ab".into(), "c".into()]));
+        let hlen = u16::from_le_bytes([s[8], s[9]]) as usize;
+        assert!(std::str::from_utf8(&s[10..10 + hlen]).unwrap().contains("'<U2'"));
+        assert_eq!(s.len(), 10 + hlen + 16);
+    }
+}

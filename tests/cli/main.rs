@@ -1,0 +1,8 @@
+//! End-to-end tests of the `rigport` CLI (one test binary, modules by area).
+
+mod bad_input;
+mod common;
+mod demo;
+mod gltf_read;
+mod gltf_samples;
+mod pinocchio;

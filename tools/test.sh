@@ -1,0 +1,208 @@
+#!/usr/bin/env bash
+# rigport's one test command (README, CI):   bash tools/test.sh
+#
+#  1. tools/setup.sh         pinned glTF-Validator (npm) + USD/numpy venv
+#  2. validator self-check   tools/validate_gltf.mjs on two tiny inline assets
+#  3. Rust tests             cargo nextest run --workspace (cargo test if no nextest)
+#  4. doctests               cargo test --doc --workspace (with nextest only)
+#  5. USD smoke              tools/.venv/bin/python tools/usd_smoke.py
+# then a summary. Steps 3-5 all run even if one fails; the exit status is 0
+# only if every step passed.
+#
+# The Rust tests see:
+#   RIGPORT_GLTF_VALIDATOR  absolute path of tools/validate_gltf.mjs (run it with node)
+#   RIGPORT_PYTHON          absolute path of tools/.venv/bin/python (usd-core, numpy)
+# Tests that need the corpus (../shared/corpus beside the repo) skip when it is
+# absent, unless CI is set.
+#
+# Environment knobs:
+#   RIGPORT_TEST_PROFILE=release|dev   cargo profile for the tests (default: release)
+#   RIGPORT_NO_NEXTEST=1               use plain `cargo test` even if nextest is installed
+#   extra arguments are passed to the test runner, e.g. `bash tools/test.sh -E 'test(fk)'`
+#   for nextest or `bash tools/test.sh fk` for cargo test.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+
+T_START=$SECONDS
+CURRENT_STEP=""
+STEP_NAMES=()
+STEP_STATUS=()
+STEP_SECS=()
+STEP_NOTES=()
+TOTAL_PASSED=0
+TOTAL_FAILED=0
+TOTAL_SKIPPED=0
+COUNTS_KNOWN=1
+FAILED=0
+WORK="$(mktemp -d "${TMPDIR:-/tmp}/rigport-test.XXXXXX")"
+
+banner() { printf '\n==> %s\n' "$*"; }
+
+record() { # name status secs note
+  STEP_NAMES+=("$1"); STEP_STATUS+=("$2"); STEP_SECS+=("$3"); STEP_NOTES+=("${4:-}")
+  if [[ "$2" != PASS ]]; then FAILED=1; fi
+  CURRENT_STEP=""
+}
+
+summary() {
+  local rc=$? i
+  rm -rf "$WORK"
+  # A step that aborted the script (set -e) has not been recorded yet.
+  if (( rc != 0 )) && [[ -n "${CURRENT_STEP:-}" ]]; then
+    record "$CURRENT_STEP" FAIL "-" "aborted, exit $rc"
+  fi
+  printf '\n==================== rigport test summary ====================\n'
+  for i in "${!STEP_NAMES[@]}"; do
+    printf '  %-4s  %-44s %6ss  %s\n' "${STEP_STATUS[$i]}" "${STEP_NAMES[$i]}" \
+      "${STEP_SECS[$i]}" "${STEP_NOTES[$i]}"
+  done
+  if [[ -d "$ROOT/../shared/corpus" ]]; then
+    printf '  corpus: %s (present)\n' "$(cd "$ROOT/../shared/corpus" && pwd)"
+  else
+    printf '  corpus: ../shared/corpus absent: corpus tests skipped%s\n' \
+      "$([[ -n "${CI:-}" ]] && echo ' (CI is set: they fail instead)')"
+  fi
+  printf '  RIGPORT_GLTF_VALIDATOR=%s\n' "${RIGPORT_GLTF_VALIDATOR:-}"
+  printf '  RIGPORT_PYTHON=%s\n' "${RIGPORT_PYTHON:-}"
+  if (( rc == 0 && FAILED == 0 )); then
+    printf 'ALL PASSED in %ss\n' "$((SECONDS - T_START))"
+  else
+    printf 'FAILED in %ss (see the step marked FAIL above)\n' "$((SECONDS - T_START))"
+  fi
+  if (( COUNTS_KNOWN == 1 )) && (( TOTAL_PASSED + TOTAL_FAILED > 0 )); then
+    printf 'tests: %d passed, %d failed, %d skipped\n' "$TOTAL_PASSED" "$TOTAL_FAILED" "$TOTAL_SKIPPED"
+  fi
+  if (( rc == 0 && FAILED != 0 )); then exit 1; fi
+  exit "$rc"
+}
+trap summary EXIT
+
+# Strip ANSI colour codes (the logs are parsed for test counts).
+plain() { sed -E 's/\x1b\[[0-9;]*[A-Za-z]//g' "$1"; }
+
+# ---------------------------------------------------------------------- 1 setup
+CURRENT_STEP="setup (tools/setup.sh)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+bash tools/setup.sh
+record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
+
+export RIGPORT_GLTF_VALIDATOR="$ROOT/tools/validate_gltf.mjs"
+export RIGPORT_PYTHON="$ROOT/tools/.venv/bin/python"
+
+# ------------------------------------------------------- 2 validator self-check
+# A minimal valid asset must pass (exit 0); one without asset.version must fail
+# (exit 1). Catches a broken validator install before the Rust tests rely on it.
+CURRENT_STEP="validator self-check"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+printf '{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"name":"root"}],"scene":0}\n' \
+  > "$WORK/ok.gltf"
+printf '{"asset":{}}\n' > "$WORK/bad.gltf"
+set +e
+node "$RIGPORT_GLTF_VALIDATOR" "$WORK/ok.gltf"; ok_rc=$?
+node "$RIGPORT_GLTF_VALIDATOR" "$WORK/bad.gltf"; bad_rc=$?
+set -e
+if (( ok_rc == 0 && bad_rc == 1 )); then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))" "valid asset -> 0, invalid asset -> 1"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "exit codes $ok_rc/$bad_rc, expected 0/1"
+fi
+
+# --------------------------------------------------------------- 3 Rust tests
+PROFILE="${RIGPORT_TEST_PROFILE:-release}"
+case "$PROFILE" in
+  release) PROFILE_ARGS=(--release) ;;
+  dev|debug) PROFILE="dev"; PROFILE_ARGS=() ;;
+  *) echo "tools/test.sh: RIGPORT_TEST_PROFILE must be release or dev, not '$PROFILE'" >&2; exit 2 ;;
+esac
+# Fresh CI clones build once: incremental caches only cost time there.
+if [[ -n "${CI:-}" ]]; then export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"; fi
+COLOR=never
+if [[ -t 1 ]]; then COLOR=always; fi
+export CARGO_TERM_COLOR="${CARGO_TERM_COLOR:-$COLOR}"
+
+lock_hint() { # explain the usual --locked failure
+  if plain "$1" | grep -q 'lock file .* needs to be updated\|cannot update the lock file'; then
+    echo "tools/test.sh: Cargo.lock is out of date with Cargo.toml: run 'cargo check --workspace' and commit Cargo.lock" >&2
+  fi
+}
+
+# Add "N passed; N failed; N ignored" from every libtest "test result:" line.
+count_libtest() {
+  local p f i
+  read -r p f i < <(plain "$1" | sed -nE 's/^test result: [A-Za-z]+\. ([0-9]+) passed; ([0-9]+) failed; ([0-9]+) ignored.*/\1 \2 \3/p' \
+    | awk '{p+=$1; f+=$2; i+=$3} END {print p+0, f+0, i+0}')
+  TOTAL_PASSED=$((TOTAL_PASSED + p)); TOTAL_FAILED=$((TOTAL_FAILED + f)); TOTAL_SKIPPED=$((TOTAL_SKIPPED + i))
+  NOTE="$p passed, $f failed, $i ignored"
+}
+
+USE_NEXTEST=0
+if [[ "${RIGPORT_NO_NEXTEST:-0}" != 1 ]] && cargo nextest --version >/dev/null 2>&1; then USE_NEXTEST=1; fi
+
+if (( USE_NEXTEST )); then
+  CURRENT_STEP="Rust tests (cargo nextest, $PROFILE)"
+  banner "$CURRENT_STEP"
+  t0=$SECONDS
+  log="$WORK/nextest.log"
+  set +e
+  cargo nextest run --workspace --locked "${PROFILE_ARGS[@]}" --no-fail-fast --no-tests=warn \
+    --color "$CARGO_TERM_COLOR" "$@" 2>&1 | tee "$log"
+  rc=${PIPESTATUS[0]}
+  set -e
+  # "Summary [  1.234s] 57 tests run: 55 passed, 2 failed, 3 skipped"
+  line="$(plain "$log" | grep -E '^ *Summary \[' | tail -n 1 || true)"
+  NOTE="${line#*] }"
+  if [[ "$line" =~ ([0-9]+)\ passed ]]; then
+    TOTAL_PASSED=$((TOTAL_PASSED + BASH_REMATCH[1]))
+    [[ "$line" =~ ([0-9]+)\ failed ]] && TOTAL_FAILED=$((TOTAL_FAILED + BASH_REMATCH[1]))
+    [[ "$line" =~ ([0-9]+)\ timed\ out ]] && TOTAL_FAILED=$((TOTAL_FAILED + BASH_REMATCH[1]))
+    [[ "$line" =~ ([0-9]+)\ skipped ]] && TOTAL_SKIPPED=$((TOTAL_SKIPPED + BASH_REMATCH[1]))
+  elif (( rc == 0 )); then
+    NOTE="no tests found"
+  else
+    COUNTS_KNOWN=0; NOTE="did not finish: exit $rc"; lock_hint "$log"
+  fi
+  record "$CURRENT_STEP" "$( ((rc == 0)) && echo PASS || echo FAIL)" "$((SECONDS - t0))" "$NOTE"
+
+  CURRENT_STEP="doctests (cargo test --doc, $PROFILE)"
+  banner "$CURRENT_STEP"
+  t0=$SECONDS
+  log="$WORK/doctest.log"
+  set +e
+  cargo test --doc --workspace --locked "${PROFILE_ARGS[@]}" --no-fail-fast 2>&1 | tee "$log"
+  rc=${PIPESTATUS[0]}
+  set -e
+  count_libtest "$log"
+  if (( rc != 0 )) && ! plain "$log" | grep -q '^test result:'; then
+    COUNTS_KNOWN=0; NOTE="did not finish: exit $rc"; lock_hint "$log"
+  fi
+  record "$CURRENT_STEP" "$( ((rc == 0)) && echo PASS || echo FAIL)" "$((SECONDS - t0))" "$NOTE"
+else
+  CURRENT_STEP="Rust tests + doctests (cargo test, $PROFILE)"
+  banner "$CURRENT_STEP (cargo-nextest not used)"
+  t0=$SECONDS
+  log="$WORK/cargo-test.log"
+  set +e
+  cargo test --workspace --locked "${PROFILE_ARGS[@]}" --no-fail-fast "$@" 2>&1 | tee "$log"
+  rc=${PIPESTATUS[0]}
+  set -e
+  count_libtest "$log"
+  if (( rc != 0 )) && ! plain "$log" | grep -q '^test result:'; then
+    COUNTS_KNOWN=0; NOTE="did not finish: exit $rc"; lock_hint "$log"
+  fi
+  record "$CURRENT_STEP" "$( ((rc == 0)) && echo PASS || echo FAIL)" "$((SECONDS - t0))" "$NOTE"
+fi
+
+# --------------------------------------------------------------- 5 USD smoke
+CURRENT_STEP="USD smoke (tools/usd_smoke.py)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+if "$RIGPORT_PYTHON" tools/usd_smoke.py; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))" "pxr.Usd, pxr.UsdSkel, numpy import; skeleton round-trips"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))"
+fi
+# The EXIT trap prints the summary and sets the exit status.
