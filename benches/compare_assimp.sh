@@ -130,9 +130,8 @@ if awk -v l="$load1" -v c="$(nproc)" 'BEGIN { exit !(l > c / 2) }'; then
 fi
 HF_ARGS=(--warmup "$WARMUP" --runs "$RUNS" --export-json "$JSON" --style basic)
 # No intermediate shell: its start-up would be most of a short run.
-if hyperfine --help 2>/dev/null | grep -q -- '--shell <'; then
-  if hyperfine --help 2>/dev/null | grep -q -- '-N'; then HF_ARGS+=(-N); else HF_ARGS+=(--shell=none); fi
-fi
+hf_help="$(hyperfine --help 2>/dev/null || true)"
+if [[ "$hf_help" == *"--shell=none"* ]]; then HF_ARGS+=(--shell=none); fi
 if (( ASSIMP_ONLY )); then
   hyperfine "${HF_ARGS[@]}" --command-name assimp "$CMD_ASSIMP" >&2
 else
@@ -142,8 +141,12 @@ fi
 ASSIMP_VERSION="$(dpkg-query -W -f='${Version}' assimp-utils 2>/dev/null || true)"
 [[ -n "$ASSIMP_VERSION" ]] || ASSIMP_VERSION="$(assimp version 2>/dev/null | grep -Eo '[Vv]ersion [0-9]+\.[0-9]+(\.[0-9]+)?' | head -n 1 | awk '{print $2}' || true)"
 HF_VERSION="$(hyperfine --version | awk '{print $2}')"
-RIGPORT_REV="$(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
-if ! git diff --quiet HEAD -- 2>/dev/null; then RIGPORT_REV="$RIGPORT_REV+dirty"; fi
+if RIGPORT_REV="$(git rev-parse --short HEAD 2>/dev/null)"; then
+  git diff --quiet HEAD -- 2>/dev/null || RIGPORT_REV="$RIGPORT_REV+dirty"
+else
+  RIGPORT_REV="(not a git checkout)"
+fi
+if (( ASSIMP_ONLY )); then RIGPORT_REV="(not run)"; fi
 
 python3 - "$JSON" "$ASSIMP_ONLY" "$VERTS" "$FACES" "$BONES" "${ASSIMP_VERSION:-?}" "$HF_VERSION" \
   "$RIGPORT_REV" "$(nproc)" "$RUNS" "$WARMUP" "$load1" <<'PY'

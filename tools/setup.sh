@@ -58,9 +58,10 @@ command -v npm >/dev/null 2>&1 || die "npm not found." \
   "Debian: apt-get install -y npm   (it comes with most Node.js installs)"
 node_version="$(node --version)"           # v20.20.2
 node_major="${node_version#v}"; node_major="${node_major%%.*}"
-[[ "$node_major" =~ ^[0-9]+$ ]] && (( node_major >= 18 )) \
-  || die "Node.js $node_version is too old: need >= 18." \
-         "Debian: apt-get install -y nodejs npm   (or a newer Node.js on PATH)"
+if ! [[ "$node_major" =~ ^[0-9]+$ ]] || (( node_major < 18 )); then
+  die "Node.js $node_version is too old: need >= 18." \
+      "Debian: apt-get install -y nodejs npm   (or a newer Node.js on PATH)"
+fi
 
 # One interpreter call answers everything (a pyenv shim costs a fork of bash
 # per call): "<version> <real executable>", or exit 3 when too old, 4 without venv.
@@ -74,7 +75,7 @@ except ImportError:
 print("%d.%d.%d" % sys.version_info[:3], sys.executable)'
 py_found_no_venv=""
 for cand in "${RIGPORT_SETUP_PYTHON:-}" python3.11 python3; do
-  [[ -n "$cand" ]] && command -v "$cand" >/dev/null 2>&1 || continue
+  if [[ -z "$cand" ]] || ! command -v "$cand" >/dev/null 2>&1; then continue; fi
   rc=0; out="$("$cand" -c "$py_probe" 2>/dev/null)" || rc=$?
   if (( rc == 0 )) && [[ -n "$out" ]]; then
     py_version="${out%% *}"; PYTHON="${out#* }"; break
