@@ -34,13 +34,15 @@ pub enum Command {
     /// Describe rigs: joints with parents, meshes, influence histogram, clips.
     Inspect(InspectArgs),
     /// Pose a rig and dump the skinned result (LBS) as .npz for numpy.
-    #[command(after_help = "POSE.json maps joint names to a rotation applied in the joint's rest frame \
+    #[command(
+        after_help = "POSE.json maps joint names to a rotation applied in the joint's rest frame \
         (local = rest_local * delta):\n  \
         {\"bone_5\": {\"quat\": [x, y, z, w]}, \"bone_7\": {\"euler_deg\": [x, y, z], \"order\": \"xyz\"}}\n\
         \"xyz\" lists the axes in the order they are applied: R = Rz * Ry * Rx.\n\n\
         The .npz holds positions, rest_positions (V x 3, source vertex order), joint_names, \
         joint_world and skin_matrices (J x 4 x 4, column vectors: p' = M p), \
-        influence_joints and influence_weights (V x K, zero-padded).")]
+        influence_joints and influence_weights (V x K, zero-padded)."
+    )]
     Eval(EvalArgs),
     /// Write the built-in demo character (no input files needed).
     Demo(DemoArgs),

@@ -83,7 +83,8 @@ fn out_kind(path: &Path) -> Result<Option<OutKind>> {
 /// non-blank line in its first 16.
 fn looks_like_skeleton(path: &Path) -> Result<Option<OutKind>> {
     use std::io::{BufRead, BufReader};
-    let file = std::fs::File::open(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let file =
+        std::fs::File::open(path).with_context(|| format!("{}: cannot read", path.display()))?;
     for line in BufReader::new(file).lines().take(16) {
         let line = line.with_context(|| format!("{}: cannot read", path.display()))?;
         let fields: Vec<&str> = line.split_ascii_whitespace().collect();
@@ -163,7 +164,10 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
         } else if attachment.is_none() {
             attachment = Some(out);
         } else {
-            bail!("{}: more .out files than a Pinocchio rig has", out.display());
+            bail!(
+                "{}: more .out files than a Pinocchio rig has",
+                out.display()
+            );
         }
     }
     match (mesh, skeleton, attachment) {
@@ -184,7 +188,10 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
             .filter(|(_, m)| *m)
             .map(|(n, _)| *n)
             .collect();
-            bail!("a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}", missing.join(", "));
+            bail!(
+                "a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}",
+                missing.join(", ")
+            );
         }
     }
     if plans.is_empty() {

@@ -47,10 +47,21 @@ impl NpzWriter {
 
 fn npy(shape: &[usize], data: &Data) -> Vec<u8> {
     let (descr, body) = match data {
-        Data::F32(v) => ("<f4".to_string(), v.iter().flat_map(|x| x.to_le_bytes()).collect()),
-        Data::I32(v) => ("<i4".to_string(), v.iter().flat_map(|x| x.to_le_bytes()).collect()),
+        Data::F32(v) => (
+            "<f4".to_string(),
+            v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        ),
+        Data::I32(v) => (
+            "<i4".to_string(),
+            v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        ),
         Data::Str(v) => {
-            let width = v.iter().map(|s| s.chars().count()).max().unwrap_or(0).max(1);
+            let width = v
+                .iter()
+                .map(|s| s.chars().count())
+                .max()
+                .unwrap_or(0)
+                .max(1);
             let mut body = Vec::with_capacity(v.len() * width * 4);
             for s in v {
                 let n = s.chars().count();
@@ -65,7 +76,10 @@ fn npy(shape: &[usize], data: &Data) -> Vec<u8> {
         [n] => format!("({n},)"),
         dims => format!(
             "({})",
-            dims.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")
+            dims.iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
     };
     let mut header =
@@ -98,7 +112,9 @@ mod tests {
         assert_eq!(bytes.len(), 10 + hlen + 24);
         let s = npy(&[2], &Data::Str(vec!["ab".into(), "c".into()]));
         let hlen = u16::from_le_bytes([s[8], s[9]]) as usize;
-        assert!(std::str::from_utf8(&s[10..10 + hlen]).unwrap().contains("'<U2'"));
+        assert!(std::str::from_utf8(&s[10..10 + hlen])
+            .unwrap()
+            .contains("'<U2'"));
         assert_eq!(s.len(), 10 + hlen + 16);
     }
 }

@@ -10,7 +10,9 @@ use crate::exit::OutputError;
 
 /// Runs `demo`.
 pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
-    let rig = ctx.step("generating the demo character", || demo::character(args.detail));
+    let rig = ctx.step("generating the demo character", || {
+        demo::character(args.detail)
+    });
     let skeleton = pinocchio::PinocchioSkeleton {
         positions: rig.joint_positions.clone(),
         parents: rig.joint_parents.clone(),

@@ -73,13 +73,22 @@ pub fn dump(asset: &Asset, rig: &Rig<'_>, posed: &RigOutput) -> NpzWriter {
         }
     }
     let v = rows.len();
-    let names: Vec<String> = asset.skeleton.joints().iter().map(|j| j.name.clone()).collect();
+    let names: Vec<String> = asset
+        .skeleton
+        .joints()
+        .iter()
+        .map(|j| j.name.clone())
+        .collect();
     let mut npz = NpzWriter::default();
     npz.add("positions", &[v, 3], Data::F32(positions));
     npz.add("rest_positions", &[v, 3], Data::F32(rest_positions));
     npz.add("joint_names", &[joint_count], Data::Str(names));
     npz.add("joint_world", &[joint_count, 4, 4], Data::F32(joint_world));
-    npz.add("skin_matrices", &[joint_count, 4, 4], Data::F32(skin_matrices));
+    npz.add(
+        "skin_matrices",
+        &[joint_count, 4, 4],
+        Data::F32(skin_matrices),
+    );
     npz.add("influence_joints", &[v, k], Data::I32(influence_joints));
     npz.add("influence_weights", &[v, k], Data::F32(influence_weights));
     npz
@@ -107,9 +116,11 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
     let rig = Rig::new(asset).context("the rig cannot be evaluated")?;
     let mut posed = RigOutput::default();
     rig.evaluate(&pose, &mut posed)?;
-    let bytes = dump(asset, &rig, &posed).finish().with_context(|| OutputError {
-        path: args.output.display().to_string(),
-    })?;
+    let bytes = dump(asset, &rig, &posed)
+        .finish()
+        .with_context(|| OutputError {
+            path: args.output.display().to_string(),
+        })?;
     rigport_export::write_atomic(&args.output, &bytes).with_context(|| OutputError {
         path: args.output.display().to_string(),
     })?;

@@ -82,22 +82,18 @@ fn report(source: String, asset: &Asset, warnings: Vec<String>) -> Report {
         .iter()
         .enumerate()
         .map(|(mi, m)| {
-            let skin = asset
-                .skins
-                .iter()
-                .find(|s| s.mesh.get() == mi)
-                .map(|s| {
-                    let max = s.influences.max_per_vertex();
-                    let mut hist = vec![0; max + 1];
-                    for row in s.influences.rows() {
-                        hist[row.len()] += 1;
-                    }
-                    SkinReport {
-                        palette_joints: s.joints.len(),
-                        max_influences: max,
-                        influence_histogram: hist,
-                    }
-                });
+            let skin = asset.skins.iter().find(|s| s.mesh.get() == mi).map(|s| {
+                let max = s.influences.max_per_vertex();
+                let mut hist = vec![0; max + 1];
+                for row in s.influences.rows() {
+                    hist[row.len()] += 1;
+                }
+                SkinReport {
+                    palette_joints: s.joints.len(),
+                    max_influences: max,
+                    influence_histogram: hist,
+                }
+            });
             let bounds = m.bounds();
             MeshReport {
                 name: m.name.clone(),
@@ -122,9 +118,9 @@ fn report(source: String, asset: &Asset, warnings: Vec<String>) -> Report {
                 .tracks
                 .iter()
                 .filter_map(|t| match t.target {
-                    TrackTarget::Translation(j) | TrackTarget::Rotation(j) | TrackTarget::Scale(j) => {
-                        Some(j.get())
-                    }
+                    TrackTarget::Translation(j)
+                    | TrackTarget::Rotation(j)
+                    | TrackTarget::Scale(j) => Some(j.get()),
                     TrackTarget::MorphWeights(_) => None,
                 })
                 .collect();
@@ -198,7 +194,11 @@ fn print_text(out: &mut impl Write, r: &Report) -> std::io::Result<()> {
                 .filter(|(_, n)| **n > 0)
                 .map(|(k, n)| format!("{k}: {n}"))
                 .collect();
-            writeln!(out, "      vertices by influence count: {}", hist.join(", "))?;
+            writeln!(
+                out,
+                "      vertices by influence count: {}",
+                hist.join(", ")
+            )?;
         }
     }
     writeln!(out, "  clips: {}", r.clips.len())?;

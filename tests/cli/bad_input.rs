@@ -32,14 +32,25 @@ fn assert_rejected(inputs: &[&Path], needles: &[&str]) {
     for out_name in ["out.glb", "out.gltf", "dump.npz"] {
         let out_dir = scratch();
         let out = out_dir.path().join(out_name);
-        let mut args: Vec<&str> = vec![if out_name.ends_with("npz") { "eval" } else { "convert" }];
+        let mut args: Vec<&str> = vec![if out_name.ends_with("npz") {
+            "eval"
+        } else {
+            "convert"
+        }];
         args.extend(inputs.iter().map(|p| p.to_str().unwrap()));
         args.extend(["-o", out.to_str().unwrap()]);
         let result = rigport(&args);
         let stderr = String::from_utf8_lossy(&result.stderr);
-        assert_eq!(result.status.code(), Some(1), "{args:?}: expected exit 1; stderr:\n{stderr}");
+        assert_eq!(
+            result.status.code(),
+            Some(1),
+            "{args:?}: expected exit 1; stderr:\n{stderr}"
+        );
         for needle in needles {
-            assert!(stderr.contains(needle), "{args:?}: {needle:?} not in:\n{stderr}");
+            assert!(
+                stderr.contains(needle),
+                "{args:?}: {needle:?} not in:\n{stderr}"
+            );
         }
         assert!(!stderr.contains("panicked"), "{stderr}");
         let left: Vec<_> = std::fs::read_dir(out_dir.path()).unwrap().collect();
@@ -58,7 +69,14 @@ fn the_valid_base_rig_converts() {
     let dir = scratch();
     let [m, s, a] = rig(dir.path(), None);
     let out = dir.path().join("ok.glb");
-    rigport_ok(&["convert", m.to_str().unwrap(), s.to_str().unwrap(), a.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    rigport_ok(&[
+        "convert",
+        m.to_str().unwrap(),
+        s.to_str().unwrap(),
+        a.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert_valid(&out);
 }
 
@@ -70,8 +88,15 @@ fn missing_file() {
     let out_dir = scratch();
     let out = out_dir.path().join("out.glb");
     let result = rigport(&[
-        "convert", "--mesh", m.to_str().unwrap(), "--skeleton", s.to_str().unwrap(),
-        "--attachment", missing.to_str().unwrap(), "-o", out.to_str().unwrap(),
+        "convert",
+        "--mesh",
+        m.to_str().unwrap(),
+        "--skeleton",
+        s.to_str().unwrap(),
+        "--attachment",
+        missing.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
     ]);
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert_eq!(result.status.code(), Some(1), "{stderr}");
@@ -81,32 +106,56 @@ fn missing_file() {
 
 #[test]
 fn attachment_rows_differ_from_obj_vertices() {
-    check_case("attachment.out", "1 0 \n0.5 0.5 \n0 1 \n", &["attachment.out:", "3", "4"]);
+    check_case(
+        "attachment.out",
+        "1 0 \n0.5 0.5 \n0 1 \n",
+        &["attachment.out:", "3", "4"],
+    );
 }
 
 #[test]
 fn attachment_wrong_column_count() {
-    check_case("attachment.out", "1 0 \n0.5 0.25 0.25 \n0 1 \n0 1 \n", &["attachment.out:2"]);
+    check_case(
+        "attachment.out",
+        "1 0 \n0.5 0.25 0.25 \n0 1 \n0 1 \n",
+        &["attachment.out:2"],
+    );
 }
 
 #[test]
 fn attachment_nan_weight() {
-    check_case("attachment.out", "1 0 \n0.5 NaN \n0 1 \n0 1 \n", &["attachment.out:2"]);
+    check_case(
+        "attachment.out",
+        "1 0 \n0.5 NaN \n0 1 \n0 1 \n",
+        &["attachment.out:2"],
+    );
 }
 
 #[test]
 fn attachment_negative_weight() {
-    check_case("attachment.out", "1 0 \n0.5 0.5 \n0 1 \n-0.5 1.5 \n", &["attachment.out:4", "negative"]);
+    check_case(
+        "attachment.out",
+        "1 0 \n0.5 0.5 \n0 1 \n-0.5 1.5 \n",
+        &["attachment.out:4", "negative"],
+    );
 }
 
 #[test]
 fn skeleton_parent_cycle() {
-    check_case("skeleton.out", "0 0 0 0 -1\n1 0 1 0 2\n2 0 2 0 1\n", &["skeleton.out", "cycle"]);
+    check_case(
+        "skeleton.out",
+        "0 0 0 0 -1\n1 0 1 0 2\n2 0 2 0 1\n",
+        &["skeleton.out", "cycle"],
+    );
 }
 
 #[test]
 fn skeleton_root_is_its_own_parent() {
-    check_case("skeleton.out", "0 0 0 0 0\n1 0 1 0 0\n2 0 2 0 1\n", &["skeleton.out:1", "-1"]);
+    check_case(
+        "skeleton.out",
+        "0 0 0 0 0\n1 0 1 0 0\n2 0 2 0 1\n",
+        &["skeleton.out:1", "-1"],
+    );
 }
 
 #[test]
@@ -118,13 +167,23 @@ fn empty_files() {
 
 #[test]
 fn malformed_obj_line() {
-    check_case("mesh.obj", "v 0 0 0\nv 0 1 zero\nv 0 2 0\nv 1 2 0\nf 1 2 3\n", &["mesh.obj:2"]);
-    check_case("mesh.obj", "v 0 0 0\nv 0 1 0\nv 0 2 0\nv 1 2 0\nf 1 2 9\n", &["mesh.obj:5"]);
+    check_case(
+        "mesh.obj",
+        "v 0 0 0\nv 0 1 zero\nv 0 2 0\nv 1 2 0\nf 1 2 3\n",
+        &["mesh.obj:2"],
+    );
+    check_case(
+        "mesh.obj",
+        "v 0 0 0\nv 0 1 0\nv 0 2 0\nv 1 2 0\nf 1 2 9\n",
+        &["mesh.obj:5"],
+    );
 }
 
 #[test]
 fn truncated_glb() {
-    let Some(src) = corpus(GLTF_SAMPLES[0]) else { return };
+    let Some(src) = corpus(GLTF_SAMPLES[0]) else {
+        return;
+    };
     let bytes = std::fs::read(src).unwrap();
     let dir = scratch();
     for cut in [10usize, 100, bytes.len() / 2, bytes.len() - 1] {
@@ -141,12 +200,27 @@ fn bad_pose_file_names_line_and_joint() {
     let pose = dir.path().join("pose.json");
     let out = dir.path().join("d.npz");
     for (text, needle) in [
-        ("{\"bone_1\": {\"quat\": [0,0,0,1]},\n \"nope\": {\"quat\": [0,0,0,1]}}", "nope"),
-        ("{\"bone_1\": {\"euler_deg\": [0,0,1], \"order\": \"abc\"}}", "abc"),
+        (
+            "{\"bone_1\": {\"quat\": [0,0,0,1]},\n \"nope\": {\"quat\": [0,0,0,1]}}",
+            "nope",
+        ),
+        (
+            "{\"bone_1\": {\"euler_deg\": [0,0,1], \"order\": \"abc\"}}",
+            "abc",
+        ),
         ("{\"bone_1\": \n {\"quat\": [0,0,0,1]", "pose.json:2"),
     ] {
         std::fs::write(&pose, text).unwrap();
-        let r = rigport(&["eval", m.to_str().unwrap(), s.to_str().unwrap(), a.to_str().unwrap(), "--pose", pose.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+        let r = rigport(&[
+            "eval",
+            m.to_str().unwrap(),
+            s.to_str().unwrap(),
+            a.to_str().unwrap(),
+            "--pose",
+            pose.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
         let stderr = String::from_utf8_lossy(&r.stderr);
         assert_eq!(r.status.code(), Some(1), "{stderr}");
         assert!(stderr.contains(needle), "{needle:?} not in {stderr}");

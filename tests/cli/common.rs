@@ -36,7 +36,10 @@ fn in_ci() -> bool {
 /// Skips (returns `None` with a message) when something optional is absent, but fails in CI.
 pub fn require<T>(what: &str, value: Option<T>) -> Option<T> {
     if value.is_none() {
-        assert!(!in_ci(), "{what} is missing and CI is set: this test must run in CI");
+        assert!(
+            !in_ci(),
+            "{what} is missing and CI is set: this test must run in CI"
+        );
         eprintln!("SKIPPED: {what} is missing");
     }
     value
@@ -45,7 +48,10 @@ pub fn require<T>(what: &str, value: Option<T>) -> Option<T> {
 /// A corpus file or folder (`../shared/corpus/<rel>`), or `None` (skip) when absent.
 pub fn corpus(rel: &str) -> Option<PathBuf> {
     let p = repo().join("../shared/corpus").join(rel);
-    require(&format!("corpus file {}", p.display()), p.exists().then_some(p))
+    require(
+        &format!("corpus file {}", p.display()),
+        p.exists().then_some(p),
+    )
 }
 
 /// The Pinocchio rigs of the corpus: (label, mesh, skeleton, attachment).
@@ -102,7 +108,10 @@ pub fn validate(file: &Path) -> Option<Verdict> {
         .unwrap_or_else(|| repo().join("tools/validate_gltf.mjs"));
     let installed = repo().join("tools/node_modules/gltf-validator").exists()
         || std::env::var_os("RIGPORT_GLTF_VALIDATOR").is_some();
-    require("glTF-Validator (bash tools/setup.sh)", installed.then_some(()))?;
+    require(
+        "glTF-Validator (bash tools/setup.sh)",
+        installed.then_some(()),
+    )?;
     let out = Command::new("node")
         .arg(&runner)
         .arg("--json")
@@ -177,8 +186,20 @@ fn parse_npy(data: &[u8]) -> NpyArray {
     let hlen = u16::from_le_bytes([data[8], data[9]]) as usize;
     let header = std::str::from_utf8(&data[10..10 + hlen]).expect("ascii header");
     let body = &data[10 + hlen..];
-    let descr = header.split("'descr': '").nth(1).expect("descr").split('\'').next().expect("descr");
-    let shape_text = header.split("'shape': (").nth(1).expect("shape").split(')').next().expect("shape");
+    let descr = header
+        .split("'descr': '")
+        .nth(1)
+        .expect("descr")
+        .split('\'')
+        .next()
+        .expect("descr");
+    let shape_text = header
+        .split("'shape': (")
+        .nth(1)
+        .expect("shape")
+        .split(')')
+        .next()
+        .expect("shape");
     let shape: Vec<usize> = shape_text
         .split(',')
         .filter(|s| !s.trim().is_empty())

@@ -41,7 +41,8 @@ pub struct GltfAnimation {
 }
 
 pub fn read(path: &Path) -> GltfScene {
-    let (doc, buffers, _) = gltf::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let (doc, buffers, _) =
+        gltf::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let n = doc.nodes().len();
     let mut parents = vec![None; n];
     for node in doc.nodes() {
@@ -140,12 +141,21 @@ pub fn read(path: &Path) -> GltfScene {
 
 impl GltfScene {
     pub fn node_by_name(&self) -> HashMap<&str, usize> {
-        self.node_names.iter().enumerate().map(|(i, n)| (n.as_str(), i)).collect()
+        self.node_names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.as_str(), i))
+            .collect()
     }
 
     /// World matrices with per-node local rotation changes (`local = rest * delta`).
     pub fn world(&self, deltas: &HashMap<usize, Quat>) -> Vec<Mat4> {
-        fn rec(s: &GltfScene, d: &HashMap<usize, Quat>, i: usize, memo: &mut Vec<Option<Mat4>>) -> Mat4 {
+        fn rec(
+            s: &GltfScene,
+            d: &HashMap<usize, Quat>,
+            i: usize,
+            memo: &mut Vec<Option<Mat4>>,
+        ) -> Mat4 {
             if let Some(m) = memo[i] {
                 return m;
             }
@@ -160,7 +170,9 @@ impl GltfScene {
             m
         }
         let mut memo = vec![None; self.local.len()];
-        (0..self.local.len()).map(|i| rec(self, deltas, i, &mut memo)).collect()
+        (0..self.local.len())
+            .map(|i| rec(self, deltas, i, &mut memo))
+            .collect()
     }
 
     /// Linear blend skinning of skin `s` for the given node world matrices (glTF §3.7.3).

@@ -13,7 +13,13 @@ fn key_names(scene: &GltfScene) -> Vec<String> {
         .node_names
         .iter()
         .enumerate()
-        .map(|(i, n)| if n.is_empty() { format!("node_{i}") } else { n.clone() })
+        .map(|(i, n)| {
+            if n.is_empty() {
+                format!("node_{i}")
+            } else {
+                n.clone()
+            }
+        })
         .collect()
 }
 
@@ -107,40 +113,58 @@ fn normalized_skin(scene: &mut GltfScene) {
 #[test]
 fn gltf_samples_reexport_clean_and_play_back_the_same() {
     for sample_path in GLTF_SAMPLES {
-        let Some(src) = corpus(sample_path) else { continue };
+        let Some(src) = corpus(sample_path) else {
+            continue;
+        };
         let dir = scratch();
         let mut source = gltf_read::read(&src);
         normalized_skin(&mut source);
         let src_names = key_names(&source);
         for ext in ["glb", "gltf"] {
             let out = dir.path().join(format!("out.{ext}"));
-            rigport_ok(&["convert", src.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+            rigport_ok(&[
+                "convert",
+                src.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ]);
             assert_valid(&out);
             let mut ours = gltf_read::read(&out);
             normalized_skin(&mut ours);
             let ours_by_name = ours.node_by_name();
             let map: Vec<usize> = src_names
                 .iter()
-                .map(|n| *ours_by_name.get(n.as_str()).unwrap_or_else(|| panic!("{sample_path}: node {n} lost")))
+                .map(|n| {
+                    *ours_by_name
+                        .get(n.as_str())
+                        .unwrap_or_else(|| panic!("{sample_path}: node {n} lost"))
+                })
                 .collect();
             assert_eq!(source.skins.len(), ours.skins.len(), "{sample_path}");
-            assert_eq!(source.animations.len(), ours.animations.len(), "{sample_path}");
+            assert_eq!(
+                source.animations.len(),
+                ours.animations.len(),
+                "{sample_path}"
+            );
             // Geometry: the same bind-space positions.
             for (s, o) in source.skins.iter().zip(&ours.skins) {
                 assert_eq!(s.positions, o.positions, "{sample_path}");
             }
-            let diag = source
-                .skins
-                .iter()
-                .flat_map(|s| &s.positions)
-                .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+            let diag = source.skins.iter().flat_map(|s| &s.positions).fold(
+                (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+            );
             let diag = (diag.1 - diag.0).length().max(1e-6);
             let mut frames = 0;
             for (a, anim) in source.animations.iter().enumerate() {
                 if !anim.name.is_empty() {
-                    assert_eq!(anim.name, ours.animations[a].name, "{sample_path}: clip name");
+                    assert_eq!(
+                        anim.name, ours.animations[a].name,
+                        "{sample_path}: clip name"
+                    );
                 }
-                let mut times: Vec<f32> = anim.channels.iter().flat_map(|c| c.times.clone()).collect();
+                let mut times: Vec<f32> =
+                    anim.channels.iter().flat_map(|c| c.times.clone()).collect();
                 times.sort_by(f32::total_cmp);
                 times.dedup();
                 for &t in &times {
@@ -153,14 +177,25 @@ fn gltf_samples_reexport_clean_and_play_back_the_same() {
                             continue;
                         }
                         let scale = m.to_cols_array().iter().fold(1.0f32, |x, y| x.max(y.abs()));
-                        let d = (*m - wo[map[i]]).to_cols_array().iter().fold(0.0f32, |x, y| x.max(y.abs()));
-                        assert!(d <= 1e-5 * scale, "{sample_path} {ext} anim {a} t={t} node {}: {d}", src_names[i]);
+                        let d = (*m - wo[map[i]])
+                            .to_cols_array()
+                            .iter()
+                            .fold(0.0f32, |x, y| x.max(y.abs()));
+                        assert!(
+                            d <= 1e-5 * scale,
+                            "{sample_path} {ext} anim {a} t={t} node {}: {d}",
+                            src_names[i]
+                        );
                     }
                     // Skinned positions.
                     for s in 0..source.skins.len() {
                         let ps = source.skin_positions(s, &ws);
                         let po = ours.skin_positions(s, &wo);
-                        let d = ps.iter().zip(&po).map(|(a, b)| (*a - *b).length()).fold(0.0, f32::max);
+                        let d = ps
+                            .iter()
+                            .zip(&po)
+                            .map(|(a, b)| (*a - *b).length())
+                            .fold(0.0, f32::max);
                         assert!(d <= 1e-5 * diag, "{sample_path} {ext} anim {a} t={t}: skinned deviation {d} (diag {diag})");
                     }
                 }

@@ -1,4 +1,8 @@
 //! End-to-end tests of the `rigport` CLI (one test binary, modules by area).
+#![allow(
+    clippy::unwrap_used,
+    reason = "test code: a failed unwrap is a failed test"
+)]
 
 mod bad_input;
 mod common;

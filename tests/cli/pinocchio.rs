@@ -196,7 +196,11 @@ fn pinocchio_rigs_convert_validate_and_read_back() {
             let world = scene.world(&HashMap::new());
             for (j, ibm) in skin.joints.iter().zip(&skin.inverse_bind) {
                 let m = world[*j] * *ibm;
-                assert!(m.abs_diff_eq(Mat4::IDENTITY, 1e-5), "{} joint {j}: {m}", rig.0);
+                assert!(
+                    m.abs_diff_eq(Mat4::IDENTITY, 1e-5),
+                    "{} joint {j}: {m}",
+                    rig.0
+                );
             }
             // Weights: the renormalized top-N of each row, on the joint named bone_<k>.
             for (v, (infl, row)) in skin.influences.iter().zip(&raw.rows).enumerate() {
@@ -205,12 +209,21 @@ fn pinocchio_rigs_convert_validate_and_read_back() {
                     .iter()
                     .map(|(node, w)| {
                         let name = &scene.node_names[*node];
-                        let k = name.strip_prefix("bone_").expect("bone joint").parse().unwrap();
+                        let k = name
+                            .strip_prefix("bone_")
+                            .expect("bone joint")
+                            .parse()
+                            .unwrap();
                         (k, *w as f64)
                     })
                     .collect();
                 got.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-                assert_eq!(got.len(), expect.len(), "{} vertex {v}: {got:?} vs {expect:?}", rig.0);
+                assert_eq!(
+                    got.len(),
+                    expect.len(),
+                    "{} vertex {v}: {got:?} vs {expect:?}",
+                    rig.0
+                );
                 for (g, e) in got.iter().zip(&expect) {
                     assert!(
                         g.0 == e.0 && (g.1 - e.1).abs() < 1e-6,
@@ -234,11 +247,20 @@ fn pinocchio_eval_matches_reference_and_gltf() {
         let dir = scratch();
         let pose_file = dir.path().join("pose.json");
         std::fs::write(&pose_file, pose_json(&pose)).unwrap();
-        let inputs = [mesh.to_str().unwrap(), skel.to_str().unwrap(), att.to_str().unwrap()];
+        let inputs = [
+            mesh.to_str().unwrap(),
+            skel.to_str().unwrap(),
+            att.to_str().unwrap(),
+        ];
         let dump = dir.path().join("dump.npz");
         let mut args = vec!["eval"];
         args.extend(inputs);
-        args.extend(["--pose", pose_file.to_str().unwrap(), "--out", dump.to_str().unwrap()]);
+        args.extend([
+            "--pose",
+            pose_file.to_str().unwrap(),
+            "--out",
+            dump.to_str().unwrap(),
+        ]);
         rigport_ok(&args);
         let npz = read_npz(&dump);
         let positions = &npz["positions"];
@@ -258,9 +280,16 @@ fn pinocchio_eval_matches_reference_and_gltf() {
                 moved += 1;
             }
         }
-        assert!(moved > raw.vertices.len() / 20, "{}: the pose moved only {moved} vertices", rig.0);
+        assert!(
+            moved > raw.vertices.len() / 20,
+            "{}: the pose moved only {moved} vertices",
+            rig.0
+        );
         assert!(max_dev <= tol, "{}: max deviation {max_dev} > {tol}", rig.0);
-        eprintln!("{}: eval vs Pinocchio reference: max deviation {max_dev:.3e} (tolerance {tol:.3e})", rig.0);
+        eprintln!(
+            "{}: eval vs Pinocchio reference: max deviation {max_dev:.3e} (tolerance {tol:.3e})",
+            rig.0
+        );
 
         // Second reference: the exported glTF's own IBMs and node transforms, with the same
         // influence limit applied by eval.
@@ -300,7 +329,11 @@ fn pinocchio_eval_matches_reference_and_gltf() {
                 );
                 max_dev = max_dev.max((p - s.as_dvec3()).length());
             }
-            assert!(max_dev <= tol, "{} (max {max}): glTF reference deviates {max_dev} > {tol}", rig.0);
+            assert!(
+                max_dev <= tol,
+                "{} (max {max}): glTF reference deviates {max_dev} > {tol}",
+                rig.0
+            );
         }
     }
 }

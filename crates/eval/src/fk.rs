@@ -143,6 +143,9 @@ mod tests {
             root_model: Mat4::IDENTITY,
             model: &mut short,
         };
-        assert!(matches!(job.validate(), Err(EvalError::Length { what: "model", .. })));
+        assert!(matches!(
+            job.validate(),
+            Err(EvalError::Length { what: "model", .. })
+        ));
     }
 }

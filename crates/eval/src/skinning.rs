@@ -121,8 +121,7 @@ impl LbsJob<'_> {
             let p = self.rest_positions[v];
             if row.is_empty() {
                 self.out_positions[v] = p;
-                if let (Some(rn), Some(on)) = (self.rest_normals, self.out_normals.as_deref_mut())
-                {
+                if let (Some(rn), Some(on)) = (self.rest_normals, self.out_normals.as_deref_mut()) {
                     on[v] = rn[v];
                 }
                 continue;
@@ -133,10 +132,7 @@ impl LbsJob<'_> {
             }
             self.out_positions[v] = (m * Vec4::from((p, 1.0))).truncate();
             if let (Some(rn), Some(on)) = (self.rest_normals, self.out_normals.as_deref_mut()) {
-                on[v] = m
-                    .transform_vector3(rn[v])
-                    .try_normalize()
-                    .unwrap_or(rn[v]);
+                on[v] = m.transform_vector3(rn[v]).try_normalize().unwrap_or(rn[v]);
             }
         }
         Ok(())
@@ -167,14 +163,16 @@ mod tests {
     }
 
     fn matrix() -> impl Strategy<Value = Mat4> {
-        (prop::array::uniform3(-3.0f32..3.0), prop::array::uniform3(-3.2f32..3.2)).prop_map(
-            |(t, r)| {
+        (
+            prop::array::uniform3(-3.0f32..3.0),
+            prop::array::uniform3(-3.2f32..3.2),
+        )
+            .prop_map(|(t, r)| {
                 Mat4::from_rotation_translation(
                     Quat::from_euler(glam::EulerRot::XYZ, r[0], r[1], r[2]),
                     Vec3::from(t),
                 )
-            },
-        )
+            })
     }
 
     proptest! {

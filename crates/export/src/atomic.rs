@@ -93,7 +93,6 @@ impl Drop for TempFile {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -42,8 +42,8 @@ mod weights;
 mod sample;
 
 pub use atomic::write_atomic;
-pub use weights::gltf_influences;
 pub use error::{ExportError, Problem};
 pub use gltf::{
     prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, PreparedGltf,
 };
+pub use weights::gltf_influences;

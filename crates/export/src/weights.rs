@@ -309,6 +309,31 @@ fn step_ulps(x: f32, k: i32) -> Option<f32> {
     (y > 0.0 && y.is_finite()).then_some(y)
 }
 
+/// The influences of `skin` exactly as the glTF exporter writes them for a per-vertex
+/// limit of `max_influences` (`1..=8`, clamped): merged, tiny weights dropped, the largest
+/// kept and renormalized so that the f32 sum is 1, vertices without influence bound to the
+/// skin's root palette joint. Lets an evaluator show what a glTF viewer of that file
+/// computes.
+pub fn gltf_influences(
+    skeleton: &rigport_model::Skeleton,
+    skin: &rigport_model::SkinBinding,
+    max_influences: usize,
+) -> Influences {
+    let fallback = crate::gltf::document::fallback_palette_index(skeleton, &skin.joints);
+    let packed = pack(&skin.influences, max_influences, fallback as u16);
+    Influences::from_rows(packed.rows.iter().map(|r| {
+        r.joints
+            .iter()
+            .zip(r.weights)
+            .filter(|(_, w)| *w > 0.0)
+            .map(|(j, w)| Influence {
+                joint: u32::from(*j),
+                weight: w,
+            })
+            .collect::<Vec<_>>()
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -525,29 +550,4 @@ mod tests {
             prop_assert_eq!(r.dropped, None);
         }
     }
-}
-
-/// The influences of `skin` exactly as the glTF exporter writes them for a per-vertex
-/// limit of `max_influences` (`1..=8`, clamped): merged, tiny weights dropped, the largest
-/// kept and renormalized so that the f32 sum is 1, vertices without influence bound to the
-/// skin's root palette joint. Lets an evaluator show what a glTF viewer of that file
-/// computes.
-pub fn gltf_influences(
-    skeleton: &rigport_model::Skeleton,
-    skin: &rigport_model::SkinBinding,
-    max_influences: usize,
-) -> Influences {
-    let fallback = crate::gltf::document::fallback_palette_index(skeleton, &skin.joints);
-    let packed = pack(&skin.influences, max_influences, fallback as u16);
-    Influences::from_rows(packed.rows.iter().map(|r| {
-        r.joints
-            .iter()
-            .zip(r.weights)
-            .filter(|(_, w)| *w > 0.0)
-            .map(|(j, w)| Influence {
-                joint: u32::from(*j),
-                weight: w,
-            })
-            .collect::<Vec<_>>()
-    }))
 }

@@ -128,8 +128,8 @@ fn join(problems: &[SkeletonProblem]) -> String {
 #[derive(Debug, thiserror::Error)]
 #[error("{location}: {problem}")]
 pub struct ImportError {
-    /// Where.
-    pub location: Location,
+    /// Where (boxed: keeps `Result<_, ImportError>` small on the happy path).
+    pub location: Box<Location>,
     /// What.
     pub problem: Problem,
 }
@@ -137,7 +137,10 @@ pub struct ImportError {
 impl ImportError {
     /// An error at `location`.
     pub fn new(location: Location, problem: Problem) -> Self {
-        Self { location, problem }
+        Self {
+            location: Box::new(location),
+            problem,
+        }
     }
 
     /// An [`Problem::Invalid`] error at `location`.
@@ -172,7 +175,10 @@ mod tests {
             "OFFSET",
             "CHANNELS",
         );
-        assert_eq!(e.to_string(), "walk.bvh:12:5: expected OFFSET, found \"CHANNELS\"");
+        assert_eq!(
+            e.to_string(),
+            "walk.bvh:12:5: expected OFFSET, found \"CHANNELS\""
+        );
         let e = ImportError::invalid(Location::json(Path::new("a.gltf"), "/skins/0"), "bad");
         assert_eq!(e.to_string(), "a.gltf: at /skins/0: bad");
     }

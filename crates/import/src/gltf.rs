@@ -17,13 +17,6 @@
 //! warning. Every accessor is range-checked before it is read, so no input makes this
 //! module panic.
 
-// `ImportError` (error.rs) is 144 bytes and the entry points' signature is given; shrinking
-// it (boxing `Location`) belongs in error.rs, for every importer at once.
-#![allow(
-    clippy::result_large_err,
-    reason = "ImportError's size is set by error.rs, shared by all importers"
-)]
-
 use std::borrow::Cow;
 use std::collections::{BTreeSet, HashMap, HashSet};
 use std::path::{Path, PathBuf};

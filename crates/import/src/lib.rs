@@ -6,8 +6,8 @@
 //! any input.
 #![warn(missing_docs)]
 
-mod error;
 pub mod demo;
+mod error;
 pub mod gltf;
 pub mod obj;
 pub mod pinocchio;

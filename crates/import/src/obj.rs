@@ -71,10 +71,11 @@ pub fn import(path: &Path) -> Result<Imported, ImportError> {
 /// # Errors
 /// At the first offending line (`file:line: problem`): a value that is not a number or is
 /// not finite, a wrong value count, a malformed face corner, index 0, a negative index
-/// reaching before the first element, a face with fewer than 3 corners (bytes that are not
-/// UTF-8 read as U+FFFD, so in a data line they fail as a bad number or index), and (checked after the whole file is read, at the face's line) an index past
-/// the last `v`/`vt`/`vn`. A file with nothing but blank and comment lines is
-/// [`Problem::Empty`]; one without `v` lines is an error too.
+/// reaching before the first element, a face with fewer than 3 corners, and (checked once
+/// the whole file is read, at the face's line) an index past the last `v`/`vt`/`vn`. Bytes
+/// that are not UTF-8 read as U+FFFD, so in a data line they fail as a bad number or index.
+/// A file of blank and comment lines only is [`Problem::Empty`]; one without `v` lines is
+/// an error at the file.
 pub fn parse(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<Warning>), ImportError> {
     let raw = Raw::read(bytes, path)?;
     raw.into_mesh(path)
@@ -202,24 +203,37 @@ impl Raw {
             self.normals.len(),
         ];
         for token in text.split_ascii_whitespace() {
-            let mut idx = [NONE; 3];
-            let mut parts = token.split('/');
-            for (k, slot) in idx.iter_mut().enumerate() {
-                let Some(part) = parts.next() else { break };
-                if part.is_empty() {
-                    if k == 0 {
-                        return Err(ImportError::syntax(at(), "a vertex index", token));
+            // `v`, `v/vt`, `v//vn` or `v/vt/vn`, split by hand: this runs per corner.
+            let mut parts = [""; 3];
+            let mut n = 0;
+            let mut start = 0;
+            for (i, b) in token.bytes().enumerate() {
+                if b == b'/' {
+                    match parts.get_mut(n) {
+                        Some(slot) if n < 2 => *slot = token.get(start..i).unwrap_or_default(),
+                        _ => {
+                            return Err(ImportError::syntax(
+                                at(),
+                                "a face corner v[/vt][/vn]",
+                                token,
+                            ))
+                        }
                     }
-                    continue;
+                    n += 1;
+                    start = i + 1;
                 }
-                *slot = resolve_index(part, counts[k], token, at)?;
             }
-            if parts.next().is_some() {
-                return Err(ImportError::syntax(
-                    at(),
-                    "a face corner v[/vt][/vn]",
-                    token,
-                ));
+            if let Some(slot) = parts.get_mut(n) {
+                *slot = token.get(start..).unwrap_or_default();
+            }
+            if parts[0].is_empty() {
+                return Err(ImportError::syntax(at(), "a vertex index", token));
+            }
+            let mut idx = [NONE; 3];
+            for ((slot, part), count) in idx.iter_mut().zip(parts).zip(counts) {
+                if !part.is_empty() {
+                    *slot = resolve_index(part, count, token, at)?;
+                }
             }
             self.corners.push(Corner {
                 v: idx[0],
@@ -247,23 +261,16 @@ impl Raw {
             return Err(ImportError::new(Location::file(path), Problem::Empty));
         }
         // Positive indices may point forwards, so ranges are checked once everything is read.
-        let limits = [
-            (self.positions.len(), "vertex", "v"),
-            (self.texcoords.len(), "texture coordinate", "vt"),
-            (self.normals.len(), "normal", "vn"),
-        ];
+        let (nv, nt, nn) = (
+            self.positions.len(),
+            self.texcoords.len(),
+            self.normals.len(),
+        );
+        let bad = |i: u32, n: usize| i != NONE && i as usize >= n;
         for face in &self.faces {
             for c in self.corners.get(face.start..face.end).unwrap_or_default() {
-                for (index, (count, what, keyword)) in [c.v, c.vt, c.vn].into_iter().zip(limits) {
-                    if index != NONE && index as usize >= count {
-                        return Err(ImportError::invalid(
-                            Location::line(path, face.line),
-                            format!(
-                                "{what} index {} is out of range: the file has {count} `{keyword}` lines",
-                                u64::from(index) + 1
-                            ),
-                        ));
-                    }
+                if bad(c.v, nv) || bad(c.vt, nt) || bad(c.vn, nn) {
+                    return Err(out_of_range(c, (nv, nt, nn), path, face.line));
                 }
             }
         }
@@ -293,17 +300,24 @@ impl Raw {
                 *slot = Some((c.vt, c.vn));
             }
         }
-        let mut out_pos = self.positions.clone();
+        let Raw {
+            positions,
+            texcoords,
+            normals,
+            corners,
+            faces,
+            ..
+        } = self;
+        let mut out_pos = positions;
         let mut out_attr: Vec<(u32, u32)> =
             first.iter().map(|f| f.unwrap_or((NONE, NONE))).collect();
         let mut source_vertex: Vec<u32> = (0..n_src as u32).collect();
         let mut splits: HashMap<Corner, u32> = HashMap::new();
-        let mut triangles =
-            Vec::with_capacity(self.corners.len().saturating_sub(2 * self.faces.len()));
+        let mut triangles = Vec::with_capacity(corners.len().saturating_sub(2 * faces.len()));
         let mut face_vertices: Vec<u32> = Vec::new();
-        for face in &self.faces {
+        for face in &faces {
             face_vertices.clear();
-            for c in self.corners.get(face.start..face.end).unwrap_or_default() {
+            for c in corners.get(face.start..face.end).unwrap_or_default() {
                 let out = if first.get(c.v as usize).copied().flatten() == Some((c.vt, c.vn)) {
                     c.v
                 } else if let Some(&out) = splits.get(c) {
@@ -318,12 +332,9 @@ impl Raw {
                                 "too many vertices for 32-bit indices",
                             )
                         })?;
-                    out_pos.push(
-                        self.positions
-                            .get(c.v as usize)
-                            .copied()
-                            .unwrap_or_default(),
-                    );
+                    // The first n_src entries are the `v` lines, unchanged.
+                    let p = out_pos.get(c.v as usize).copied().unwrap_or_default();
+                    out_pos.push(p);
                     out_attr.push((c.vt, c.vn));
                     source_vertex.push(c.v);
                     splits.insert(*c, out);
@@ -333,23 +344,20 @@ impl Raw {
             }
             if let Some((&a, rest)) = face_vertices.split_first() {
                 for pair in rest.windows(2) {
-                    triangles.push([a, pair[0], pair[1]]);
+                    if let &[b, c] = pair {
+                        triangles.push([a, b, c]);
+                    }
                 }
             }
         }
 
-        let uvs = self.corners.iter().any(|c| c.vt != NONE).then(|| {
+        let uvs = corners.iter().any(|c| c.vt != NONE).then(|| {
             out_attr
                 .iter()
-                .map(|&(vt, _)| {
-                    self.texcoords
-                        .get(vt as usize)
-                        .copied()
-                        .unwrap_or(Vec2::ZERO)
-                })
+                .map(|&(vt, _)| texcoords.get(vt as usize).copied().unwrap_or(Vec2::ZERO))
                 .collect::<Vec<_>>()
         });
-        let missing_uv = uvs.is_some() && self.corners.iter().any(|c| c.vt == NONE);
+        let missing_uv = uvs.is_some() && corners.iter().any(|c| c.vt == NONE);
         if missing_uv {
             warnings.push(Warning::Note {
                 location: location.clone(),
@@ -370,14 +378,10 @@ impl Raw {
             ..Mesh::default()
         };
 
-        if self.corners.iter().any(|c| c.vn != NONE) {
+        if corners.iter().any(|c| c.vn != NONE) {
             let given: Vec<Option<Vec3>> = out_attr
                 .iter()
-                .map(|&(_, vn)| {
-                    self.normals
-                        .get(vn as usize)
-                        .and_then(|n| n.try_normalize())
-                })
+                .map(|&(_, vn)| normals.get(vn as usize).and_then(|n| n.try_normalize()))
                 .collect();
             // Corners without a normal, and zero normals, take the smooth face normal.
             let zero = out_attr
@@ -398,7 +402,7 @@ impl Raw {
                     ),
                 });
             }
-            if self.corners.iter().any(|c| c.vn == NONE) {
+            if corners.iter().any(|c| c.vn == NONE) {
                 warnings.push(Warning::Note {
                     location,
                     message:
@@ -418,11 +422,88 @@ impl Raw {
     }
 }
 
+/// The error for a corner with an index past the last `v`, `vt` or `vn` line.
+#[cold]
+fn out_of_range(
+    c: &Corner,
+    (nv, nt, nn): (usize, usize, usize),
+    path: &Path,
+    line: usize,
+) -> ImportError {
+    let (index, count, what, keyword) = if c.v as usize >= nv {
+        (c.v, nv, "vertex", "v")
+    } else if c.vt != NONE && c.vt as usize >= nt {
+        (c.vt, nt, "texture coordinate", "vt")
+    } else {
+        (c.vn, nn, "normal", "vn")
+    };
+    ImportError::invalid(
+        Location::line(path, line),
+        format!(
+            "{what} index {} is out of range: the file has {count} `{keyword}` lines",
+            u64::from(index) + 1
+        ),
+    )
+}
+
+/// Exact powers of ten in `f32` (10^10 = 2^10 * 9765625 still fits the 24-bit mantissa).
+const POW10_F32: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
+
+/// Parses a float exactly as `token.parse::<f32>()` does (`None` where it fails).
+///
+/// Plain decimals (`-0.0881862`, `0.9825`, `12`) with at most 7 significant digits and 10
+/// decimals, which is most OBJ coordinates and every Pinocchio weight, take Clinger's fast
+/// path: the digits as an integer below 2^24 and 10^k are both exact in `f32`, and IEEE
+/// division rounds correctly, so the result is the correctly rounded value `str::parse`
+/// returns (W. D. Clinger, "How to read floating point numbers accurately", PLDI 1990).
+/// Anything else goes to `str::parse`. A property test compares the two.
+#[inline]
+pub(crate) fn parse_f32(token: &str) -> Option<f32> {
+    fast_f32(token.as_bytes()).or_else(|| token.parse().ok())
+}
+
+/// [`parse_f32`]'s fast path; `None` when the token is not a short plain decimal.
+#[inline]
+fn fast_f32(bytes: &[u8]) -> Option<f32> {
+    let (negative, digits) = match bytes.split_first()? {
+        (b'-', rest) => (true, rest),
+        _ => (false, bytes),
+    };
+    let mut mantissa: u32 = 0;
+    let mut significant = 0;
+    let mut decimals = 0;
+    let mut any_digit = false;
+    let mut dot = false;
+    for &b in digits {
+        match b {
+            b'0'..=b'9' => {
+                any_digit = true;
+                if mantissa != 0 || b != b'0' {
+                    significant += 1;
+                    if significant > 7 {
+                        return None;
+                    }
+                    mantissa = mantissa * 10 + u32::from(b - b'0');
+                }
+                if dot {
+                    decimals += 1;
+                }
+            }
+            b'.' if !dot => dot = true,
+            _ => return None,
+        }
+    }
+    if !any_digit {
+        return None;
+    }
+    // mantissa <= 9_999_999 < 2^24, so it is exact as f32.
+    let value = mantissa as f32 / *POW10_F32.get(decimals)?;
+    Some(if negative { -value } else { value })
+}
+
 /// Parses one number, which must be finite.
 fn read_number(token: &str, expected: &str, at: &dyn Fn() -> Location) -> Result<f32, ImportError> {
-    let value: f32 = token
-        .parse()
-        .map_err(|_| ImportError::syntax(at(), expected, token))?;
+    let value = parse_f32(token).ok_or_else(|| ImportError::syntax(at(), expected, token))?;
     if value.is_finite() {
         Ok(value)
     } else {
@@ -460,6 +541,15 @@ fn resolve_index(
     token: &str,
     at: &dyn Fn() -> Location,
 ) -> Result<u32, ImportError> {
+    // Fast path for the usual 1-based index of at most 9 digits (cannot overflow).
+    if part.len() <= 9 && part.bytes().all(|b| b.is_ascii_digit()) {
+        let x = part
+            .bytes()
+            .fold(0_u32, |acc, b| acc * 10 + u32::from(b - b'0'));
+        if x > 0 {
+            return Ok(x - 1);
+        }
+    }
     let x: i64 = part
         .parse()
         .map_err(|_| ImportError::syntax(at(), "an index", token))?;
@@ -706,6 +796,71 @@ mod tests {
         ];
         for s in samples {
             let _ = parse(s, Path::new("g.obj"));
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn fast_float_path_equals_str_parse(
+            digits in "[0-9]{0,9}",
+            dot in 0_usize..11,
+            negative in proptest::bool::ANY,
+        ) {
+            let mut token = digits.clone();
+            if dot <= token.len() {
+                token.insert(dot, '.');
+            }
+            if negative {
+                token.insert(0, '-');
+            }
+            let ours = parse_f32(&token).map(f32::to_bits);
+            let std = token.parse::<f32>().ok().map(f32::to_bits);
+            proptest::prop_assert_eq!(ours, std, "{}", token);
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn never_panics_on_random_obj_text(text in "([vtnfgol] |[0-9 ./eE+\\-]|nan|inf|\r?\n|#){0,300}") {
+            if let Ok((mesh, _)) = parse(text.as_bytes(), Path::new("r.obj")) {
+                let asset = Asset { meshes: vec![mesh], ..Asset::default() };
+                proptest::prop_assert!(asset.validate().is_ok());
+            }
+        }
+    }
+
+    #[test]
+    fn fast_float_path_edge_cases() {
+        for token in [
+            "0",
+            "-0",
+            "0.9825",
+            "-0.0881862",
+            "1.",
+            ".5",
+            ".",
+            "-",
+            "",
+            "+1",
+            "1e3",
+            "0.00000000001",
+            "0.0000000001",
+            "16777217",
+            "9999999",
+            "0.1234567",
+            "nan",
+            "inf",
+            "1..2",
+            "--1",
+            "0x1",
+            "-.",
+            "00000000000012",
+        ] {
+            assert_eq!(
+                parse_f32(token).map(f32::to_bits),
+                token.parse::<f32>().ok().map(f32::to_bits),
+                "{token:?}"
+            );
         }
     }
 

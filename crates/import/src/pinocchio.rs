@@ -49,16 +49,33 @@ pub struct PinocchioSkeleton {
     pub parents: Vec<Option<usize>>,
 }
 
-/// Per-vertex weights as read from `attachment.out`, renormalized.
+/// Per-vertex weights as read from `attachment.out` (renormalized), or generated.
+///
+/// Stored flat, row-major: row `r` (OBJ `v` line `r`) is
+/// `weights[r * bones..(r + 1) * bones]`, column `k` being the bone that ends at Pinocchio
+/// joint `k + 1`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Attachment {
-    /// One row per OBJ `v` line, one weight per bone (`J - 1` values): column `k` is the
-    /// bone ending at Pinocchio joint `k + 1`.
-    pub rows: Vec<Vec<f32>>,
+    /// Bone weights, `bones` per row, rows in OBJ `v` order.
+    pub weights: Vec<f32>,
+    /// Weights per row: the skeleton's joint count minus 1.
+    pub bones: usize,
     /// The leading root column of a `J`-column file, one value per row; `None` for
-    /// Pinocchio's own `J - 1`-column layout. Each row's bone weights plus its root weight
-    /// sum to 1.
+    /// Pinocchio's own `J - 1`-column layout. A row's bone weights plus its root weight sum
+    /// to 1 after [`parse_attachment`].
     pub root_weights: Option<Vec<f32>>,
+}
+
+impl Attachment {
+    /// Number of rows (`weights.len() / bones`; 0 when `bones` is 0).
+    pub fn row_count(&self) -> usize {
+        self.weights.len().checked_div(self.bones).unwrap_or(0)
+    }
+
+    /// The rows' bone weights, in order (`bones` values each).
+    pub fn rows(&self) -> std::slice::ChunksExact<'_, f32> {
+        self.weights.chunks_exact(self.bones.max(1))
+    }
 }
 
 /// Imports a Pinocchio rig: the OBJ mesh, `skeleton.out` and `attachment.out`.
@@ -91,7 +108,7 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
         mesh_data,
         &pino,
         None,
-        &weights.rows,
+        weights.rows(),
         weights.root_weights.as_deref(),
     )?;
     warnings.extend(imported.warnings);
@@ -223,7 +240,8 @@ pub fn parse_attachment(
     }
     let bones = joint_count - 1;
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut rows: Vec<Vec<f32>> = Vec::with_capacity(vertex_count);
+    let mut weights: Vec<f32> = Vec::with_capacity(vertex_count.saturating_mul(bones));
+    let mut row_count = 0;
     let mut root_weights: Vec<f32> = Vec::new();
     // (columns, line) of the first row.
     let mut layout: Option<(usize, usize)> = None;
@@ -239,7 +257,7 @@ pub fn parse_attachment(
         }
         let line_no = i + 1;
         let at = || Location::line(path, line_no);
-        if rows.len() == vertex_count {
+        if row_count == vertex_count {
             let extra = 1 + lines.filter(|(_, l)| !l.trim_ascii().is_empty()).count();
             return Err(ImportError::invalid(
                 at(),
@@ -250,32 +268,13 @@ pub fn parse_attachment(
                 ),
             ));
         }
-        buf.clear();
-        for token in line.split_ascii_whitespace() {
-            let column = buf.len() + 1;
-            // Most of a dense Pinocchio row is "0": skip the float parser for it.
-            let w: f32 = if token == "0" {
-                0.0
-            } else {
-                token
-                    .parse()
-                    .map_err(|_| ImportError::syntax(at(), "a weight", token))?
-            };
-            if !w.is_finite() {
-                return Err(ImportError::invalid(
-                    at(),
-                    format!("weight {column} ({token}) is not finite"),
-                ));
+        parse_row(line, &mut buf).map_err(|(column, token)| match obj::parse_f32(token) {
+            None => ImportError::syntax(at(), "a weight", token),
+            Some(w) if w.is_nan() || w.is_infinite() => {
+                ImportError::invalid(at(), format!("weight {column} ({token}) is not finite"))
             }
-            if w < 0.0 {
-                return Err(ImportError::invalid(
-                    at(),
-                    format!("weight {column} ({token}) is negative"),
-                ));
-            }
-            // + 0.0 turns -0.0 into 0.0.
-            buf.push(w + 0.0);
-        }
+            Some(_) => ImportError::invalid(at(), format!("weight {column} ({token}) is negative")),
+        })?;
         let (columns, first_line) = match layout {
             Some(l) => l,
             None => {
@@ -317,16 +316,16 @@ pub fn parse_attachment(
         if columns == joint_count {
             root_weights.push(scaled.next().unwrap_or(0.0));
         }
-        rows.push(scaled.collect());
+        weights.extend(scaled);
+        row_count += 1;
         last_line = line_no;
     }
-    if rows.len() < vertex_count {
+    if row_count < vertex_count {
         let problem = format!(
-            "{} weight rows for {vertex_count} OBJ vertices (`v` lines): the rows of vertices {}..={vertex_count} are missing",
-            rows.len(),
-            rows.len() + 1
+            "{row_count} weight rows for {vertex_count} OBJ vertices (`v` lines): the rows of vertices {}..={vertex_count} are missing",
+            row_count + 1
         );
-        if rows.is_empty() {
+        if row_count == 0 {
             return Err(ImportError::new(Location::file(path), Problem::Empty));
         }
         return Err(ImportError::invalid(
@@ -359,11 +358,30 @@ pub fn parse_attachment(
     let has_root = layout.is_some_and(|(columns, _)| columns == joint_count);
     Ok((
         Attachment {
-            rows,
+            weights,
+            bones,
             root_weights: has_root.then_some(root_weights),
         },
         warnings,
     ))
+}
+
+/// Parses a row of weights into `out` (cleared first), read by [`obj::parse_f32`].
+/// Negative zero becomes zero.
+///
+/// # Errors
+/// The 1-based column and the token of the first weight that does not parse or is NaN,
+/// infinite or negative.
+fn parse_row<'a>(line: &'a str, out: &mut Vec<f32>) -> Result<(), (usize, &'a str)> {
+    out.clear();
+    for token in line.split_ascii_whitespace() {
+        match obj::parse_f32(token) {
+            // `>= 0` is false for NaN; + 0.0 turns -0.0 into 0.0.
+            Some(w) if w >= 0.0 && w.is_finite() => out.push(w + 0.0),
+            _ => return Err((out.len() + 1, token)),
+        }
+    }
+    Ok(())
 }
 
 /// Builds the asset from already-parsed or generated Pinocchio data; [`import`] and the
@@ -379,7 +397,8 @@ pub fn parse_attachment(
 ///   non-empty and unique.
 /// - `rows`: one row per source vertex (`mesh.source_vertex_count()` rows), `J - 1` weights
 ///   each, column `k` for the bone ending at joint `k + 1`.
-/// - `root_weights`: an optional root weight per row (the `J`-column layout's first column).
+/// - `root_weights`: an optional root weight per row (the `J`-column layout's first
+///   column), bound to the root joint.
 ///
 /// Each row's weights (with its root weight) are normalized to sum 1 here without a
 /// warning, weights below [`WEIGHT_EPSILON`] dropped, the rest sorted by descending weight
@@ -400,17 +419,46 @@ pub fn assemble(
     rows: &[Vec<f32>],
     root_weights: Option<&[f32]>,
 ) -> Result<Imported, ImportError> {
+    let rows = rows.iter().map(Vec::as_slice);
     assemble_from(name, name, mesh, skeleton, bone_names, rows, root_weights)
 }
 
-/// [`assemble`], with `skeleton_source` as the location of the bounding-box note.
-fn assemble_from(
+/// [`assemble`] with the weights of an [`Attachment`] (as [`parse_attachment`] returns
+/// them).
+///
+/// # Errors
+/// As [`assemble`]; also when `weights.bones` is not the skeleton's joint count minus 1.
+pub fn assemble_attachment(
+    name: &str,
+    mesh: Mesh,
+    skeleton: &PinocchioSkeleton,
+    bone_names: Option<&[String]>,
+    weights: &Attachment,
+) -> Result<Imported, ImportError> {
+    let bones = skeleton.positions.len().saturating_sub(1);
+    if weights.bones != bones || weights.weights.len() % bones.max(1) != 0 {
+        return Err(ImportError::invalid(
+            Location::file(Path::new(name)),
+            format!(
+                "{} weights in rows of {}, for {bones} bones",
+                weights.weights.len(),
+                weights.bones
+            ),
+        ));
+    }
+    let root = weights.root_weights.as_deref();
+    assemble_from(name, name, mesh, skeleton, bone_names, weights.rows(), root)
+}
+
+/// [`assemble`], with `skeleton_source` as the location of the bounding-box note and the
+/// rows from any source (nested vectors or an [`Attachment`]'s flat storage).
+fn assemble_from<'a>(
     name: &str,
     skeleton_source: &str,
     mesh: Mesh,
     skeleton: &PinocchioSkeleton,
     bone_names: Option<&[String]>,
-    rows: &[Vec<f32>],
+    rows: impl ExactSizeIterator<Item = &'a [f32]>,
     root_weights: Option<&[f32]>,
 ) -> Result<Imported, ImportError> {
     let here = || Location::file(Path::new(name));
@@ -435,19 +483,18 @@ fn assemble_from(
     let bones = joint_count - 1;
 
     // Weight rows: one per source vertex.
+    let row_count = rows.len();
     let source_count = mesh.source_vertex_count();
-    if rows.len() != source_count {
+    if row_count != source_count {
         return Err(invalid(format!(
-            "{} weight rows for a mesh of {source_count} source vertices",
-            rows.len()
+            "{row_count} weight rows for a mesh of {source_count} source vertices"
         )));
     }
     if let Some(root) = root_weights {
-        if root.len() != rows.len() {
+        if root.len() != row_count {
             return Err(invalid(format!(
-                "{} root weights for {} weight rows",
-                root.len(),
-                rows.len()
+                "{} root weights for {row_count} weight rows",
+                root.len()
             )));
         }
     }
@@ -501,9 +548,9 @@ fn assemble_from(
 
     // Influences per source vertex, then per output vertex.
     // Built flat (one allocation) rather than one Vec per row.
-    let mut entries: Vec<Influence> = Vec::with_capacity(rows.len() * 4);
-    let mut ends: Vec<usize> = Vec::with_capacity(rows.len());
-    for (v, row) in rows.iter().enumerate() {
+    let mut entries: Vec<Influence> = Vec::with_capacity(row_count * 4);
+    let mut ends: Vec<usize> = Vec::with_capacity(row_count);
+    for (v, row) in rows.enumerate() {
         if row.len() != bones {
             return Err(invalid(format!(
                 "weight row {v} has {} weights for {bones} bones",
@@ -544,13 +591,13 @@ fn assemble_from(
         *start = end;
         Some(row)
     }));
-    let identity = mesh.source_vertex.len() == rows.len()
+    let identity = mesh.source_vertex.len() == row_count
         && mesh
             .source_vertex
             .iter()
             .enumerate()
             .all(|(i, &s)| s as usize == i);
-    // source_vertex entries are < rows.len() since rows.len() == max + 1.
+    // source_vertex entries are < row_count since row_count == max + 1.
     let influences = if identity {
         by_source
     } else {
@@ -847,9 +894,9 @@ mod tests {
         let text = "0.5 0.5 0 \n0.3333 0.3333 0.3333 \r\n0 1 0\n\n0.2500 0.2500 0.5003";
         let (a, warnings) = att(text, 4, 4).unwrap();
         assert!(a.root_weights.is_none());
-        assert_eq!(a.rows.len(), 4);
-        assert_eq!(a.rows[0], vec![0.5, 0.5, 0.0]);
-        for row in &a.rows {
+        assert_eq!((a.row_count(), a.bones), (4, 3));
+        assert_eq!(a.rows().next(), Some(&[0.5, 0.5, 0.0][..]));
+        for row in a.rows() {
             assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-6, "{row:?}");
         }
         assert_eq!(warnings.len(), 2);
@@ -877,7 +924,8 @@ mod tests {
     fn attachment_root_column_layout() {
         let (a, warnings) = att("0.5 0.25 0.25\n0 0 1\n", 3, 2).unwrap();
         assert_eq!(a.root_weights, Some(vec![0.5, 0.0]));
-        assert_eq!(a.rows, vec![vec![0.25, 0.25], vec![0.0, 1.0]]);
+        assert_eq!(a.weights, [0.25, 0.25, 0.0, 1.0]);
+        assert_eq!(a.bones, 2);
         assert_eq!(
             warnings,
             vec![Warning::Note {
@@ -931,7 +979,42 @@ mod tests {
             "a.out:2: all weights are zero: the vertex would follow no bone"
         );
         // Negative zero is zero.
-        assert_eq!(att("-0 1\n", 3, 1).unwrap().0.rows, vec![vec![0.0, 1.0]]);
+        let zero = att("-0 1\n", 3, 1).unwrap().0.weights;
+        assert_eq!(
+            zero.iter().map(|w| w.to_bits()).collect::<Vec<_>>(),
+            vec![0.0_f32.to_bits(), 1.0_f32.to_bits()]
+        );
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn never_panics_on_random_text(
+            text in "([0-9 .eE+\\-]|nan|inf|\r?\n){0,200}",
+            joints in 0_usize..6,
+            vertices in 0_usize..6,
+        ) {
+            let _ = parse_skeleton(&text, Path::new("s.out"));
+            let _ = parse_attachment(&text, Path::new("a.out"), joints, vertices);
+        }
+
+        #[test]
+        fn assembled_rows_sum_to_one(rows in proptest::collection::vec(
+            proptest::collection::vec(0.0_f32..1.0, 4), 1..8
+        )) {
+            proptest::prop_assume!(rows.iter().all(|r| r.iter().sum::<f32>() > 1e-3));
+            let n = rows.len();
+            let mesh = Mesh {
+                positions: vec![Vec3::ZERO; n],
+                source_vertex: (0..n as u32).collect(),
+                ..Mesh::default()
+            };
+            let imported = assemble("p", mesh, &branch(), None, &rows, None).unwrap();
+            for row in imported.asset.skins[0].influences.rows() {
+                let sum: f32 = row.iter().map(|i| i.weight).sum();
+                proptest::prop_assert!((sum - 1.0).abs() < 1e-5, "{:?}", row);
+                proptest::prop_assert!(row.windows(2).all(|w| w[0].weight >= w[1].weight));
+            }
+        }
     }
 
     #[test]
@@ -1170,6 +1253,35 @@ mod tests {
     }
 
     #[test]
+    fn assemble_attachment_matches_nested_rows() {
+        let s = branch();
+        let mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::Y],
+            source_vertex: vec![0, 1],
+            ..Mesh::default()
+        };
+        let (a, _) = att("0.1 0.2 0.3 0.4 0\n0 0 0 0.5 0.5\n", 5, 2).unwrap();
+        let rows: Vec<Vec<f32>> = a.rows().map(<[f32]>::to_vec).collect();
+        let flat = assemble_attachment("r", mesh.clone(), &s, None, &a).unwrap();
+        let nested = assemble(
+            "r",
+            mesh.clone(),
+            &s,
+            None,
+            &rows,
+            a.root_weights.as_deref(),
+        );
+        assert_eq!(flat.asset, nested.unwrap().asset);
+        let short = Attachment { bones: 3, ..a };
+        assert_eq!(
+            assemble_attachment("r", mesh, &s, None, &short)
+                .unwrap_err()
+                .to_string(),
+            "r: 8 weights in rows of 3, for 4 bones"
+        );
+    }
+
+    #[test]
     fn far_skeleton_gets_a_note() {
         let mut s = branch();
         let mesh = Mesh {
@@ -1328,46 +1440,5 @@ mod tests {
                 "skeleton.out:2: joint 0 has parent 0, i.e. is its own parent: the root must have parent -1"
             );
         }
-    }
-}
-
-#[cfg(test)]
-mod tmp_perf {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn perf() {
-        let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/corpus/1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1"));
-        let objb = std::fs::read(dir.join("Model1.obj")).unwrap();
-        let sk = std::fs::read_to_string(dir.join("skeleton.out")).unwrap();
-        let at = std::fs::read_to_string(dir.join("attachment.out")).unwrap();
-        let mut best = [f64::MAX; 4];
-        for _ in 0..30 {
-            let t = std::time::Instant::now();
-            let (mesh, _) = obj::parse(&objb, Path::new("m.obj")).unwrap();
-            let t1 = t.elapsed().as_secs_f64();
-            let s = parse_skeleton(&sk, Path::new("s")).unwrap();
-            let t2 = t.elapsed().as_secs_f64();
-            let (a, _) = parse_attachment(
-                &at,
-                Path::new("a"),
-                s.positions.len(),
-                mesh.source_vertex_count(),
-            )
-            .unwrap();
-            let t3 = t.elapsed().as_secs_f64();
-            let _ = assemble("x", mesh, &s, None, &a.rows, None).unwrap();
-            let t4 = t.elapsed().as_secs_f64();
-            for (b, v) in best.iter_mut().zip([t1, t2 - t1, t3 - t2, t4 - t3]) {
-                *b = b.min(v);
-            }
-        }
-        println!(
-            "obj {:.2}ms skel {:.3}ms att {:.2}ms assemble {:.2}ms",
-            best[0] * 1e3,
-            best[1] * 1e3,
-            best[2] * 1e3,
-            best[3] * 1e3
-        );
     }
 }

@@ -209,7 +209,9 @@ impl Asset {
                     })
                 };
                 match track.target {
-                    TrackTarget::Translation(j) | TrackTarget::Rotation(j) | TrackTarget::Scale(j)
+                    TrackTarget::Translation(j)
+                    | TrackTarget::Rotation(j)
+                    | TrackTarget::Scale(j)
                         if j.get() >= joint_count =>
                     {
                         bad(format!("targets {j}, which does not exist"))

@@ -129,7 +129,11 @@ mod tests {
         };
         for o in EulerOrder::ALL {
             let got = Mat3::from_quat(o.to_quat(angles));
-            assert!(got.abs_diff_eq(expect(o), 1e-6), "{o:?}: {got} vs {}", expect(o));
+            assert!(
+                got.abs_diff_eq(expect(o), 1e-6),
+                "{o:?}: {got} vs {}",
+                expect(o)
+            );
             assert_eq!(EulerOrder::parse(&o.as_str().to_uppercase()), Some(o));
         }
     }

@@ -5,9 +5,9 @@
 //! The conventions every value follows are written down once, in [`conventions`].
 #![warn(missing_docs)]
 
-pub mod conventions;
 mod asset;
 mod clip;
+pub mod conventions;
 mod index;
 mod mesh;
 mod skeleton;

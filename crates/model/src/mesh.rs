@@ -51,7 +51,10 @@ impl Mesh {
 
     /// Number of distinct source vertices (`max(source_vertex) + 1`).
     pub fn source_vertex_count(&self) -> usize {
-        self.source_vertex.iter().max().map_or(0, |&m| m as usize + 1)
+        self.source_vertex
+            .iter()
+            .max()
+            .map_or(0, |&m| m as usize + 1)
     }
 
     /// For each source vertex, the first output vertex made from it (`u32::MAX` if none).

@@ -340,7 +340,10 @@ mod tests {
         }));
         assert!(problems.contains(&SkeletonProblem::SelfParent { index: 3 }));
         assert!(problems.contains(&SkeletonProblem::EmptyName { index: 3 }));
-        assert!(matches!(problems[2], SkeletonProblem::NonFinite { index: 2, .. }));
+        assert!(matches!(
+            problems[2],
+            SkeletonProblem::NonFinite { index: 2, .. }
+        ));
     }
 
     #[test]
@@ -348,7 +351,10 @@ mod tests {
         let problems = Skeleton::new(vec![joint("a", Some(1)), joint("b", None)]).unwrap_err();
         assert_eq!(
             problems,
-            vec![SkeletonProblem::ParentAfterChild { index: 0, parent: 1 }]
+            vec![SkeletonProblem::ParentAfterChild {
+                index: 0,
+                parent: 1
+            }]
         );
     }
 

@@ -103,7 +103,10 @@ mod tests {
 
     #[test]
     fn csr_rows_round_trip() {
-        let inf = |j, w| Influence { joint: j, weight: w };
+        let inf = |j, w| Influence {
+            joint: j,
+            weight: w,
+        };
         let rows = vec![vec![inf(0, 1.0)], vec![], vec![inf(1, 0.25), inf(2, 0.75)]];
         let s = Influences::from_rows(rows.clone());
         assert_eq!(s.vertex_count(), 3);
