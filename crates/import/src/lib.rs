@@ -6,6 +6,7 @@
 //! any input.
 #![warn(missing_docs)]
 
+pub mod csci520;
 pub mod demo;
 mod error;
 pub mod gltf;

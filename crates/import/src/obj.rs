@@ -81,6 +81,24 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<Warning>), ImportEr
     raw.into_mesh(path)
 }
 
+/// Counts the `v` lines of an OBJ file without parsing them: the vertex count [`parse`]
+/// gives for a well-formed file (its `source_vertex_count`), cheap enough to learn it
+/// before parsing, e.g. to read per-vertex data in parallel. Same line rules as [`parse`]
+/// (keyword `v` followed by white space, leading white space allowed).
+pub fn count_vertex_lines(bytes: &[u8]) -> usize {
+    bytes
+        .split(|&b| b == b'\n')
+        .filter(|line| {
+            let start = line
+                .iter()
+                .position(|b| !b.is_ascii_whitespace())
+                .unwrap_or(line.len());
+            let line = &line[start..];
+            line.len() > 1 && line[0] == b'v' && line[1].is_ascii_whitespace()
+        })
+        .count()
+}
+
 /// One face corner: 0-based `v`, `vt`, `vn` indices, [`NONE`] when absent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 struct Corner {
@@ -447,7 +465,7 @@ fn out_of_range(
 }
 
 /// Exact powers of ten in `f32` (10^10 = 2^10 * 9765625 still fits the 24-bit mantissa).
-const POW10_F32: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
+pub(crate) const POW10_F32: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
 
 /// Parses a float exactly as `token.parse::<f32>()` does (`None` where it fails).
 ///

@@ -90,16 +90,48 @@ impl Attachment {
 /// [`parse_attachment`] or [`assemble`] fails.
 pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Imported, ImportError> {
     let mesh_bytes = read_file(mesh)?;
-    let (mesh_data, mut warnings) = obj::parse(&mesh_bytes, mesh)?;
-    let skeleton_bytes = read_file(skeleton)?;
-    let pino = parse_skeleton(utf8(&skeleton_bytes, skeleton)?, skeleton)?;
-    let attachment_bytes = read_file(attachment)?;
-    let (weights, attachment_warnings) = parse_attachment(
-        utf8(&attachment_bytes, attachment)?,
-        attachment,
-        pino.positions.len(),
-        mesh_data.source_vertex_count(),
-    )?;
+    // The OBJ and the weights are independent text files of similar size: parse them on
+    // two threads. The weights need the vertex count, which a cheap line count gives up
+    // front (checked against the parsed mesh below).
+    let expected_vertices = obj::count_vertex_lines(&mesh_bytes);
+    let read_rig = || -> Result<_, ImportError> {
+        let skeleton_bytes = read_file(skeleton)?;
+        let pino = parse_skeleton(utf8(&skeleton_bytes, skeleton)?, skeleton)?;
+        let attachment_bytes = read_file(attachment)?;
+        let parsed = parse_attachment(
+            utf8(&attachment_bytes, attachment)?,
+            attachment,
+            pino.positions.len(),
+            expected_vertices,
+        );
+        Ok((pino, attachment_bytes, parsed))
+    };
+    let (mesh_result, rig_result) = std::thread::scope(|scope| {
+        let rig = scope.spawn(read_rig);
+        let mesh_result = obj::parse(&mesh_bytes, mesh);
+        // A panic on the other thread is a bug; surface it as one.
+        let rig_result = match rig.join() {
+            Ok(r) => r,
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        (mesh_result, rig_result)
+    });
+    // Errors in file order: the mesh first.
+    let (mesh_data, mut warnings) = mesh_result?;
+    let (pino, attachment_bytes, parsed) = rig_result?;
+    let vertex_count = mesh_data.source_vertex_count();
+    let (weights, attachment_warnings) = if vertex_count == expected_vertices {
+        parsed?
+    } else {
+        // The line count and the parser disagree (unusual syntax): parse again with the
+        // parser's count, so errors name the right rows.
+        parse_attachment(
+            utf8(&attachment_bytes, attachment)?,
+            attachment,
+            pino.positions.len(),
+            vertex_count,
+        )?
+    };
     warnings.extend(attachment_warnings);
     let name = mesh_data.name.clone();
     let imported = assemble_from(
@@ -374,6 +406,10 @@ pub fn parse_attachment(
 /// infinite or negative.
 fn parse_row<'a>(line: &'a str, out: &mut Vec<f32>) -> Result<(), (usize, &'a str)> {
     out.clear();
+    if fast_row(line.as_bytes(), out) {
+        return Ok(());
+    }
+    out.clear();
     for token in line.split_ascii_whitespace() {
         match obj::parse_f32(token) {
             // `>= 0` is false for NaN; + 0.0 turns -0.0 into 0.0.
@@ -382,6 +418,70 @@ fn parse_row<'a>(line: &'a str, out: &mut Vec<f32>) -> Result<(), (usize, &'a st
         }
     }
     Ok(())
+}
+
+/// The common case of a weight row in one pass over its bytes: unsigned decimals
+/// (`0`, `0.9991`, `.5`) of at most 7 significant digits separated by blanks, which is all
+/// Pinocchio writes. Returns `false` on anything else (exponents, signs, long mantissas,
+/// junk), and the caller parses the row the general way, which also finds the error.
+/// Gives the same `f32`s as `str::parse` (the mantissa is exact, and the one division by a
+/// power of ten is correctly rounded).
+fn fast_row(bytes: &[u8], out: &mut Vec<f32>) -> bool {
+    let mut mantissa: u32 = 0;
+    let mut significant = 0_u32;
+    let mut decimals = 0_usize;
+    let mut in_token = false;
+    let mut any_digit = false;
+    let mut dot = false;
+    let finish = |mantissa: u32, decimals: usize, any_digit: bool, out: &mut Vec<f32>| {
+        if !any_digit {
+            return false;
+        }
+        match obj::POW10_F32.get(decimals) {
+            Some(p) => {
+                out.push(mantissa as f32 / p);
+                true
+            }
+            None => false,
+        }
+    };
+    for &b in bytes {
+        match b {
+            b'0'..=b'9' => {
+                in_token = true;
+                any_digit = true;
+                if mantissa != 0 || b != b'0' {
+                    significant += 1;
+                    if significant > 7 {
+                        return false;
+                    }
+                    mantissa = mantissa * 10 + u32::from(b - b'0');
+                }
+                if dot {
+                    decimals += 1;
+                }
+            }
+            b'.' if !dot => {
+                in_token = true;
+                dot = true;
+            }
+            b' ' | b'\t' | b'\r' => {
+                if in_token {
+                    if !finish(mantissa, decimals, any_digit, out) {
+                        return false;
+                    }
+                    mantissa = 0;
+                    significant = 0;
+                    decimals = 0;
+                    in_token = false;
+                    any_digit = false;
+                    dot = false;
+                }
+            }
+            _ => return false,
+        }
+    }
+    !in_token || finish(mantissa, decimals, any_digit, out)
 }
 
 /// Builds the asset from already-parsed or generated Pinocchio data; [`import`] and the

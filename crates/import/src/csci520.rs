@@ -1,0 +1,1 @@
+//! USC CSCI 520 skinning/IK folders (being written).
