@@ -74,7 +74,8 @@ pub struct ConvertArgs {
     /// Output file: .glb, or .gltf (+ a .bin of the same stem beside it).
     #[arg(long, short, value_name = "OUT")]
     pub output: PathBuf,
-    /// Influences kept per vertex: 1 to 8; above 4 writes JOINTS_1/WEIGHTS_1 too.
+    /// Influences kept per vertex: 1 to 8; above 4, vertices with more than 4 get a second
+    /// set (JOINTS_1/WEIGHTS_1). Each vertex keeps its largest weights, renormalized.
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=8))]
     pub max_influences: u8,
 }

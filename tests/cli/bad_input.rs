@@ -235,3 +235,51 @@ fn usage_errors_exit_2() {
     let r = rigport(&["frobnicate"]);
     assert_eq!(r.status.code(), Some(2));
 }
+
+#[test]
+fn deny_warnings_exits_4_and_writes_nothing() {
+    let dir = scratch();
+    // Row 2 sums to 0.9996: renormalized with a warning.
+    let [m, s, a] = rig(
+        dir.path(),
+        Some(("attachment.out", "1 0 \n0.4998 0.4998 \n0 1 \n0 1 \n")),
+    );
+    let out = dir.path().join("out.glb");
+    let args = [
+        "convert",
+        m.to_str().unwrap(),
+        s.to_str().unwrap(),
+        a.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let mut denied = vec!["--deny-warnings"];
+    denied.extend(args);
+    let r = rigport(&denied);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(4), "{stderr}");
+    assert!(stderr.contains("renormalized 1 weight rows"), "{stderr}");
+    assert!(!out.exists());
+    // Without the flag the same input converts, with the warning printed.
+    let stderr = rigport_ok(&args);
+    assert!(stderr.contains("warning:"), "{stderr}");
+    assert!(out.exists());
+}
+
+#[test]
+fn unwritable_output_exits_3() {
+    let dir = scratch();
+    let [m, s, a] = rig(dir.path(), None);
+    let out = dir.path().join("no/such/folder/out.glb");
+    let r = rigport(&[
+        "convert",
+        m.to_str().unwrap(),
+        s.to_str().unwrap(),
+        a.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("out.glb"), "{stderr}");
+}
