@@ -147,23 +147,37 @@ pub(crate) fn pack_row(
             .filter(|i| i.weight.is_finite() && i.weight > 0.0)
             .map(|i| (i.joint, f64::from(i.weight))),
     );
-    scratch.sort_by_key(|&(j, _)| j);
-    let mut merged = 0;
-    for k in 0..scratch.len() {
-        if merged > 0 && scratch[merged - 1].0 == scratch[k].0 {
-            scratch[merged - 1].1 += scratch[k].1;
-        } else {
-            scratch[merged] = scratch[k];
-            merged += 1;
+    // Fast path: with small palette indices a bit set proves there is nothing to merge,
+    // which is the usual case and saves a sort per vertex.
+    let mut seen = 0_u64;
+    let needs_merge = scratch.iter().any(|&(j, _)| {
+        let bit = 1_u64.checked_shl(j).unwrap_or(0);
+        let repeat = bit == 0 || seen & bit != 0;
+        seen |= bit;
+        repeat
+    });
+    if needs_merge {
+        scratch.sort_by_key(|&(j, _)| j);
+        let mut merged = 0;
+        for k in 0..scratch.len() {
+            if merged > 0 && scratch[merged - 1].0 == scratch[k].0 {
+                scratch[merged - 1].1 += scratch[k].1;
+            } else {
+                scratch[merged] = scratch[k];
+                merged += 1;
+            }
         }
+        scratch.truncate(merged);
     }
-    scratch.truncate(merged);
     // 2. Drop negligible weights, relative to the row's total so that unnormalized rows
     //    (sums of 100, say) are judged like normalized ones.
     let merged_total: f64 = scratch.iter().map(|&(_, w)| w).sum();
     scratch.retain(|&(_, w)| w / merged_total >= f64::from(WEIGHT_EPSILON));
     // 3. Largest first, ties by palette index.
-    scratch.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    //    Importers usually hand rows over in this order already.
+    if !scratch.is_sorted_by(|a, b| a.1 > b.1 || (a.1 == b.1 && a.0 < b.0)) {
+        scratch.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    }
 
     if scratch.is_empty() {
         report.unbound = true;
