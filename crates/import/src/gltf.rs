@@ -550,8 +550,14 @@ struct SceneNodes {
     skeleton: Skeleton,
     /// Node indices in skeleton (parents-first) order.
     order: Vec<usize>,
-    /// Each node's joint; `None` for nodes outside the imported scene.
+    /// Each node's joint; `None` for nodes outside the imported scene and for
+    /// `mesh_only` nodes.
     node_joint: Vec<Option<JointIndex>>,
+    /// Skinned-mesh nodes that are not joints: leaves that no skin uses and no animation
+    /// moves. glTF ignores a skinned mesh node's transform, so such a node carries nothing
+    /// but its mesh; making it a joint would add a node on every round trip.
+    /// `(node, parent joint)`.
+    mesh_only: Vec<(usize, Option<JointIndex>)>,
 }
 
 /// A mesh's shared skin data, converted once per glTF skin.
@@ -598,6 +604,7 @@ impl<'a> Importer<'a> {
             skeleton,
             order,
             node_joint,
+            mesh_only,
         } = self.skeleton()?;
         let model_rest = skeleton.model_rest_matrices();
         let nodes: Vec<::gltf::Node<'a>> = self.doc.nodes().collect();
@@ -607,12 +614,30 @@ impl<'a> Importer<'a> {
         let mut geometry: HashMap<(usize, usize), Option<Mesh>> = HashMap::new();
         let mut skin_data: HashMap<usize, SkinData> = HashMap::new();
 
-        for &node_index in &order {
-            let (Some(node), Some(joint)) = (
-                nodes.get(node_index),
-                node_joint.get(node_index).copied().flatten(),
-            ) else {
+        // Every joint node, then the skinned-mesh nodes that are not joints.
+        let mesh_nodes = order
+            .iter()
+            .map(|&i| (i, None))
+            .chain(mesh_only.iter().map(|&(i, parent)| (i, Some(parent))));
+        for (node_index, mesh_only_parent) in mesh_nodes {
+            let Some(node) = nodes.get(node_index) else {
                 continue;
+            };
+            // The node's model-space rest matrix; its joint, when it is one.
+            let (node_model, joint) = match mesh_only_parent {
+                None => {
+                    let Some(joint) = node_joint.get(node_index).copied().flatten() else {
+                        continue;
+                    };
+                    (model_rest.get(joint.get()).copied(), Some(joint))
+                }
+                Some(parent) => {
+                    let parent_model = parent
+                        .and_then(|p| model_rest.get(p.get()).copied())
+                        .unwrap_or(Mat4::IDENTITY);
+                    let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+                    (Some(parent_model * local), None)
+                }
             };
             let Some(mesh) = node.mesh() else {
                 if node.skin().is_some() {
@@ -625,9 +650,7 @@ impl<'a> Importer<'a> {
             };
             let skin = node.skin();
             if skin.is_some() {
-                let moved = model_rest
-                    .get(joint.get())
-                    .is_some_and(|m| !m.abs_diff_eq(Mat4::IDENTITY, 1e-6));
+                let moved = node_model.is_some_and(|m| !m.abs_diff_eq(Mat4::IDENTITY, 1e-6));
                 if moved {
                     self.note(
                         &format!("/nodes/{node_index}"),
@@ -701,7 +724,7 @@ impl<'a> Importer<'a> {
                                  JOINTS_0; imported unskinned, attached to the node"
                             ),
                         );
-                        model_mesh.attached_to = Some(joint);
+                        model_mesh.attached_to = joint;
                     }
                     (None, has_joints) => {
                         if has_joints {
@@ -713,7 +736,7 @@ impl<'a> Importer<'a> {
                                 ),
                             );
                         }
-                        model_mesh.attached_to = Some(joint);
+                        model_mesh.attached_to = joint;
                     }
                 }
                 meshes.push(model_mesh);
@@ -830,7 +853,37 @@ impl<'a> Importer<'a> {
                 stack.extend(node.children().map(|c| c.index()));
             }
         }
-        let order: Vec<usize> = full_order.into_iter().filter(|&i| selected[i]).collect();
+        let mut used = vec![false; n];
+        for skin in self.doc.skins() {
+            for j in skin.joints() {
+                if let Some(u) = used.get_mut(j.index()) {
+                    *u = true;
+                }
+            }
+            if let Some(u) = skin.skeleton().and_then(|s| used.get_mut(s.index())) {
+                *u = true;
+            }
+        }
+        for anim in self.doc.animations() {
+            for ch in anim.channels() {
+                if let Some(u) = used.get_mut(ch.target().node().index()) {
+                    *u = true;
+                }
+            }
+        }
+        let mesh_only_node = |i: usize| {
+            let node = &nodes[i];
+            node.mesh().is_some_and(|m| {
+                m.primitives()
+                    .all(|p| p.get(&Semantic::Joints(0)).is_some())
+            }) && node.skin().is_some()
+                && node.children().len() == 0
+                && !used[i]
+        };
+        let (order, mesh_only_nodes): (Vec<usize>, Vec<usize>) = full_order
+            .into_iter()
+            .filter(|&i| selected[i])
+            .partition(|&i| !mesh_only_node(i));
         let mut node_joint: Vec<Option<JointIndex>> = vec![None; n];
         for (k, &i) in order.iter().enumerate() {
             node_joint[i] = Some(JointIndex(k as u32));
@@ -919,10 +972,15 @@ impl<'a> Importer<'a> {
                 Problem::Skeleton(problems),
             )
         })?;
+        let mesh_only = mesh_only_nodes
+            .into_iter()
+            .map(|i| (i, parent[i].and_then(|p| node_joint[p])))
+            .collect();
         Ok(SceneNodes {
             skeleton,
             order,
             node_joint,
+            mesh_only,
         })
     }
 

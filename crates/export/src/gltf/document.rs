@@ -287,6 +287,11 @@ fn write_mesh(
                 .iter()
                 .enumerate()
                 .map(|(v, n)| {
+                    // Already-unit normals are kept bit for bit, so re-exporting a file
+                    // reproduces it (the validator allows 0.00005; 1e-6 is far inside).
+                    if (n.length_squared() - 1.0).abs() <= 1e-6 {
+                        return *n;
+                    }
                     n.try_normalize().unwrap_or_else(|| {
                         repaired += 1;
                         computed.get_or_insert_with(|| mesh.compute_normals())[v]
