@@ -52,7 +52,8 @@ pub enum Command {
 #[derive(Debug, Args)]
 pub struct InputArgs {
     /// Input files or folders: a .glb/.gltf; an .obj with Pinocchio skeleton and attachment
-    /// .out files (told apart by their content); or a folder holding such a set.
+    /// .out files (told apart by name or content); a USC CSCI 520 skin.config; or a folder
+    /// holding one of these sets.
     pub inputs: Vec<PathBuf>,
     /// The OBJ mesh of a Pinocchio rig.
     #[arg(long, value_name = "M.obj")]

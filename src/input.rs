@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use rigport_import::{gltf, obj, pinocchio, Imported};
+use rigport_import::{csci520, gltf, obj, pinocchio, Imported};
 
 use crate::cli::InputArgs;
 
@@ -23,13 +23,15 @@ pub enum Plan {
     },
     /// A bare OBJ mesh (no rig).
     Obj(PathBuf),
+    /// A USC CSCI 520 rig: its `skin.config`.
+    Csci520(PathBuf),
 }
 
 impl Plan {
     /// A short label for messages.
     pub fn label(&self) -> String {
         match self {
-            Plan::Gltf(p) | Plan::Obj(p) => p.display().to_string(),
+            Plan::Gltf(p) | Plan::Obj(p) | Plan::Csci520(p) => p.display().to_string(),
             Plan::Pinocchio { mesh, .. } => mesh.display().to_string(),
         }
     }
@@ -39,6 +41,7 @@ impl Plan {
         Ok(match self {
             Plan::Gltf(p) => gltf::import(p)?,
             Plan::Obj(p) => obj::import(p)?,
+            Plan::Csci520(p) => csci520::import(p)?.imported,
             Plan::Pinocchio {
                 mesh,
                 skeleton,
@@ -120,11 +123,12 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
         }
         match extension(input).as_str() {
             "glb" | "gltf" => plans.push(Plan::Gltf(input.clone())),
+            "config" => plans.push(Plan::Csci520(input.clone())),
             "obj" => objs.push(input.clone()),
             "out" => outs.push(input.clone()),
-            "" => bail!("{}: no file extension; expected .glb, .gltf, .obj or .out", input.display()),
+            "" => bail!("{}: no file extension; expected .glb, .gltf, .obj, .out or skin.config", input.display()),
             other => bail!(
-                "{}: unsupported input type .{other}; expected .glb, .gltf, .obj or Pinocchio .out files",
+                "{}: unsupported input type .{other}; expected .glb, .gltf, a CSCI 520 skin.config, .obj or Pinocchio .out files",
                 input.display()
             ),
         }
@@ -201,6 +205,10 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
 }
 
 fn plan_folder(dir: &Path) -> Result<Plan> {
+    let config = dir.join("skin.config");
+    if config.is_file() {
+        return Ok(Plan::Csci520(config));
+    }
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("{}: cannot read folder", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))

@@ -109,6 +109,12 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
         limited = Some(asset);
     }
     let asset = limited.as_ref().unwrap_or(&imported.asset);
+    if asset.skins.is_empty() && asset.meshes.iter().all(|m| m.attached_to.is_none()) {
+        anyhow::bail!(
+            "{}: nothing to skin: the rig has no skin weights and no mesh attached to a joint",
+            plan.label()
+        );
+    }
     let pose = match &args.pose {
         Some(path) => pose::load(path, &asset.skeleton)?,
         None => Pose::rest(&asset.skeleton),

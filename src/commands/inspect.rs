@@ -18,6 +18,8 @@ struct Report {
     joints: Vec<JointReport>,
     meshes: Vec<MeshReport>,
     clips: Vec<ClipReport>,
+    /// Names of the joints the rig marks as IK handles.
+    ik_handles: Vec<String>,
     warnings: Vec<String>,
 }
 
@@ -142,6 +144,11 @@ fn report(source: String, asset: &Asset, warnings: Vec<String>) -> Report {
         joints,
         meshes,
         clips,
+        ik_handles: asset
+            .ik_handles
+            .iter()
+            .map(|j| skel.joint(*j).name.clone())
+            .collect(),
         warnings,
     }
 }
@@ -200,6 +207,9 @@ fn print_text(out: &mut impl Write, r: &Report) -> std::io::Result<()> {
                 hist.join(", ")
             )?;
         }
+    }
+    if !r.ik_handles.is_empty() {
+        writeln!(out, "  IK handles: {}", r.ik_handles.join(", "))?;
     }
     writeln!(out, "  clips: {}", r.clips.len())?;
     for c in &r.clips {

@@ -6,6 +6,7 @@
 
 mod bad_input;
 mod common;
+mod csci520;
 mod demo;
 mod gltf_read;
 mod gltf_samples;

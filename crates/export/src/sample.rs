@@ -203,6 +203,7 @@ pub(crate) fn rig() -> Asset {
         }],
         clips: vec![wave(), idle()],
         meters_per_unit: Some(1.0),
+        ik_handles: Vec::new(),
     }
 }
 
@@ -226,6 +227,7 @@ pub(crate) fn wide_rig() -> Asset {
         }],
         clips: Vec::new(),
         meters_per_unit: None,
+        ik_handles: Vec::new(),
     }
 }
 
@@ -287,6 +289,7 @@ pub(crate) fn two_roots() -> Asset {
             }],
         }],
         meters_per_unit: None,
+        ik_handles: Vec::new(),
     }
 }
 
@@ -350,6 +353,7 @@ pub(crate) fn big_palette() -> Asset {
         }],
         clips: Vec::new(),
         meters_per_unit: None,
+        ik_handles: Vec::new(),
     }
 }
 
@@ -509,6 +513,7 @@ pub(crate) fn static_props() -> Asset {
             }],
         }],
         meters_per_unit: None,
+        ik_handles: Vec::new(),
     }
 }
 

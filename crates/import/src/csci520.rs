@@ -217,7 +217,7 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
 
     let weights = match &cfg.joint_weights_filename {
         None => {
-            warnings.push(Warning::Note {
+            warnings.push(Warning::Incomplete {
                 location: config.display().to_string(),
                 message: "no *jointWeightsFilename option: the rig has no skin weights; imported the skeleton and an unskinned mesh".into(),
             });
@@ -227,7 +227,7 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
             let path = dir.join(&entry.value);
             match std::fs::read(&path) {
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                    warnings.push(Warning::Note {
+                    warnings.push(Warning::Incomplete {
                         location: location(entry.line),
                         message: format!(
                             "*jointWeightsFilename names {:?}, which does not exist: the rig has no skin weights; imported the skeleton and an unskinned mesh",
@@ -284,10 +284,12 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
     let name = mesh.name.clone();
     let assembled = assemble(&name, mesh, &parents, &rest, weights, &rest_path)?;
     let new_index = &assembled.new_index;
-    let ik_handles = handles_file
+    let ik_handles: Vec<JointIndex> = handles_file
         .iter()
         .filter_map(|&f| new_index.get(f).map(|&k| JointIndex(k)))
         .collect();
+    let mut asset = assembled.asset;
+    asset.ik_handles = ik_handles.clone();
     let pick = |values: &[DVec3]| -> Vec<DVec3> {
         assembled
             .order
@@ -310,10 +312,7 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
         joint_orients_deg: pick(&rest.joint_orients_deg),
         ik_handles,
         file_index: assembled.order,
-        imported: Imported {
-            asset: assembled.asset,
-            warnings,
-        },
+        imported: Imported { asset, warnings },
     })
 }
 
@@ -1153,6 +1152,7 @@ fn assemble(
         skins,
         clips: Vec::new(),
         meters_per_unit: None,
+        ik_handles: Vec::new(),
     };
     if let Err(errors) = asset.validate() {
         let text: Vec<String> = errors.iter().map(ToString::to_string).collect();

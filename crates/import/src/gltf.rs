@@ -760,6 +760,7 @@ impl<'a> Importer<'a> {
             clips,
             // glTF 2.0 §3.4: "The units for all linear distances are meters."
             meters_per_unit: Some(1.0),
+            ik_handles: Vec::new(),
         };
         asset.validate().map_err(|problems| {
             ImportError::invalid(

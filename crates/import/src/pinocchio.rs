@@ -721,6 +721,7 @@ fn assemble_from<'a>(
         }],
         clips: Vec::new(),
         meters_per_unit: None,
+        ik_handles: Vec::new(),
     };
     if let Err(errors) = asset.validate() {
         let text: Vec<String> = errors.iter().map(ToString::to_string).collect();

@@ -1,4 +1,4 @@
-use crate::{Clip, Interpolation, Mesh, Skeleton, SkinBinding, TrackTarget};
+use crate::{Clip, Interpolation, JointIndex, Mesh, Skeleton, SkinBinding, TrackTarget};
 
 /// Everything rigport knows about one rig: skeleton, meshes, skin bindings and clips.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -15,6 +15,9 @@ pub struct Asset {
     pub clips: Vec<Clip>,
     /// Metres per length unit, when the source states it.
     pub meters_per_unit: Option<f64>,
+    /// Joints the rig names as inverse-kinematics handles (end effectors), in the source's
+    /// order (e.g. CSCI 520 `IKJointIDs`).
+    pub ik_handles: Vec<JointIndex>,
 }
 
 /// One thing wrong with an [`Asset`], as found by [`Asset::validate`].
@@ -142,6 +145,13 @@ impl Asset {
                         what: format!("mesh {mi} attachment {j}"),
                     });
                 }
+            }
+        }
+        for (i, j) in self.ik_handles.iter().enumerate() {
+            if j.get() >= joint_count {
+                errs.push(AssetError::BadReference {
+                    what: format!("IK handle {i} ({j})"),
+                });
             }
         }
         for (si, skin) in self.skins.iter().enumerate() {

@@ -33,6 +33,14 @@ pub enum Warning {
         /// What was wrong and what was done.
         message: String,
     },
+    /// Part of what the input should hold is absent, and the result lacks it (e.g. a rig
+    /// whose weights file is missing imports without a skin).
+    Incomplete {
+        /// Where.
+        location: String,
+        /// What is missing and what the result lacks.
+        message: String,
+    },
     /// A fact about the input the user may want to know (e.g. which layout was detected).
     Note {
         /// Where.
@@ -63,6 +71,7 @@ impl fmt::Display for Warning {
                 "mesh {mesh:?}: {vertices} vertices lost weight to the limit of {max_influences} influences (largest weight dropped {max_dropped_weight:.6}); renormalized"
             ),
             Warning::Repaired { location, message } => write!(f, "{location}: repaired: {message}"),
+            Warning::Incomplete { location, message } => write!(f, "{location}: {message}"),
             Warning::Note { location, message } => write!(f, "{location}: {message}"),
         }
     }
