@@ -865,9 +865,10 @@ impl<'a> Importer<'a> {
                 *u = true;
             }
         }
-        for anim in self.doc.animations() {
-            for ch in anim.channels() {
-                if let Some(u) = used.get_mut(ch.target().node().index()) {
+        // From the JSON: the gltf crate's channel accessors unwrap unvalidated indices.
+        for anim in &self.doc.as_json().animations {
+            for ch in &anim.channels {
+                if let Some(u) = used.get_mut(ch.target.node.value()) {
                     *u = true;
                 }
             }
@@ -2067,11 +2068,15 @@ mod tests {
         assert_eq!(asset.name, "skin_basic");
         assert_eq!(asset.meters_per_unit, Some(1.0));
         // Nodes are stored child-before-parent (Spine = node 0); the skeleton is sorted.
-        assert_eq!(names(&asset), ["Body", "Hips", "Spine"]);
-        let parents: Vec<_> = asset.skeleton.parents().collect();
-        assert_eq!(parents, [None, None, Some(JointIndex(1))]);
         assert_eq!(
-            asset.skeleton.joint(JointIndex(2)).rest_local.translation,
+            names(&asset),
+            ["Hips", "Spine"],
+            "the skinned mesh node Body is no joint"
+        );
+        let parents: Vec<_> = asset.skeleton.parents().collect();
+        assert_eq!(parents, [None, Some(JointIndex(0))]);
+        assert_eq!(
+            asset.skeleton.joint(JointIndex(1)).rest_local.translation,
             Vec3::Y
         );
 
@@ -2089,7 +2094,7 @@ mod tests {
         assert_eq!(asset.skins.len(), 1);
         let skin = &asset.skins[0];
         assert_eq!(skin.mesh, MeshIndex(0));
-        assert_eq!(skin.joints, [JointIndex(1), JointIndex(2)]);
+        assert_eq!(skin.joints, [JointIndex(0), JointIndex(1)]);
         assert!(bind_pose_is_rest_pose(&asset));
         let row = |v| {
             skin.influences
@@ -2107,25 +2112,25 @@ mod tests {
         assert_eq!(bend.name, "bend");
         assert_eq!(bend.tracks.len(), 3);
         let rot = &bend.tracks[0];
-        assert_eq!(rot.target, TrackTarget::Rotation(JointIndex(2)));
+        assert_eq!(rot.target, TrackTarget::Rotation(JointIndex(1)));
         assert_eq!(rot.interpolation, Interpolation::Linear);
         assert_eq!(rot.times, [0.0, 1.0]);
         let s = 0.5f32.sqrt();
         assert_close(&rot.values, &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, s, s]);
         let step = &bend.tracks[1];
-        assert_eq!(step.target, TrackTarget::Translation(JointIndex(1)));
+        assert_eq!(step.target, TrackTarget::Translation(JointIndex(0)));
         assert_eq!(step.interpolation, Interpolation::Step);
         assert_eq!(step.times, [0.0, 0.5, 1.0]);
         assert_close(&step.values, &[0.0, 1.0, 0.0, 0.0, 1.5, 0.0, 0.0, 1.0, 0.0]);
         let cubic = &bend.tracks[2];
-        assert_eq!(cubic.target, TrackTarget::Scale(JointIndex(2)));
+        assert_eq!(cubic.target, TrackTarget::Scale(JointIndex(1)));
         assert_eq!(cubic.interpolation, Interpolation::CubicSpline);
         assert_eq!(cubic.values.len(), 2 * 3 * 3, "[in, value, out] per key");
         assert_eq!(cubic.key_value(1), [1.0, 2.0, 1.0]);
         assert_eq!(asset.clips[1].name, "animation_1");
         assert_eq!(
             asset.clips[1].tracks[0].target,
-            TrackTarget::Rotation(JointIndex(1))
+            TrackTarget::Rotation(JointIndex(0))
         );
     }
 
@@ -2140,9 +2145,13 @@ mod tests {
     #[test]
     fn weights_from_all_sets_merged_and_kept_unnormalized() {
         let Imported { asset, warnings } = import_fixture("skin_weights.gltf");
-        assert_eq!(names(&asset), ["Mesh", "A", "B", "C"]);
+        assert_eq!(
+            names(&asset),
+            ["A", "B", "C"],
+            "the skinned mesh node is no joint"
+        );
         let skin = &asset.skins[0];
-        assert_eq!(skin.joints, [JointIndex(1), JointIndex(2), JointIndex(3)]);
+        assert_eq!(skin.joints, [JointIndex(0), JointIndex(1), JointIndex(2)]);
         assert_eq!(
             skin.inv_bind,
             vec![Mat4::IDENTITY; 3],
@@ -2617,7 +2626,11 @@ mod tests {
         else {
             return;
         };
-        assert_eq!(asset.skeleton.len(), 5);
+        assert_eq!(
+            asset.skeleton.len(),
+            4,
+            "5 nodes less the skinned mesh node"
+        );
         assert_eq!(asset.meshes.len(), 1);
         assert_eq!(asset.meshes[0].name, "Cylinder");
         assert_eq!(asset.meshes[0].vertex_count(), 96);
@@ -2637,7 +2650,7 @@ mod tests {
             "/nodes/1",
             "skinned mesh node has a transform"
         ));
-        assert!(has_warning(&warnings, "/nodes", "5 unnamed node(s)"));
+        assert!(has_warning(&warnings, "/nodes", "4 unnamed node(s)"));
     }
 
     #[test]
@@ -2647,7 +2660,11 @@ mod tests {
         else {
             return;
         };
-        assert_eq!(asset.skeleton.len(), 22);
+        assert_eq!(
+            asset.skeleton.len(),
+            21,
+            "22 nodes less the skinned mesh node"
+        );
         assert_eq!(asset.meshes.len(), 1);
         assert_eq!(asset.meshes[0].name, "Proxy");
         assert_eq!(asset.meshes[0].vertex_count(), 370);
@@ -2673,7 +2690,11 @@ mod tests {
         else {
             return;
         };
-        assert_eq!(asset.skeleton.len(), 22);
+        assert_eq!(
+            asset.skeleton.len(),
+            21,
+            "22 nodes less the skinned mesh node"
+        );
         assert_eq!(asset.meshes.len(), 1);
         let mesh = &asset.meshes[0];
         assert_eq!(mesh.name, "Cesium_Man");
