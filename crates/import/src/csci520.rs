@@ -52,7 +52,7 @@ use rigport_model::{
     Skeleton, SkeletonProblem, SkinBinding, Transform, Warning,
 };
 
-use crate::{obj, read_file, ImportError, Imported, Location, Problem};
+use crate::{obj, read_file, utf8, ImportError, Imported, Location, Problem};
 
 /// A row of weights whose sum differs from 1 by more than this is renormalized with a
 /// [`Warning::WeightsRenormalized`]. The corpus rows sum to 1 within 2e-12 (13-digit
@@ -1241,18 +1241,6 @@ fn unreadable(
             path.display()
         ),
     )
-}
-
-/// The file as UTF-8 text.
-///
-/// # Errors
-/// At the line holding the first invalid byte.
-fn utf8<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a str, ImportError> {
-    std::str::from_utf8(bytes).map_err(|e| {
-        let before = bytes.get(..e.valid_up_to()).unwrap_or_default();
-        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-        ImportError::invalid(Location::line(path, line), "not UTF-8 text")
-    })
 }
 
 #[cfg(test)]

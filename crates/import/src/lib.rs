@@ -30,3 +30,15 @@ pub struct Imported {
 pub(crate) fn read_file(path: &std::path::Path) -> Result<Vec<u8>, ImportError> {
     std::fs::read(path).map_err(|e| ImportError::new(Location::file(path), Problem::Io(e)))
 }
+
+/// The file as UTF-8 text (parsers strip a byte-order mark themselves).
+///
+/// # Errors
+/// At the line holding the first invalid byte.
+pub(crate) fn utf8<'a>(bytes: &'a [u8], path: &std::path::Path) -> Result<&'a str, ImportError> {
+    std::str::from_utf8(bytes).map_err(|e| {
+        let before = bytes.get(..e.valid_up_to()).unwrap_or_default();
+        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+        ImportError::invalid(Location::line(path, line), "not UTF-8 text")
+    })
+}

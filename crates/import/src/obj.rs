@@ -465,7 +465,7 @@ fn out_of_range(
 }
 
 /// Exact powers of ten in `f32` (10^10 = 2^10 * 9765625 still fits the 24-bit mantissa).
-pub(crate) const POW10_F32: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
+const POW10_F32: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
 
 /// Parses a float exactly as `token.parse::<f32>()` does (`None` where it fails).
 ///
@@ -487,36 +487,64 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
         (b'-', rest) => (true, rest),
         _ => (false, bytes),
     };
-    let mut mantissa: u32 = 0;
-    let mut significant = 0;
-    let mut decimals = 0;
-    let mut any_digit = false;
-    let mut dot = false;
+    let mut number = Decimal::default();
     for &b in digits {
-        match b {
-            b'0'..=b'9' => {
-                any_digit = true;
-                if mantissa != 0 || b != b'0' {
-                    significant += 1;
-                    if significant > 7 {
-                        return None;
-                    }
-                    mantissa = mantissa * 10 + u32::from(b - b'0');
-                }
-                if dot {
-                    decimals += 1;
-                }
-            }
-            b'.' if !dot => dot = true,
-            _ => return None,
+        if !number.push(b) {
+            return None;
         }
     }
-    if !any_digit {
-        return None;
-    }
-    // mantissa <= 9_999_999 < 2^24, so it is exact as f32.
-    let value = mantissa as f32 / *POW10_F32.get(decimals)?;
+    let value = number.value()?;
     Some(if negative { -value } else { value })
+}
+
+/// An unsigned decimal (`12`, `0.9991`, `.5`, `3.`) read one byte at a time, for the fast
+/// paths of the text parsers.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Decimal {
+    mantissa: u32,
+    significant: u32,
+    decimals: usize,
+    any_digit: bool,
+    dot: bool,
+}
+
+impl Decimal {
+    /// Takes the next byte; `false` when it is neither a digit nor the first `.`, or the
+    /// number has more than 7 significant digits (then the caller takes the slow path).
+    pub(crate) fn push(&mut self, b: u8) -> bool {
+        match b {
+            b'0'..=b'9' => {
+                self.any_digit = true;
+                if self.mantissa != 0 || b != b'0' {
+                    self.significant += 1;
+                    if self.significant > 7 {
+                        return false;
+                    }
+                    self.mantissa = self.mantissa * 10 + u32::from(b - b'0');
+                }
+                if self.dot {
+                    self.decimals += 1;
+                }
+                true
+            }
+            b'.' if !self.dot => {
+                self.dot = true;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// The value, `None` without any digit or with too many decimals.
+    ///
+    /// The mantissa is below 2^24 and the power of ten exact in `f32`, so the one
+    /// division is correctly rounded: the same `f32` as `str::parse` (Clinger's fast path).
+    pub(crate) fn value(&self) -> Option<f32> {
+        if !self.any_digit {
+            return None;
+        }
+        Some(self.mantissa as f32 / *POW10_F32.get(self.decimals)?)
+    }
 }
 
 /// Parses one number, which must be finite.

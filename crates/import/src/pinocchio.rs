@@ -37,7 +37,7 @@ use rigport_model::{
     Skeleton, SkinBinding, Transform, Warning,
 };
 
-use crate::{obj, read_file, ImportError, Imported, Location, Problem};
+use crate::{obj, read_file, utf8, ImportError, Imported, Location, Problem};
 
 /// A Pinocchio skeleton as written in `skeleton.out`: joints in Pinocchio's numbering.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -427,61 +427,31 @@ fn parse_row<'a>(line: &'a str, out: &mut Vec<f32>) -> Result<(), (usize, &'a st
 /// Gives the same `f32`s as `str::parse` (the mantissa is exact, and the one division by a
 /// power of ten is correctly rounded).
 fn fast_row(bytes: &[u8], out: &mut Vec<f32>) -> bool {
-    let mut mantissa: u32 = 0;
-    let mut significant = 0_u32;
-    let mut decimals = 0_usize;
+    let mut number = obj::Decimal::default();
     let mut in_token = false;
-    let mut any_digit = false;
-    let mut dot = false;
-    let finish = |mantissa: u32, decimals: usize, any_digit: bool, out: &mut Vec<f32>| {
-        if !any_digit {
+    for &b in bytes {
+        if matches!(b, b' ' | b'\t' | b'\r') {
+            if in_token {
+                match number.value() {
+                    Some(w) => out.push(w),
+                    None => return false,
+                }
+                number = obj::Decimal::default();
+                in_token = false;
+            }
+        } else if number.push(b) {
+            in_token = true;
+        } else {
             return false;
         }
-        match obj::POW10_F32.get(decimals) {
-            Some(p) => {
-                out.push(mantissa as f32 / p);
-                true
-            }
-            None => false,
-        }
-    };
-    for &b in bytes {
-        match b {
-            b'0'..=b'9' => {
-                in_token = true;
-                any_digit = true;
-                if mantissa != 0 || b != b'0' {
-                    significant += 1;
-                    if significant > 7 {
-                        return false;
-                    }
-                    mantissa = mantissa * 10 + u32::from(b - b'0');
-                }
-                if dot {
-                    decimals += 1;
-                }
-            }
-            b'.' if !dot => {
-                in_token = true;
-                dot = true;
-            }
-            b' ' | b'\t' | b'\r' => {
-                if in_token {
-                    if !finish(mantissa, decimals, any_digit, out) {
-                        return false;
-                    }
-                    mantissa = 0;
-                    significant = 0;
-                    decimals = 0;
-                    in_token = false;
-                    any_digit = false;
-                    dot = false;
-                }
-            }
-            _ => return false,
+    }
+    if in_token {
+        match number.value() {
+            Some(w) => out.push(w),
+            None => return false,
         }
     }
-    !in_token || finish(mantissa, decimals, any_digit, out)
+    true
 }
 
 /// Builds the asset from already-parsed or generated Pinocchio data; [`import`] and the
@@ -836,18 +806,6 @@ fn bounds_note(mesh: &Mesh, skeleton: &PinocchioSkeleton, location: &str) -> Opt
             worst.0,
             worst.1
         ),
-    })
-}
-
-/// The file as UTF-8 text (a byte-order mark is stripped by the parsers).
-///
-/// # Errors
-/// At the line holding the first invalid byte.
-fn utf8<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a str, ImportError> {
-    std::str::from_utf8(bytes).map_err(|e| {
-        let before = bytes.get(..e.valid_up_to()).unwrap_or_default();
-        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-        ImportError::invalid(Location::line(path, line), "not UTF-8 text")
     })
 }
 
