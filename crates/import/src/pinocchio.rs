@@ -92,9 +92,9 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
     let mesh_bytes = read_file(mesh)?;
     // The OBJ and the weights are independent text files of similar size: parse them on
     // two threads. The weights need the vertex count, which a cheap line count gives up
-    // front (checked against the parsed mesh below).
-    let expected_vertices = obj::count_vertex_lines(&mesh_bytes);
+    // front on the other thread (checked against the parsed mesh below).
     let read_rig = || -> Result<_, ImportError> {
+        let expected_vertices = obj::count_vertex_lines(&mesh_bytes);
         let skeleton_bytes = read_file(skeleton)?;
         let pino = parse_skeleton(utf8(&skeleton_bytes, skeleton)?, skeleton)?;
         let attachment_bytes = read_file(attachment)?;
@@ -104,7 +104,26 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
             pino.positions.len(),
             expected_vertices,
         );
-        Ok((pino, attachment_bytes, parsed))
+        // The per-vertex influences need only the skeleton and the weights: build them
+        // here too. Any problem is left for `assemble_from` to report, in file order.
+        let influences = match (&parsed, check_topology(&pino.parents)) {
+            (Ok((weights, _)), Ok(order)) => source_influences(
+                weights.rows(),
+                weights.root_weights.as_deref(),
+                &skeleton_indices(&order),
+                pino.positions.len().saturating_sub(1),
+                &|m| ImportError::invalid(Location::file(attachment), m),
+            )
+            .ok(),
+            _ => None,
+        };
+        Ok((
+            pino,
+            attachment_bytes,
+            parsed,
+            influences,
+            expected_vertices,
+        ))
     };
     let (mesh_result, rig_result) = std::thread::scope(|scope| {
         let rig = scope.spawn(read_rig);
@@ -118,11 +137,12 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
     });
     // Errors in file order: the mesh first.
     let (mesh_data, mut warnings) = mesh_result?;
-    let (pino, attachment_bytes, parsed) = rig_result?;
+    let (pino, attachment_bytes, parsed, mut influences, expected_vertices) = rig_result?;
     let vertex_count = mesh_data.source_vertex_count();
     let (weights, attachment_warnings) = if vertex_count == expected_vertices {
         parsed?
     } else {
+        influences = None;
         // The line count and the parser disagree (unusual syntax): parse again with the
         // parser's count, so errors name the right rows.
         parse_attachment(
@@ -142,6 +162,7 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
         None,
         weights.rows(),
         weights.root_weights.as_deref(),
+        influences,
     )?;
     warnings.extend(imported.warnings);
     Ok(Imported {
@@ -490,7 +511,16 @@ pub fn assemble(
     root_weights: Option<&[f32]>,
 ) -> Result<Imported, ImportError> {
     let rows = rows.iter().map(Vec::as_slice);
-    assemble_from(name, name, mesh, skeleton, bone_names, rows, root_weights)
+    assemble_from(
+        name,
+        name,
+        mesh,
+        skeleton,
+        bone_names,
+        rows,
+        root_weights,
+        None,
+    )
 }
 
 /// [`assemble`] with the weights of an [`Attachment`] (as [`parse_attachment`] returns
@@ -517,7 +547,86 @@ pub fn assemble_attachment(
         ));
     }
     let root = weights.root_weights.as_deref();
-    assemble_from(name, name, mesh, skeleton, bone_names, weights.rows(), root)
+    assemble_from(
+        name,
+        name,
+        mesh,
+        skeleton,
+        bone_names,
+        weights.rows(),
+        root,
+        None,
+    )
+}
+
+/// Each weight row's influences on the skeleton joints (`new_index[k]` is Pinocchio joint
+/// `k`'s skeleton index): zero weights dropped, renormalized, largest first (ties by joint).
+///
+/// # Errors
+/// Via `invalid`: a row of the wrong length, a negative or non-finite weight, a row with no
+/// weight.
+fn source_influences<'a>(
+    rows: impl ExactSizeIterator<Item = &'a [f32]>,
+    root_weights: Option<&[f32]>,
+    new_index: &[u32],
+    bones: usize,
+    invalid: &dyn Fn(String) -> ImportError,
+) -> Result<Influences, ImportError> {
+    // Built flat (one allocation) rather than one Vec per row.
+    let mut entries: Vec<Influence> = Vec::with_capacity(rows.len() * 4);
+    let mut ends: Vec<usize> = Vec::with_capacity(rows.len());
+    for (v, row) in rows.enumerate() {
+        if row.len() != bones {
+            return Err(invalid(format!(
+                "weight row {v} has {} weights for {bones} bones",
+                row.len()
+            )));
+        }
+        let start = entries.len();
+        let root = root_weights.and_then(|r| r.get(v)).copied();
+        let columns = root
+            .map(|w| (0_usize, w))
+            .into_iter()
+            .chain(row.iter().enumerate().map(|(c, &w)| (c + 1, w)));
+        let mut sum = 0.0_f64;
+        for (k, w) in columns {
+            if !w.is_finite() || w < 0.0 {
+                return Err(invalid(format!("weight row {v} holds {w}")));
+            }
+            if w >= WEIGHT_EPSILON {
+                sum += f64::from(w);
+                entries.push(Influence {
+                    joint: new_index.get(k).copied().unwrap_or(0),
+                    weight: w,
+                });
+            }
+        }
+        if sum <= 0.0 {
+            return Err(invalid(format!("weight row {v} has no weight")));
+        }
+        let kept = entries.get_mut(start..).unwrap_or_default();
+        for inf in kept.iter_mut() {
+            inf.weight = (f64::from(inf.weight) / sum) as f32;
+        }
+        kept.sort_by(|a, b| b.weight.total_cmp(&a.weight).then(a.joint.cmp(&b.joint)));
+        ends.push(entries.len());
+    }
+    Ok(Influences::from_rows(ends.iter().scan(0, |start, &end| {
+        let row = entries.get(*start..end).unwrap_or_default().iter().copied();
+        *start = end;
+        Some(row)
+    })))
+}
+
+/// Skeleton index of each Pinocchio joint, for a topology [`check_topology`] accepted.
+fn skeleton_indices(order: &[usize]) -> Vec<u32> {
+    let mut new_index = vec![0_u32; order.len()];
+    for (i, &k) in order.iter().enumerate() {
+        if let Some(slot) = new_index.get_mut(k) {
+            *slot = i as u32;
+        }
+    }
+    new_index
 }
 
 /// [`assemble`], with `skeleton_source` as the location of the bounding-box note and the
@@ -530,6 +639,7 @@ fn assemble_from<'a>(
     bone_names: Option<&[String]>,
     rows: impl ExactSizeIterator<Item = &'a [f32]>,
     root_weights: Option<&[f32]>,
+    precomputed: Option<Influences>,
 ) -> Result<Imported, ImportError> {
     let here = || Location::file(Path::new(name));
     let invalid = |message: String| ImportError::invalid(here(), message);
@@ -570,12 +680,7 @@ fn assemble_from<'a>(
     }
 
     // Skeleton: output joint i is Pinocchio joint order[i].
-    let mut new_index = vec![0_u32; joint_count];
-    for (i, &k) in order.iter().enumerate() {
-        if let Some(slot) = new_index.get_mut(k) {
-            *slot = i as u32;
-        }
-    }
+    let new_index = skeleton_indices(&order);
     let parent_of = |k: usize| skeleton.parents.get(k).copied().flatten();
     let position = |k: usize| skeleton.positions.get(k).copied().unwrap_or(Vec3::ZERO);
     // A bone's origin is its head: its Pinocchio parent's position; the root's is its own.
@@ -616,51 +721,12 @@ fn assemble_from<'a>(
         .map(|m| Mat4::from_translation(-m.w_axis.truncate()))
         .collect();
 
-    // Influences per source vertex, then per output vertex.
-    // Built flat (one allocation) rather than one Vec per row.
-    let mut entries: Vec<Influence> = Vec::with_capacity(row_count * 4);
-    let mut ends: Vec<usize> = Vec::with_capacity(row_count);
-    for (v, row) in rows.enumerate() {
-        if row.len() != bones {
-            return Err(invalid(format!(
-                "weight row {v} has {} weights for {bones} bones",
-                row.len()
-            )));
-        }
-        let start = entries.len();
-        let root = root_weights.and_then(|r| r.get(v)).copied();
-        let columns = root
-            .map(|w| (0_usize, w))
-            .into_iter()
-            .chain(row.iter().enumerate().map(|(c, &w)| (c + 1, w)));
-        let mut sum = 0.0_f64;
-        for (k, w) in columns {
-            if !w.is_finite() || w < 0.0 {
-                return Err(invalid(format!("weight row {v} holds {w}")));
-            }
-            if w >= WEIGHT_EPSILON {
-                sum += f64::from(w);
-                entries.push(Influence {
-                    joint: new_index.get(k).copied().unwrap_or(0),
-                    weight: w,
-                });
-            }
-        }
-        if sum <= 0.0 {
-            return Err(invalid(format!("weight row {v} has no weight")));
-        }
-        let kept = entries.get_mut(start..).unwrap_or_default();
-        for inf in kept.iter_mut() {
-            inf.weight = (f64::from(inf.weight) / sum) as f32;
-        }
-        kept.sort_by(|a, b| b.weight.total_cmp(&a.weight).then(a.joint.cmp(&b.joint)));
-        ends.push(entries.len());
-    }
-    let by_source = Influences::from_rows(ends.iter().scan(0, |start, &end| {
-        let row = entries.get(*start..end).unwrap_or_default().iter().copied();
-        *start = end;
-        Some(row)
-    }));
+    // Influences per source vertex (possibly built already, beside the OBJ parse), then
+    // per output vertex.
+    let by_source = match precomputed {
+        Some(done) => done,
+        None => source_influences(rows, root_weights, &new_index, bones, &invalid)?,
+    };
     let identity = mesh.source_vertex.len() == row_count
         && mesh
             .source_vertex

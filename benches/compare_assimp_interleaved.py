@@ -1,0 +1,67 @@
+#!/usr/bin/env python3
+"""Peer comparison robust to machine drift: rigport vs Assimp, runs interleaved.
+
+    python3 benches/compare_assimp_interleaved.py [--pairs N] [--bin target/release/rigport]
+
+hyperfine (benches/compare_assimp.sh) times all runs of one command, then all of the other;
+on a shared VM the load drifts between the two blocks and the ratio swings (0.24x to 0.46x
+seen in one hour). Here each pair runs rigport and Assimp back to back, alternating which
+goes first, so both see the same machine. Prints both medians, the ratio of the medians and
+the median of the per-pair ratios, as a markdown table row for BENCHMARKS.md.
+
+Input: ../shared/corpus/.../human_model1 (Model1.obj, skeleton.out, attachment.out).
+Needs: a release build of rigport and `assimp` (Debian assimp-utils). Exit 2 if missing.
+"""
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+MODEL = os.path.join(ROOT, "../shared/corpus/1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--pairs", type=int, default=120)
+    ap.add_argument("--bin", default=os.path.join(ROOT, "target/release/rigport"))
+    args = ap.parse_args()
+    if not os.path.exists(args.bin):
+        print(f"compare: {args.bin} missing: run cargo build --release", file=sys.stderr)
+        return 2
+    if shutil.which("assimp") is None:
+        print("compare: assimp missing: apt-get install -y assimp-utils", file=sys.stderr)
+        return 2
+    files = [os.path.join(MODEL, f) for f in ("Model1.obj", "skeleton.out", "attachment.out")]
+    if not all(os.path.exists(f) for f in files):
+        print(f"compare: corpus rig missing under {MODEL}", file=sys.stderr)
+        return 2
+    with tempfile.TemporaryDirectory() as out:
+        ours = [args.bin, "convert", "-q", *files, "-o", os.path.join(out, "rigport.glb")]
+        theirs = ["assimp", "export", files[0], os.path.join(out, "assimp.glb"), "-fglb2"]
+        for _ in range(5):  # warm-up
+            subprocess.run(ours, capture_output=True, check=True)
+            subprocess.run(theirs, capture_output=True, check=True)
+        t_ours, t_theirs = [], []
+        for i in range(args.pairs):
+            order = [(ours, t_ours), (theirs, t_theirs)]
+            for cmd, acc in order if i % 2 == 0 else reversed(order):
+                t = time.perf_counter()
+                subprocess.run(cmd, capture_output=True, check=True)
+                acc.append(time.perf_counter() - t)
+    mo, mt = statistics.median(t_ours) * 1e3, statistics.median(t_theirs) * 1e3
+    pair = statistics.median(a / b for a, b in zip(t_ours, t_theirs))
+    load = os.getloadavg()[0]
+    print(f"{args.pairs} interleaved pairs, load {load:.2f}")
+    print("| input | rigport convert (median) | assimp export -fglb2 (median) | ratio of medians | median pairwise ratio |")
+    print("| --- | ---: | ---: | ---: | ---: |")
+    print(f"| Model1 | {mo:.1f} ms | {mt:.1f} ms | {mo / mt:.2f}x | {pair:.2f}x |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
