@@ -631,6 +631,10 @@ fn skeleton_indices(order: &[usize]) -> Vec<u32> {
 
 /// [`assemble`], with `skeleton_source` as the location of the bounding-box note and the
 /// rows from any source (nested vectors or an [`Attachment`]'s flat storage).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "private: the two public entry points fill in different subsets"
+)]
 fn assemble_from<'a>(
     name: &str,
     skeleton_source: &str,
