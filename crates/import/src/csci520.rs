@@ -52,7 +52,7 @@ use rigport_model::{
     Skeleton, SkeletonProblem, SkinBinding, Transform, Warning,
 };
 
-use crate::{obj, read_file, utf8, ImportError, Imported, Location, Problem};
+use crate::{exact_fields, obj, read_file, utf8, ImportError, Imported, Location, Problem};
 
 /// A row of weights whose sum differs from 1 by more than this is renormalized with a
 /// [`Warning::WeightsRenormalized`]. The corpus rows sum to 1 within 2e-12 (13-digit
@@ -868,22 +868,13 @@ pub fn parse_weights(
         Vec::with_capacity(vertex_count.saturating_mul(4));
     for (line_no, line) in lines {
         let at = || Location::line(path, line_no);
-        let mut fields = [""; 3];
-        let mut n = 0;
-        for token in line.split_ascii_whitespace() {
-            if let Some(slot) = fields.get_mut(n) {
-                *slot = token;
-            }
-            n += 1;
-        }
-        if n != 3 {
+        let Some([vertex, joint, weight]) = exact_fields::<3>(line) else {
             return Err(ImportError::syntax(
                 at(),
                 "an entry `vertex joint weight`",
                 line,
             ));
-        }
-        let [vertex, joint, weight] = fields;
+        };
         let index = |token: &str, what: &str, count: usize| -> Result<u32, ImportError> {
             let value: i64 = token
                 .parse()

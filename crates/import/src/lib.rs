@@ -42,3 +42,14 @@ pub(crate) fn utf8<'a>(bytes: &'a [u8], path: &std::path::Path) -> Result<&'a st
         ImportError::invalid(Location::line(path, line), "not UTF-8 text")
     })
 }
+
+/// The white-space separated fields of a line, when there are exactly `N`.
+pub(crate) fn exact_fields<const N: usize>(line: &str) -> Option<[&str; N]> {
+    let mut fields = [""; N];
+    let mut n = 0;
+    for token in line.split_ascii_whitespace() {
+        *fields.get_mut(n)? = token;
+        n += 1;
+    }
+    (n == N).then_some(fields)
+}

@@ -37,7 +37,7 @@ use rigport_model::{
     Skeleton, SkinBinding, Transform, Warning,
 };
 
-use crate::{obj, read_file, utf8, ImportError, Imported, Location, Problem};
+use crate::{exact_fields, obj, read_file, utf8, ImportError, Imported, Location, Problem};
 
 /// A Pinocchio skeleton as written in `skeleton.out`: joints in Pinocchio's numbering.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -194,21 +194,13 @@ pub fn parse_skeleton(text: &str, path: &Path) -> Result<PinocchioSkeleton, Impo
             continue;
         }
         let at = || Location::line(path, i + 1);
-        let mut fields = [""; 5];
-        let mut n = 0;
-        for token in line.split_ascii_whitespace() {
-            if let Some(slot) = fields.get_mut(n) {
-                *slot = token;
-            }
-            n += 1;
-        }
-        if n != 5 {
+        let Some(fields) = exact_fields::<5>(line) else {
             return Err(ImportError::syntax(
                 at(),
                 "5 fields `index x y z parent`",
                 line,
             ));
-        }
+        };
         let ordinal = skeleton.positions.len();
         let index: usize = fields[0]
             .parse()

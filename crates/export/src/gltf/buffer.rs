@@ -114,60 +114,23 @@ impl Builder {
         self.accessor(view, data.len() / width, ComponentType::F32, type_, bounds)
     }
 
-    /// An `UNSIGNED_BYTE` accessor (`data.len() / size` elements of `type_`).
-    pub(crate) fn u8s(
+    /// An unsigned-integer accessor (`data.len() / size` elements of `type_`), of `T`'s
+    /// component type (`u8`, `u16` or `u32`).
+    pub(crate) fn ints<T: IntComponent>(
         &mut self,
-        data: &[u8],
-        type_: Type,
-        target: Option<Target>,
-    ) -> Index<json::Accessor> {
-        let view = self.view(target, |bin| bin.extend_from_slice(data));
-        self.accessor(
-            view,
-            data.len() / type_.multiplicity(),
-            ComponentType::U8,
-            type_,
-            None,
-        )
-    }
-
-    /// An `UNSIGNED_SHORT` accessor (`data.len() / size` elements of `type_`).
-    pub(crate) fn u16s(
-        &mut self,
-        data: &[u16],
+        data: &[T],
         type_: Type,
         target: Option<Target>,
     ) -> Index<json::Accessor> {
         let view = self.view(target, |bin| {
             for v in data {
-                bin.extend_from_slice(&v.to_le_bytes());
+                v.put_le(bin);
             }
         });
         self.accessor(
             view,
             data.len() / type_.multiplicity(),
-            ComponentType::U16,
-            type_,
-            None,
-        )
-    }
-
-    /// An `UNSIGNED_INT` accessor (`data.len() / size` elements of `type_`).
-    pub(crate) fn u32s(
-        &mut self,
-        data: &[u32],
-        type_: Type,
-        target: Option<Target>,
-    ) -> Index<json::Accessor> {
-        let view = self.view(target, |bin| {
-            for v in data {
-                bin.extend_from_slice(&v.to_le_bytes());
-            }
-        });
-        self.accessor(
-            view,
-            data.len() / type_.multiplicity(),
-            ComponentType::U32,
+            T::COMPONENT,
             type_,
             None,
         )
@@ -197,3 +160,25 @@ fn min_max(data: &[f32], width: usize) -> (json::Value, json::Value) {
     };
     (to_json(lo), to_json(hi))
 }
+
+/// An unsigned integer glTF stores little-endian as an accessor component.
+pub(crate) trait IntComponent: Copy {
+    /// The accessor's component type.
+    const COMPONENT: ComponentType;
+    /// Appends the little-endian bytes.
+    fn put_le(self, out: &mut Vec<u8>);
+}
+
+macro_rules! int_component {
+    ($t:ty, $c:expr) => {
+        impl IntComponent for $t {
+            const COMPONENT: ComponentType = $c;
+            fn put_le(self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
+        }
+    };
+}
+int_component!(u8, ComponentType::U8);
+int_component!(u16, ComponentType::U16);
+int_component!(u32, ComponentType::U32);

@@ -334,9 +334,9 @@ fn write_mesh(
             // JOINTS_n: UNSIGNED_BYTE when every palette index fits, else UNSIGNED_SHORT.
             let joints_acc = if skin.joints.len() <= 256 {
                 let small: Vec<u8> = joints.iter().map(|&j| j as u8).collect();
-                b.u8s(&small, Type::Vec4, array)
+                b.ints(&small, Type::Vec4, array)
             } else {
-                b.u16s(&joints, Type::Vec4, array)
+                b.ints(&joints, Type::Vec4, array)
             };
             let weights: Vec<f32> = packed
                 .rows
@@ -382,9 +382,9 @@ fn write_mesh(
     let element = Some(Target::ElementArrayBuffer);
     let indices = if mesh.vertex_count() <= usize::from(u16::MAX) {
         let small: Vec<u16> = flat.iter().map(|&i| i as u16).collect();
-        b.u16s(&small, Type::Scalar, element)
+        b.ints(&small, Type::Scalar, element)
     } else {
-        b.u32s(&flat, Type::Scalar, element)
+        b.ints(&flat, Type::Scalar, element)
     };
 
     // Morph targets. If any target has normal deltas, every target gets a NORMAL accessor
