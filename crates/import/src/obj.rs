@@ -138,7 +138,15 @@ impl Raw {
             Err(_) => String::from_utf8_lossy(bytes),
         };
         let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-        let mut raw = Raw::default();
+        // Reserve from the file size so the big arrays never reallocate: a `v` line takes
+        // at least 8 bytes, a face corner at least 2. Capacity that stays unused costs
+        // address space only (its pages are never touched).
+        let mut raw = Raw {
+            positions: Vec::with_capacity(text.len() / 8),
+            corners: Vec::with_capacity(text.len() / 2),
+            faces: Vec::with_capacity(text.len() / 8),
+            ..Raw::default()
+        };
         for (i, line) in text.split('\n').enumerate() {
             let line_no = i + 1;
             let line = line.trim_ascii();
