@@ -1,13 +1,7 @@
 //! Exit codes, documented in `rigport --help`.
 
-/// Success.
-#[allow(dead_code)]
-pub const OK: u8 = 0;
 /// An input could not be read or is invalid (the message names file and line).
 pub const BAD_INPUT: u8 = 1;
-/// Usage error: unknown flag, missing argument (clap's own code).
-#[allow(dead_code)]
-pub const USAGE: u8 = 2;
 /// An output could not be written.
 pub const OUTPUT: u8 = 3;
 /// Warnings were reported and `--deny-warnings` was given.
