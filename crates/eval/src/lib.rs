@@ -6,10 +6,16 @@
 //! influences, not a skeleton. Parallelism is the caller's choice.
 #![warn(missing_docs)]
 
+pub mod bone_mesh;
+pub mod dqs;
 mod error;
 pub mod fk;
 pub mod pose;
+pub mod reduce;
+pub mod retime;
 pub mod rig;
+pub mod sample;
+pub mod sequence;
 pub mod skinning;
 
 pub use error::EvalError;

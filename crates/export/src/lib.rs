@@ -36,6 +36,7 @@
 mod atomic;
 mod error;
 mod gltf;
+mod usd;
 mod weights;
 
 #[cfg(test)]

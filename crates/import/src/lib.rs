@@ -6,12 +6,15 @@
 //! any input.
 #![warn(missing_docs)]
 
+pub mod asf_amc;
+pub mod bvh;
 pub mod csci520;
 pub mod demo;
 mod error;
 pub mod gltf;
 pub mod obj;
 pub mod pinocchio;
+pub mod usda;
 
 pub use error::{ImportError, Location, Problem};
 

@@ -1,0 +1,1 @@
+//! Dual quaternion skinning, following UsdSkel so results can be compared with it.

@@ -1,0 +1,1 @@
+//! Key reduction with a bound on world-space joint position error.

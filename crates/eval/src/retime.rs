@@ -1,0 +1,1 @@
+//! Time warping: resampling, speed, warp curves and reversal, baked to linear keys.

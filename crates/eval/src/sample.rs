@@ -1,0 +1,1 @@
+//! Clip sampling: a clip and a time to local joint transforms.

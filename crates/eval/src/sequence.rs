@@ -1,0 +1,1 @@
+//! Sequencing: concatenation with crossfades, seamless loops, trimming.

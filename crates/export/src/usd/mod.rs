@@ -1,0 +1,1 @@
+//! Asset -> USD text (.usda) with UsdSkel.

@@ -1,0 +1,1 @@
+//! Acclaim ASF skeletons with AMC motions (CMU motion capture).

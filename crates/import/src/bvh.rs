@@ -1,0 +1,1 @@
+//! BioVision Hierarchy (BVH) motion capture.

@@ -1,0 +1,1 @@
+//! USD text files (.usda) with UsdSkel skeletons, bindings and animations.
