@@ -10,4 +10,7 @@ mod csci520;
 mod demo;
 mod gltf_read;
 mod gltf_samples;
+mod motion;
 mod pinocchio;
+mod skinning;
+mod usd;
