@@ -1,1 +1,0 @@
-//! USD text files (.usda) with UsdSkel skeletons, bindings and animations.
