@@ -1,4 +1,11 @@
 //! Clips -> glTF animations: one sampler per track, channels on joint or mesh nodes.
+//!
+//! Constant tracks are written small: a track whose every key equals the property's rest
+//! value (the joint node's TRS, or the mesh's default morph weights) is not written at all,
+//! since a property without a channel keeps that value (glTF 2.0 §3.11 "Animations"); a
+//! constant track at another value keeps only its first and last key. Every animation still
+//! spans its clip's full time range: when the tracks that set the range's ends would all be
+//! dropped, the first of them is kept with its first and last key.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -7,7 +14,7 @@ use json::accessor::Type;
 use json::animation::{Interpolation as GltfInterpolation, Property};
 use json::validation::Checked;
 use json::Index;
-use rigport_model::{Asset, Clip, Interpolation, Track, TrackTarget, Warning};
+use rigport_model::{Asset, Clip, Interpolation, Track, TrackTarget, Transform, Warning};
 
 use super::buffer::{Bounds, Builder};
 use super::document::mesh_label;
@@ -26,9 +33,11 @@ pub(crate) fn write_animations(
 ) {
     let mut inputs: BTreeMap<Vec<u32>, Index<json::Accessor>> = BTreeMap::new();
     for clip in &asset.clips {
+        // Per-track warnings, flushed in track order once the clip is planned and written.
+        let mut track_warnings: Vec<(usize, Warning)> = Vec::new();
         let mut seen = BTreeSet::new();
-        let mut channels = Vec::new();
-        let mut samplers = Vec::new();
+        // Tracks that survive the checks, in clip order.
+        let mut planned: Vec<Planned> = Vec::new();
         for (ti, track) in clip.tracks.iter().enumerate() {
             let location = format!("clip {:?} track {ti}", clip.name);
             let (node, path) = match track.target {
@@ -42,21 +51,18 @@ pub(crate) fn write_animations(
                     // (ANIMATION_CHANNEL_TARGET_NODE_WEIGHTS_NO_MORPHS) and one weight per
                     // target per key (ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_COUNT).
                     if targets == 0 {
-                        warnings.push(dropped(
-                            &location,
-                            format!("mesh {:?} has no morph targets", mesh_label(m.get(), mesh)),
-                        ));
+                        let why =
+                            format!("mesh {:?} has no morph targets", mesh_label(m.get(), mesh));
+                        track_warnings.push((ti, dropped(&location, why)));
                         continue;
                     }
                     if track.components() != targets {
-                        warnings.push(dropped(
-                            &location,
-                            format!(
-                                "{} weights per key for the {targets} morph targets of mesh {:?}",
-                                track.components(),
-                                mesh_label(m.get(), mesh)
-                            ),
-                        ));
+                        let why = format!(
+                            "{} weights per key for the {targets} morph targets of mesh {:?}",
+                            track.components(),
+                            mesh_label(m.get(), mesh)
+                        );
+                        track_warnings.push((ti, dropped(&location, why)));
                         continue;
                     }
                     (mesh_nodes[m.get()], Property::MorphTargetWeights)
@@ -64,35 +70,59 @@ pub(crate) fn write_animations(
             };
             // ANIMATION_DUPLICATE_TARGETS: one channel per node and path in an animation.
             if !seen.insert(track.target) {
-                warnings.push(dropped(
-                    &location,
-                    "an earlier track of this clip animates the same property".into(),
-                ));
+                let why = "an earlier track of this clip animates the same property";
+                track_warnings.push((ti, dropped(&location, why.into())));
                 continue;
             }
+            planned.push(Planned {
+                track: ti,
+                node,
+                path,
+                fate: constancy(asset, track),
+            });
+        }
+        keep_time_range(clip, &mut planned);
 
+        let mut channels = Vec::new();
+        let mut samplers = Vec::new();
+        for &Planned {
+            track: ti,
+            node,
+            path,
+            fate,
+        } in &planned
+        {
+            let track = &clip.tracks[ti];
+            let location = format!("clip {:?} track {ti}", clip.name);
             let mut interpolation = track.interpolation;
-            let mut values = sampler_values(track);
-            if interpolation == Interpolation::CubicSpline && track.times.len() < 2 {
+            let (times, mut values) = match fate {
+                Constancy::AtRest => continue,
+                Constancy::Constant => end_keys(track),
+                Constancy::Varying => (track.times.clone(), sampler_values(track)),
+            };
+            if interpolation == Interpolation::CubicSpline && times.len() < 2 {
                 // glTF requires two keys for CUBICSPLINE
                 // (ANIMATION_SAMPLER_INPUT_ACCESSOR_TOO_FEW_ELEMENTS). One key is a
                 // constant, which STEP with the key's value states exactly.
                 let c = track.components();
                 values = values[c..2 * c].to_vec();
                 interpolation = Interpolation::Step;
-                warnings.push(Warning::Note {
-                    location: location.clone(),
-                    message: "one-key cubic spline written as STEP (CUBICSPLINE needs two keys)"
-                        .into(),
-                });
+                let message = "one-key cubic spline written as STEP (CUBICSPLINE needs two keys)";
+                track_warnings.push((
+                    ti,
+                    Warning::Note {
+                        location: location.clone(),
+                        message: message.into(),
+                    },
+                ));
             }
 
-            let key: Vec<u32> = track.times.iter().map(|t| t.to_bits()).collect();
+            let key: Vec<u32> = times.iter().map(|t| t.to_bits()).collect();
             let input = match inputs.get(&key) {
                 Some(&acc) => acc,
                 None => {
                     // Sampler inputs require min/max (ANIMATION_SAMPLER_INPUT_ACCESSOR_WITHOUT_BOUNDS).
-                    let acc = b.floats(&track.times, Type::Scalar, None, Bounds::MinMax);
+                    let acc = b.floats(&times, Type::Scalar, None, Bounds::MinMax);
                     inputs.insert(key, acc);
                     acc
                 }
@@ -130,6 +160,9 @@ pub(crate) fn write_animations(
                 extras: None,
             });
         }
+        // Stable: a track's own warnings keep their order.
+        track_warnings.sort_by_key(|&(ti, _)| ti);
+        warnings.extend(track_warnings.into_iter().map(|(_, w)| w));
         if channels.is_empty() {
             warnings.push(Warning::Repaired {
                 location: clip_location(clip),
@@ -145,6 +178,167 @@ pub(crate) fn write_animations(
             samplers,
         });
     }
+}
+
+/// A track that passed the checks and will be written (unless at rest).
+#[derive(Clone, Copy, Debug)]
+struct Planned {
+    /// Index in the clip's tracks.
+    track: usize,
+    /// The node it animates.
+    node: usize,
+    /// The property.
+    path: Property,
+    /// How it is written.
+    fate: Constancy,
+}
+
+/// What a track's keys hold, as far as writing it small goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Constancy {
+    /// Every key equals the property's rest value: the channel can go.
+    AtRest,
+    /// Every key equals the first, which is not the rest value: two keys say it exactly.
+    Constant,
+    /// Written as it is.
+    Varying,
+}
+
+/// Relative tolerance for equal translations, scales and morph weights: `f32` values that
+/// went through a unit conversion or a matrix decomposition differ from the "same" value
+/// by a few ulps (2^-23 ≈ 1.2e-7 each).
+const VALUE_TOLERANCE: f64 = 1e-6;
+/// Rotations are equal when `|dot| >= 1 - ROTATION_TOLERANCE` (q and -q are one rotation);
+/// 1e-7 is an angle of about 9e-4 rad (0.05°).
+const ROTATION_TOLERANCE: f64 = 1e-7;
+
+/// Whether two values of a property are equal for [`constancy`].
+fn same_value(rotation: bool, a: &[f32], b: &[f32]) -> bool {
+    if rotation {
+        let (Ok(a), Ok(b)) = (<[f32; 4]>::try_from(a), <[f32; 4]>::try_from(b)) else {
+            return false;
+        };
+        // Non-degenerate: checked before building.
+        return quat_dot(unit_quat(a), unit_quat(b)).abs() >= 1.0 - ROTATION_TOLERANCE;
+    }
+    let norm = |v: &[f32]| v.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>().sqrt();
+    let diff = a
+        .iter()
+        .zip(b)
+        .map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    a.len() == b.len() && diff <= VALUE_TOLERANCE * norm(a).max(norm(b))
+}
+
+/// Classifies a track against the value its property has without a channel: the joint
+/// node's rest TRS, or the mesh's default morph weights (zeros when it states none).
+///
+/// A cubic spline is constant only when every tangent is exactly zero; otherwise the curve
+/// moves between equal keys.
+fn constancy(asset: &Asset, track: &Track) -> Constancy {
+    let joint_rest = |j: rigport_model::JointIndex| {
+        asset
+            .skeleton
+            .joints()
+            .get(j.get())
+            .map_or(Transform::IDENTITY, |joint| joint.rest_local)
+    };
+    let rest: Vec<f32> = match track.target {
+        TrackTarget::Translation(j) => joint_rest(j).translation.to_array().to_vec(),
+        TrackTarget::Rotation(j) => joint_rest(j).rotation.to_array().to_vec(),
+        TrackTarget::Scale(j) => joint_rest(j).scale.to_array().to_vec(),
+        TrackTarget::MorphWeights(m) => match asset.meshes.get(m.get()) {
+            Some(mesh) if mesh.morph_weights.is_empty() => vec![0.0; mesh.morph_targets.len()],
+            Some(mesh) => mesh.morph_weights.clone(),
+            None => return Constancy::Varying,
+        },
+    };
+    let rotation = matches!(track.target, TrackTarget::Rotation(_));
+    let c = track.components();
+    if c == 0 || track.times.is_empty() {
+        return Constancy::Varying;
+    }
+    if track.interpolation == Interpolation::CubicSpline {
+        let tangents_zero = track
+            .values
+            .chunks_exact(3 * c)
+            .all(|key| key[..c].iter().chain(&key[2 * c..]).all(|&t| t == 0.0));
+        if !tangents_zero {
+            return Constancy::Varying;
+        }
+    }
+    let first = track.key_value(0);
+    if !(1..track.times.len()).all(|k| same_value(rotation, first, track.key_value(k))) {
+        return Constancy::Varying;
+    }
+    if same_value(rotation, first, &rest) {
+        Constancy::AtRest
+    } else {
+        Constancy::Constant
+    }
+}
+
+/// Keeps the animation as long as its clip: the clip's time range is that of every
+/// planned track; when the written tracks do not reach its end (or start), the first
+/// at-rest track that does is written after all, with its first and last key.
+fn keep_time_range(clip: &Clip, planned: &mut [Planned]) {
+    let range = |track: &Track| Some((*track.times.first()?, *track.times.last()?));
+    let span = |written: bool, planned: &[Planned]| {
+        planned
+            .iter()
+            .filter(|p| !written || p.fate != Constancy::AtRest)
+            .filter_map(|p| range(clip.tracks.get(p.track)?))
+            .fold(None, |acc: Option<(f32, f32)>, (lo, hi)| {
+                Some(acc.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))))
+            })
+    };
+    let Some((start, end)) = span(false, planned) else {
+        return;
+    };
+    // The end first: it is the clip's duration.
+    for (at_end, target) in [(true, end), (false, start)] {
+        let covered = match span(true, planned) {
+            Some((lo, _)) if !at_end => lo <= target,
+            Some((_, hi)) => hi >= target,
+            None => false,
+        };
+        if covered {
+            continue;
+        }
+        let pick = planned.iter_mut().find(|p| {
+            p.fate == Constancy::AtRest
+                && clip
+                    .tracks
+                    .get(p.track)
+                    .and_then(range)
+                    .is_some_and(|(lo, hi)| if at_end { hi == target } else { lo == target })
+        });
+        if let Some(p) = pick {
+            p.fate = Constancy::Constant;
+        }
+    }
+}
+
+/// A constant track's first and last key, both with the first key's value (normalized for
+/// rotations; a cubic spline's tangents are zero). One key stays one key.
+fn end_keys(track: &Track) -> (Vec<f32>, Vec<f32>) {
+    let per_key = track.values.len() / track.times.len().max(1);
+    let mut values = sampler_values(&Track {
+        target: track.target,
+        interpolation: track.interpolation,
+        times: track.times.iter().take(1).copied().collect(),
+        values: track.values.iter().take(per_key).copied().collect(),
+    });
+    let times: Vec<f32> = match (track.times.first(), track.times.last()) {
+        (Some(&first), Some(&last)) if last > first => vec![first, last],
+        (Some(&first), _) => vec![first],
+        _ => Vec::new(),
+    };
+    if times.len() == 2 {
+        values.extend_from_within(..);
+    }
+    (times, values)
 }
 
 /// `clip "name"`.
