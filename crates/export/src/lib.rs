@@ -47,4 +47,5 @@ pub use error::{ExportError, Problem};
 pub use gltf::{
     prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, PreparedGltf,
 };
+pub use usd::{prepare_usd, to_usda, ExportedUsd, PreparedUsd, UsdOptions, UsdSkinning};
 pub use weights::gltf_influences;

@@ -1,1 +1,224 @@
-//! Asset -> USD text (.usda) with UsdSkel.
+//! Asset -> USD text (`.usda`) with UsdSkel.
+//!
+//! What the stage holds (`<root>` is the asset name made an identifier, `rig` when empty):
+//! - layer metadata: `defaultPrim = "<root>"`, `upAxis = "Y"`, `metersPerUnit` (the asset's
+//!   [`meters_per_unit`](rigport_model::Asset::meters_per_unit); **1 when unknown**, the
+//!   same assumption the glTF exporter makes, since glTF's unit is the metre, rather than
+//!   USD's fallback of 0.01), and with clips `timeCodesPerSecond`, `startTimeCode`,
+//!   `endTimeCode` (see "Time" below);
+//! - `def SkelRoot "<root>"` when the asset has joints or morph targets (else an `Xform`
+//!   holding plain meshes; morph targets without joints get a Skeleton with no joints,
+//!   which drives their blend shapes), with:
+//!   - `Skeleton "Skeleton"`: `joints` as path tokens in skeleton order (parents first;
+//!     several roots are fine for UsdSkel), names not valid as USD identifiers sanitized and
+//!     made unique with a warning; `bindTransforms` in model space (the inverse of the
+//!     first skin's inverse bind matrix naming the joint, else the joint's rest model
+//!     matrix); `restTransforms` in the parent's space. Matrices are transposed to USD's
+//!     row-vector convention and computed in `f64`. A skin whose bind pose disagrees with
+//!     these (beyond a common geomBindTransform) gets a second Skeleton prim
+//!     `Skeleton_1` with the same joints and animations;
+//!   - `Scope "Animations"` with one `SkelAnimation` per clip: `joints` (the joints the clip
+//!     animates, in skeleton order; the others, and those whose tracks only hold the rest
+//!     value, keep `restTransforms`), `translations` (`float3[]`), `rotations` (`quatf[]`,
+//!     written `(w, x, y, z)`), `scales` (`half3[]`, UsdSkel's type: values not
+//!     representable in half precision are reported), each with its rest-pose default
+//!     value and time samples; `blendShapes` /
+//!     `blendShapeWeights` (default: the meshes' default morph weights) when there are
+//!     morph targets;
+//!   - one `Mesh` per model mesh, in asset order (see below), named after it (sanitized,
+//!     unique);
+//!   - without clips but with non-zero default morph weights, a `SkelAnimation "rest"`
+//!     bound directly, since UsdSkel reads blend-shape weights only from an animation;
+//!   - a variant set `clip` on the SkelRoot, one variant per clip named after its
+//!     SkelAnimation prim, each binding `skel:animationSource` on the Skeleton(s); the
+//!     selection is the first clip. **Other clips are reached by switching the variant**
+//!     (usdview: the prim's Variants; Python: `prim.GetVariantSet("clip").SetVariantSelection("idle")`).
+//!
+//! Each Mesh: `points`, `faceVertexCounts` / `faceVertexIndices` (the model's
+//! counter-clockwise triangles, USD's default `rightHanded` orientation), `normals`
+//! (vertex interpolation; computed when the model has none), `extent`,
+//! `subdivisionScheme = "none"`, `texCoord2f[] primvars:st` (vertex; `t = 1 - v`, since the
+//! model's UVs have glTF's top-left origin and USD's bottom-left), and
+//! `int[] primvars:rigport:sourceVertex` (vertex) when the mesh's vertices are not its
+//! source vertices one to one, so a checker can compare with `rigport eval` dumps. Bound
+//! meshes apply `SkelBindingAPI` and relate `skel:skeleton`:
+//! - skinned: `primvars:skel:jointIndices` / `jointWeights`, vertex interpolation,
+//!   `elementSize` = the most influences on one point (no limit; rows zero-padded with
+//!   index 0 weight 0), indices into the Skeleton's `joints`, weights merged per joint,
+//!   noise below 1e-6 of the row dropped, sorted, renormalized (reported when a row's sum
+//!   was off); a point without influence is bound to the skin's root joint (reported);
+//!   `primvars:skel:geomBindTransform` (identity unless the skin needs one); with
+//!   [`UsdSkinning::Dqs`] `uniform token primvars:skel:skinningMethod = "dualQuaternion"`;
+//! - attached to a joint ([`Mesh::attached_to`](rigport_model::Mesh::attached_to)): points
+//!   stay in the joint's space, a rigid binding (`jointIndices = [j]`, `jointWeights =
+//!   [1]`, constant interpolation, `elementSize = 1`) with `geomBindTransform` = the
+//!   joint's bind matrix, so the mesh follows the joint exactly;
+//! - morph targets: `BlendShape` children (`offsets`, `normalOffsets`, `pointIndices` when
+//!   sparse), `skel:blendShapes` / `skel:blendShapeTargets`; an unskinned mesh with morph
+//!   targets is bound for its blend shapes only.
+//!
+//! # Time
+//! `timeCodesPerSecond` comes from the first clip's key times: when three or more keys are
+//! evenly spaced at 24 or more per second, that rate (`1 / spacing`, an integer when within
+//! `f32` noise of one; BVH's `Frame Time: 0.0333333` gives 30.00003 so key k is time code k
+//! exactly); else the first of the rate the smallest key interval suggests, 24, 25, 30, 48,
+//! 50, 60, 100, 120, 240 (and for sparse keys a multiple of theirs from 24 up) that puts
+//! every key within 1e-3 frames of a frame; else 1000 (millisecond time codes); 24 (USD's
+//! default) when the first clip has fewer than two keys. Every clip is sampled at time code
+//! = seconds × that rate, snapped to the integer when within 1e-3 frames (`check_usd.py`
+//! maps dump times the same way), at every key time of the clip, all three joint
+//! attributes at every time. Between samples USD interpolates linearly (quaternions: slerp),
+//! as rigport's LINEAR tracks do; clips with STEP or CUBICSPLINE tracks are also sampled at
+//! every frame of that rate (30 fps when no rate was found) between their first and last
+//! key, and this is reported. The sampler is the exporter's own (glTF semantics, rotation
+//! keys normalized and sign-continuous as the glTF exporter writes them); unanimated
+//! channels take the rest pose. SkelAnimation `scales` are `half3[]` in UsdSkel's schema:
+//! scales that half precision cannot hold (1.2 becomes 1.2001953) are rounded and reported.
+//!
+//! Output is deterministic: the same asset and options give the same bytes (fixed order,
+//! shortest round-trip number formatting, no hash order, no time stamps).
+//!
+//! ```
+//! use rigport_export::{to_usda, UsdOptions};
+//! use rigport_model::{glam::Vec3, Asset, Mesh};
+//!
+//! let asset = Asset {
+//!     name: "tri".into(),
+//!     meshes: vec![Mesh {
+//!         positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+//!         triangles: vec![[0, 1, 2]],
+//!         source_vertex: vec![0, 1, 2],
+//!         ..Default::default()
+//!     }],
+//!     ..Default::default()
+//! };
+//! let out = to_usda(&asset, &UsdOptions::default())?;
+//! assert!(out.text.starts_with("#usda 1.0\n"));
+//! assert!(out.text.contains("def Xform \"tri\""));
+//! assert!(out.text.contains("int[] faceVertexIndices = [0, 1, 2]"));
+//! # Ok::<(), rigport_export::ExportError>(())
+//! ```
+
+mod names;
+mod sampler;
+mod stage;
+#[cfg(test)]
+mod tests;
+mod text;
+
+use std::path::{Path, PathBuf};
+
+use rigport_model::{Asset, Warning};
+
+use crate::ExportError;
+
+/// The skinning method a USD reader should use for skinned meshes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum UsdSkinning {
+    /// Linear blend skinning (UsdSkel's `classicLinear`, its default; nothing is written).
+    #[default]
+    Lbs,
+    /// Dual quaternion skinning: every skinned mesh gets
+    /// `uniform token primvars:skel:skinningMethod = "dualQuaternion"` (USD >= 23.02).
+    Dqs,
+}
+
+/// Options for the USD exporter.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct UsdOptions {
+    /// Skinning method of skinned meshes. Default [`UsdSkinning::Lbs`].
+    pub skinning: UsdSkinning,
+}
+
+/// A `.usda` file in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExportedUsd {
+    /// The complete USDA text (UTF-8, `\n` line ends, ends with a newline).
+    pub text: String,
+    /// Lossy or repairing steps taken (renamed prims and joints, dropped tracks, unbound
+    /// vertices, renormalized weights, resampled tracks, half-precision scales...), in the
+    /// order they happened.
+    pub warnings: Vec<Warning>,
+}
+
+/// Exports `asset` as USDA text in memory.
+///
+/// The asset is checked first ([`Asset::validate`] plus the exporter's own rules, the same
+/// as the glTF exporter's except the glTF-only limits on empty meshes and palette size);
+/// nothing is built unless it passes.
+///
+/// # Errors
+/// [`ExportError::Invalid`] listing every problem found.
+pub fn to_usda(asset: &Asset, options: &UsdOptions) -> Result<ExportedUsd, ExportError> {
+    let (text, warnings) = stage::build(asset, options)?;
+    Ok(ExportedUsd { text, warnings })
+}
+
+/// An export to a `.usda` file, built in memory and not yet written, so that the caller
+/// can look at the warnings (and, say, refuse to write under `--deny-warnings`) before any
+/// file changes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedUsd {
+    path: PathBuf,
+    text: String,
+    warnings: Vec<Warning>,
+}
+
+/// Builds the export of `asset` to `path` in memory. The extension must be `.usda` or
+/// `.usd` (case-insensitive; a `.usd` file may hold text). Nothing is written until
+/// [`PreparedUsd::write`].
+///
+/// # Errors
+/// [`ExportError::UnsupportedExtension`] for any other extension (checked before any
+/// work), and the errors of [`to_usda`].
+pub fn prepare_usd(
+    asset: &Asset,
+    path: &Path,
+    options: &UsdOptions,
+) -> Result<PreparedUsd, ExportError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("usda" | "usd")) {
+        return Err(ExportError::UnsupportedExtension {
+            path: path.to_path_buf(),
+        });
+    }
+    let out = to_usda(asset, options)?;
+    Ok(PreparedUsd {
+        path: path.to_path_buf(),
+        text: out.text,
+        warnings: out.warnings,
+    })
+}
+
+impl PreparedUsd {
+    /// Lossy or repairing steps taken, as [`ExportedUsd::warnings`].
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+
+    /// The output file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The USDA text that [`PreparedUsd::write`] writes.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// Writes the file atomically (a temporary file in the same directory, renamed over the
+    /// target; see [`crate::write_atomic`]).
+    ///
+    /// # Errors
+    /// [`ExportError::Io`] naming the file; the target is then unchanged and no temporary
+    /// file is left.
+    pub fn write(self) -> Result<(), ExportError> {
+        crate::write_atomic(&self.path, self.text.as_bytes()).map_err(|source| ExportError::Io {
+            path: self.path.clone(),
+            source,
+        })
+    }
+}
