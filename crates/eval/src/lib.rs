@@ -10,6 +10,7 @@ pub mod bone_mesh;
 pub mod dqs;
 mod error;
 pub mod fk;
+pub mod ik;
 pub mod pose;
 pub mod reduce;
 pub mod retime;
@@ -22,4 +23,8 @@ pub use error::EvalError;
 pub use fk::LocalToModelJob;
 pub use pose::Pose;
 pub use rig::{Rig, RigOutput};
-pub use skinning::{skinning_matrices, LbsJob};
+pub use dqs::{DqsJob, DqsPalette};
+pub use skinning::{
+    par_skin_frames, skin_frames, skinning_matrices, LbsJob, PackedInfluences, SkinFramesJob,
+    SkinningMethod,
+};
