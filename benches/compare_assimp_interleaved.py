@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Peer comparison robust to machine drift: rigport vs Assimp, runs interleaved.
 
-    python3 benches/compare_assimp_interleaved.py [--pairs N] [--bin target/release/rigport]
+    python3 benches/compare_assimp_interleaved.py [--case model1|bvh|asf] [--pairs N] [--bin target/release/rigport]
 
 hyperfine (benches/compare_assimp.sh) times all runs of one command, then all of the other;
 on a shared VM the load drifts between the two blocks and the ratio swings (0.24x to 0.46x
@@ -9,7 +9,11 @@ seen in one hour). Here each pair runs rigport and Assimp back to back, alternat
 goes first, so both see the same machine. Prints both medians, the ratio of the medians and
 the median of the per-pair ratios, as a markdown table row for BENCHMARKS.md.
 
-Input: ../shared/corpus/.../human_model1 (Model1.obj, skeleton.out, attachment.out).
+Cases (inputs under ../shared/corpus):
+  model1  human_model1 (Model1.obj, skeleton.out, attachment.out) -> .glb; Assimp reads the OBJ.
+  bvh     the largest corpus BVH (Bandai Namco kick, 443 KB) -> .glb; Assimp reads the BVH.
+  asf     131-dance.asf + 131_04-dance.amc -> .glb; Assimp has no ASF/AMC reader, so its
+          column times the BVH case instead and only rigport's median is meaningful.
 Needs: a release build of rigport and `assimp` (Debian assimp-utils). Exit 2 if missing.
 """
 import argparse
@@ -22,12 +26,29 @@ import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-MODEL = os.path.join(ROOT, "../shared/corpus/1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1")
+CORPUS = os.path.join(ROOT, "../shared/corpus")
+MODEL = os.path.join(CORPUS, "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1")
+KICK = os.path.join(CORPUS, "4_bvh/bandai_namco_ds1/dataset-1_kick_normal_001.bvh")
+DANCE = os.path.join(CORPUS, "3_acclaim_asf_amc/usc_csci520_mocapPlayer__shreyabhaumik")
+
+
+def case_files(case: str):
+    """(label, rigport inputs, assimp input) for a case."""
+    if case == "model1":
+        files = [os.path.join(MODEL, f) for f in ("Model1.obj", "skeleton.out", "attachment.out")]
+        return "Model1", files, files[0]
+    if case == "bvh":
+        return "kick BVH (443 KB)", [KICK], KICK
+    if case == "asf":
+        files = [os.path.join(DANCE, "131-dance.asf"), os.path.join(DANCE, "131_04-dance.amc")]
+        return "131_04-dance ASF/AMC (assimp: kick BVH)", files, KICK
+    raise SystemExit(f"unknown case {case}")
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=120)
+    ap.add_argument("--case", default="model1", choices=["model1", "bvh", "asf"])
     ap.add_argument("--bin", default=os.path.join(ROOT, "target/release/rigport"))
     args = ap.parse_args()
     if not os.path.exists(args.bin):
@@ -36,13 +57,13 @@ def main() -> int:
     if shutil.which("assimp") is None:
         print("compare: assimp missing: apt-get install -y assimp-utils", file=sys.stderr)
         return 2
-    files = [os.path.join(MODEL, f) for f in ("Model1.obj", "skeleton.out", "attachment.out")]
-    if not all(os.path.exists(f) for f in files):
-        print(f"compare: corpus rig missing under {MODEL}", file=sys.stderr)
+    label, files, assimp_in = case_files(args.case)
+    if not all(os.path.exists(f) for f in files + [assimp_in]):
+        print(f"compare: corpus inputs missing: {files}", file=sys.stderr)
         return 2
     with tempfile.TemporaryDirectory() as out:
         ours = [args.bin, "convert", "-q", *files, "-o", os.path.join(out, "rigport.glb")]
-        theirs = ["assimp", "export", files[0], os.path.join(out, "assimp.glb"), "-fglb2"]
+        theirs = ["assimp", "export", assimp_in, os.path.join(out, "assimp.glb"), "-fglb2"]
         for _ in range(5):  # warm-up
             subprocess.run(ours, capture_output=True, check=True)
             subprocess.run(theirs, capture_output=True, check=True)
@@ -59,7 +80,7 @@ def main() -> int:
     print(f"{args.pairs} interleaved pairs, load {load:.2f}")
     print("| input | rigport convert (median) | assimp export -fglb2 (median) | ratio of medians | median pairwise ratio |")
     print("| --- | ---: | ---: | ---: | ---: |")
-    print(f"| Model1 | {mo:.1f} ms | {mt:.1f} ms | {mo / mt:.2f}x | {pair:.2f}x |")
+    print(f"| {label} | {mo:.1f} ms | {mt:.1f} ms | {mo / mt:.2f}x | {pair:.2f}x |")
     return 0
 
 

@@ -33,7 +33,7 @@ pub enum Command {
     Convert(ConvertArgs),
     /// Describe rigs: joints with parents, meshes, influence histogram, clips.
     Inspect(InspectArgs),
-    /// Pose a rig and dump the skinned result (LBS) as .npz for numpy.
+    /// Pose a rig, or play one of its clips, and dump the skinned result as .npz for numpy.
     #[command(
         after_help = "POSE.json maps joint names to a rotation applied in the joint's rest frame \
         (local = rest_local * delta):\n  \
@@ -41,15 +41,38 @@ pub enum Command {
         \"xyz\" lists the axes in the order they are applied: R = Rz * Ry * Rx.\n\n\
         The .npz holds positions, rest_positions (V x 3, source vertex order), joint_names, \
         joint_world and skin_matrices (J x 4 x 4, column vectors: p' = M p), \
-        influence_joints and influence_weights (V x K, zero-padded)."
+        influence_joints and influence_weights (V x K, zero-padded), skinning ([\"lbs\"] or \
+        [\"dqs\"]).\n\n\
+        Without --pose, a rig with clips plays one (--clip, default the first) and the arrays \
+        that change get a leading frame axis: times (F, seconds), positions (F x V x 3), \
+        joint_world and skin_matrices (F x J x 4 x 4)."
     )]
     Eval(EvalArgs),
+    /// Keyframe a rig from a JSON file of poses and write it with the clip.
+    #[command(after_help = "KEYS.json:\n  \
+        {\"name\": \"wave\", \"fps\": 30, \"keys\": [\n    \
+        {\"time\": 0.0, \"pose\": {}},\n    \
+        {\"time\": 0.5, \"pose\": {\"bone_5\": {\"euler_deg\": [0, 0, 45], \"order\": \"xyz\"}}, \"translation\": [0, 0.1, 0]},\n    \
+        {\"frame\": 30, \"pose\": {\"bone_5\": {\"quat\": [0, 0, 0, 1]}}}]}\n\
+        Each key is a whole pose: joints it does not list are at rest. Pose entries are those of \
+        `rigport eval --pose`. \"time\" is in seconds; \"frame\" needs \"fps\". \"translation\" moves \
+        the root from its rest position (root motion, the rig's length unit). Between keys, \
+        rotations are slerped and translations lerped (glTF LINEAR).")]
+    Animate(AnimateArgs),
+    /// Re-time a clip (resample, speed, warp curve, reverse, trim), baked to linear keys.
+    Retime(RetimeArgs),
+    /// Play clips one after another with crossfades, optionally as a seamless loop.
+    Sequence(SequenceArgs),
+    /// Bake a skinning result (DQS) into a glTF every viewer plays back exactly.
+    Bake(crate::commands::bake::BakeArgs),
+    /// Render rigs and clips to PNG contact sheets or GIF/APNG animations (CPU, headless).
+    Render(crate::commands::render::RenderArgs),
     /// Write the built-in demo character (no input files needed).
     Demo(DemoArgs),
 }
 
 /// Where a rig comes from.
-#[derive(Debug, Args)]
+#[derive(Clone, Debug, Args)]
 pub struct InputArgs {
     /// Input files or folders: a .glb/.gltf; an .obj with Pinocchio skeleton and attachment
     /// .out files (told apart by name or content); a USC CSCI 520 skin.config; or a folder
@@ -64,6 +87,47 @@ pub struct InputArgs {
     /// Pinocchio `attachment.out` (one row of bone weights per OBJ vertex).
     #[arg(long, value_name = "A.out")]
     pub attachment: Option<PathBuf>,
+    /// An AMC motion for the .asf skeleton among the inputs (repeat for several clips;
+    /// .amc files may also be given as inputs).
+    #[arg(long, value_name = "M.amc")]
+    pub motion: Vec<PathBuf>,
+    /// Frame rate of AMC motions, which do not state one (default: 120, CMU's rate).
+    #[arg(long, value_name = "FPS")]
+    pub amc_fps: Option<f32>,
+    /// Do not generate a bone mesh for skeleton-only inputs (ASF/AMC, BVH). By default each
+    /// bone gets a small skinned shape so viewers show the motion.
+    #[arg(long)]
+    pub no_bone_mesh: bool,
+}
+
+/// Where and how an asset is written.
+#[derive(Debug, Args)]
+pub struct OutputArgs {
+    /// Output file: .glb, .gltf (+ a .bin of the same stem beside it) or .usda.
+    #[arg(long, short, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Influences kept per vertex in glTF: 1 to 8; above 4, vertices with more than 4 get a
+    /// second set (JOINTS_1/WEIGHTS_1). Each vertex keeps its largest weights, renormalized.
+    /// USD keeps every influence.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=8))]
+    pub max_influences: u8,
+    /// Remove animation keys while every joint's world position stays within D (in the
+    /// rig's length unit) of the full clip at every original key time.
+    #[arg(long, value_name = "D")]
+    pub reduce_tolerance: Option<f32>,
+    /// Skinning method a .usda declares (primvars:skel:skinningMethod). glTF is always LBS;
+    /// use `rigport bake --skinning dqs` to bake DQS into a glTF.
+    #[arg(long, value_enum, default_value_t = Skinning::Lbs)]
+    pub skinning: Skinning,
+}
+
+/// A skinning method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Skinning {
+    /// Linear blend skinning.
+    Lbs,
+    /// Dual quaternion skinning (UsdSkel's definition).
+    Dqs,
 }
 
 /// `rigport convert`.
@@ -72,13 +136,82 @@ pub struct ConvertArgs {
     /// The rig.
     #[command(flatten)]
     pub input: InputArgs,
-    /// Output file: .glb, or .gltf (+ a .bin of the same stem beside it).
-    #[arg(long, short, value_name = "OUT")]
-    pub output: PathBuf,
-    /// Influences kept per vertex: 1 to 8; above 4, vertices with more than 4 get a second
-    /// set (JOINTS_1/WEIGHTS_1). Each vertex keeps its largest weights, renormalized.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=8))]
-    pub max_influences: u8,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+    /// Frame rate of AMC motions (the same as --amc-fps; default 120).
+    #[arg(long, value_name = "FPS")]
+    pub fps: Option<f32>,
+}
+
+/// `rigport animate`.
+#[derive(Debug, Args)]
+pub struct AnimateArgs {
+    /// The rig.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// The keyframes (see below).
+    #[arg(long, value_name = "KEYS.json")]
+    pub keys: PathBuf,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `rigport retime`.
+#[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("how").required(true).args(["frames", "fps", "speed", "warp", "reverse", "trim"])))]
+pub struct RetimeArgs {
+    /// The rig with its clips.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Resample to N frames over the same duration.
+    #[arg(long, value_name = "N")]
+    pub frames: Option<usize>,
+    /// Resample at F frames per second over the same duration.
+    #[arg(long, value_name = "F")]
+    pub fps: Option<f32>,
+    /// Play S times as fast (0.5 = half speed, twice as long).
+    #[arg(long, value_name = "S")]
+    pub speed: Option<f32>,
+    /// Warp curve: output_seconds:source_seconds keys, monotone, e.g. 0:0,1:0.4,2:2.
+    #[arg(long, value_name = "KEYS", allow_hyphen_values = true)]
+    pub warp: Option<String>,
+    /// Play backwards.
+    #[arg(long)]
+    pub reverse: bool,
+    /// Keep only START..END seconds (times shift to start at 0).
+    #[arg(long, value_name = "START..END")]
+    pub trim: Option<String>,
+    /// The clip to retime (default: the first).
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `rigport sequence`.
+#[derive(Debug, Args)]
+pub struct SequenceArgs {
+    /// The rigs whose clips play one after another (the first rig's skeleton and meshes
+    /// are written; the others' clips are matched to it by joint name). A rig with several
+    /// clips contributes all of them, in order.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Frames over which each clip blends into the next (slerp).
+    #[arg(long, default_value_t = 0, value_name = "FRAMES")]
+    pub crossfade: usize,
+    /// Make the result loop seamlessly (its end blends into its start over --crossfade
+    /// frames, at least one).
+    #[arg(long = "loop")]
+    pub looping: bool,
+    /// Frame rate of the result (default: the first clip's).
+    #[arg(long, value_name = "F")]
+    pub fps: Option<f32>,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// `rigport inspect`.
@@ -108,6 +241,15 @@ pub struct EvalArgs {
     /// all of them: shows what a viewer of that file computes.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
     pub max_influences: Option<u8>,
+    /// The clip to play (default: the first).
+    #[arg(long, value_name = "NAME", conflicts_with = "pose")]
+    pub clip: Option<String>,
+    /// Sample the clip at F frames per second (default: at its own key times).
+    #[arg(long, value_name = "F", conflicts_with = "pose")]
+    pub fps: Option<f32>,
+    /// Skinning method.
+    #[arg(long, value_enum, default_value_t = Skinning::Lbs)]
+    pub skinning: Skinning,
 }
 
 /// `rigport demo`.

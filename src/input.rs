@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use rigport_import::{csci520, gltf, obj, pinocchio, Imported};
+use rigport_import::{asf_amc, bvh, csci520, gltf, obj, pinocchio, usda, Imported};
 
 use crate::cli::InputArgs;
 
@@ -25,14 +25,30 @@ pub enum Plan {
     Obj(PathBuf),
     /// A USC CSCI 520 rig: its `skin.config`.
     Csci520(PathBuf),
+    /// An Acclaim skeleton with its motions.
+    AsfAmc {
+        /// The `.asf`.
+        asf: PathBuf,
+        /// The `.amc` files, one clip each, in the order given.
+        motions: Vec<PathBuf>,
+        /// Frame rate of the motions (AMC files do not state one).
+        fps: f32,
+    },
+    /// A BVH file (skeleton and one clip).
+    Bvh(PathBuf),
+    /// A USD text file with UsdSkel.
+    Usda(PathBuf),
 }
 
 impl Plan {
     /// A short label for messages.
     pub fn label(&self) -> String {
         match self {
-            Plan::Gltf(p) | Plan::Obj(p) | Plan::Csci520(p) => p.display().to_string(),
+            Plan::Gltf(p) | Plan::Obj(p) | Plan::Csci520(p) | Plan::Bvh(p) | Plan::Usda(p) => {
+                p.display().to_string()
+            }
             Plan::Pinocchio { mesh, .. } => mesh.display().to_string(),
+            Plan::AsfAmc { asf, .. } => asf.display().to_string(),
         }
     }
 
@@ -42,6 +58,9 @@ impl Plan {
             Plan::Gltf(p) => gltf::import(p)?,
             Plan::Obj(p) => obj::import(p)?,
             Plan::Csci520(p) => csci520::import(p)?.imported,
+            Plan::Bvh(p) => bvh::import(p)?,
+            Plan::Usda(p) => usda::import(p)?,
+            Plan::AsfAmc { asf, motions, fps } => asf_amc::import(asf, motions, *fps)?,
             Plan::Pinocchio {
                 mesh,
                 skeleton,
@@ -113,12 +132,14 @@ fn looks_like_skeleton(path: &Path) -> Result<Option<OutKind>> {
 /// folder is searched for one such set. `--mesh/--skeleton/--attachment` name the set
 /// explicitly.
 pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
+    let fps = amc_fps(args)?;
     let mut plans = Vec::new();
     let mut objs = Vec::new();
     let mut outs = Vec::new();
+    let mut amcs = Vec::new();
     for input in &args.inputs {
         if input.is_dir() {
-            plans.push(plan_folder(input)?);
+            plans.push(plan_folder(input, fps)?);
             continue;
         }
         match extension(input).as_str() {
@@ -126,12 +147,42 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
             "config" => plans.push(Plan::Csci520(input.clone())),
             "obj" => objs.push(input.clone()),
             "out" => outs.push(input.clone()),
-            "" => bail!("{}: no file extension; expected .glb, .gltf, .obj, .out or skin.config", input.display()),
+            "bvh" => plans.push(Plan::Bvh(input.clone())),
+            "usda" => plans.push(Plan::Usda(input.clone())),
+            "usd" | "usdc" | "usdz" => bail!(
+                "{}: rigport reads USD text (.usda); convert with `usdcat {} -o file.usda`",
+                input.display(),
+                input.display()
+            ),
+            "asf" => plans.push(Plan::AsfAmc {
+                asf: input.clone(),
+                motions: Vec::new(),
+                fps,
+            }),
+            "amc" => amcs.push(input.clone()),
+            "" => bail!("{}: no file extension; expected {EXPECTED}", input.display()),
             other => bail!(
-                "{}: unsupported input type .{other}; expected .glb, .gltf, a CSCI 520 skin.config, .obj or Pinocchio .out files",
+                "{}: unsupported input type .{other}; expected {EXPECTED}",
                 input.display()
             ),
         }
+    }
+    amcs.extend(args.motion.iter().cloned());
+    if !amcs.is_empty() {
+        let mut asfs = plans.iter_mut().filter_map(|p| match p {
+            Plan::AsfAmc { motions, .. } => Some(motions),
+            _ => None,
+        });
+        match (asfs.next(), asfs.next()) {
+            (Some(motions), None) => motions.extend(amcs),
+            _ => bail!(
+                "{}: AMC motions need exactly one .asf skeleton among the inputs",
+                amcs[0].display()
+            ),
+        }
+    } else if args.amc_fps.is_some() && !plans.iter().any(|p| matches!(p, Plan::AsfAmc { .. }))
+    {
+        bail!("--fps sets the frame rate of AMC motions and needs an .asf input; to resample a clip use `rigport retime --fps`");
     }
     let mut mesh = args.mesh.clone();
     let mut skeleton = args.skeleton.clone();
@@ -204,7 +255,19 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
     Ok(plans)
 }
 
-fn plan_folder(dir: &Path) -> Result<Plan> {
+/// What positional inputs may be.
+const EXPECTED: &str = ".glb, .gltf, .usda, a CSCI 520 skin.config, .obj with Pinocchio .out files, .bvh, or .asf with .amc files";
+
+/// The AMC frame rate from `--fps`/`--amc-fps`, checked.
+fn amc_fps(args: &InputArgs) -> Result<f32> {
+    let fps = args.amc_fps.unwrap_or(asf_amc::DEFAULT_FPS);
+    if !(fps.is_finite() && fps > 0.0) {
+        bail!("--fps {fps}: the AMC frame rate must be a positive number");
+    }
+    Ok(fps)
+}
+
+fn plan_folder(dir: &Path, fps: f32) -> Result<Plan> {
     let config = dir.join("skin.config");
     if config.is_file() {
         return Ok(Plan::Csci520(config));
@@ -215,6 +278,23 @@ fn plan_folder(dir: &Path) -> Result<Plan> {
         .filter(|p| p.is_file())
         .collect();
     entries.sort();
+    let asfs: Vec<&PathBuf> = entries.iter().filter(|p| extension(p) == "asf").collect();
+    let bvhs: Vec<&PathBuf> = entries.iter().filter(|p| extension(p) == "bvh").collect();
+    if let [asf] = asfs.as_slice() {
+        let motions = entries
+            .iter()
+            .filter(|p| extension(p) == "amc")
+            .cloned()
+            .collect();
+        return Ok(Plan::AsfAmc {
+            asf: asf.to_path_buf(),
+            motions,
+            fps,
+        });
+    }
+    if let ([bvh], []) = (bvhs.as_slice(), asfs.as_slice()) {
+        return Ok(Plan::Bvh(bvh.to_path_buf()));
+    }
     let gltfs: Vec<&PathBuf> = entries
         .iter()
         .filter(|p| matches!(extension(p).as_str(), "glb" | "gltf"))
@@ -253,4 +333,30 @@ pub fn single_plan(args: &InputArgs) -> Result<Plan> {
         bail!("this command takes one rig; {} were given", plans.len());
     }
     Ok(plans.remove(0))
+}
+
+/// Imports a plan; unless `--no-bone-mesh`, a skeleton-only asset gets a generated bone
+/// mesh (noted in the warnings) so viewers show its motion.
+///
+/// # Errors
+/// As the importer.
+pub fn load(plan: &Plan, args: &InputArgs) -> Result<Imported> {
+    let mut imported = plan.import()?;
+    if !args.no_bone_mesh && rigport_eval::bone_mesh::add_bone_mesh(&mut imported.asset) {
+        imported.warnings.push(rigport_model::Warning::Note {
+            location: plan.label(),
+            message: "skeleton only: added a bone mesh (one shape per bone; --no-bone-mesh to leave it out)".into(),
+        });
+    }
+    Ok(imported)
+}
+
+/// Resolves and imports exactly one asset.
+///
+/// # Errors
+/// As [`single_plan`] and [`load`].
+pub fn load_single(args: &InputArgs) -> Result<(Plan, Imported)> {
+    let plan = single_plan(args)?;
+    let imported = load(&plan, args)?;
+    Ok((plan, imported))
 }

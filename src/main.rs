@@ -8,7 +8,9 @@ mod cli;
 mod commands;
 mod exit;
 mod input;
+mod keys;
 mod npz;
+mod output;
 mod pose;
 
 use std::process::ExitCode;

@@ -28,9 +28,22 @@ pub fn load(path: &Path, skeleton: &Skeleton) -> Result<Pose> {
         .with_context(|| format!("{}: cannot read", path.display()))?;
     let entries: serde_json::Map<String, serde_json::Value> = serde_json::from_str(&text)
         .map_err(|e| anyhow::anyhow!("{}:{}:{}: {e}", path.display(), e.line(), e.column()))?;
+    from_entries(entries, skeleton, &format!("{}: at ", path.display()))
+}
+
+/// Applies pose entries (joint name -> `{"quat"}` or `{"euler_deg", "order"}`) to the rest
+/// pose. `at` prefixes the JSON path in messages (`file: at /keys/2/pose`).
+///
+/// # Errors
+/// As [`load`].
+pub fn from_entries(
+    entries: serde_json::Map<String, serde_json::Value>,
+    skeleton: &Skeleton,
+    at: &str,
+) -> Result<Pose> {
     let mut pose = Pose::rest(skeleton);
     for (joint, value) in entries {
-        let at = format!("{}: at /{joint}", path.display());
+        let at = format!("{at}/{joint}");
         let entry: Entry = serde_json::from_value(value).with_context(|| at.clone())?;
         let delta = match (entry.quat, entry.euler_deg) {
             (Some(q), None) => {

@@ -1,43 +1,27 @@
-//! `rigport convert`: a rig to glTF.
+//! `rigport convert`: a rig (and its motion) to glTF or USD.
 
-use anyhow::{Context as _, Result};
-use rigport_export::GltfOptions;
+use anyhow::Result;
 
 use super::Context;
 use crate::cli::ConvertArgs;
-use crate::exit::OutputError;
-use crate::input;
+use crate::{input, output};
 
 /// Runs `convert`.
 pub fn run(ctx: &Context, args: &ConvertArgs) -> Result<()> {
-    let plan = input::single_plan(&args.input)?;
-    let imported = ctx.step(&format!("reading {}", plan.label()), || plan.import())?;
-    let opts = GltfOptions {
-        max_influences: usize::from(args.max_influences),
-    };
-    let prepared = ctx
-        .step("building glTF", || {
-            rigport_export::prepare_gltf(&imported.asset, &args.output, &opts)
-        })
-        .with_context(|| format!("cannot export {}", plan.label()))?;
-    let mut warnings = imported.warnings.clone();
-    warnings.extend(prepared.warnings().iter().cloned());
-    ctx.report(&warnings)?;
-    prepared.write().with_context(|| OutputError {
-        path: args.output.display().to_string(),
-    })?;
-    if !ctx.quiet {
-        let asset = &imported.asset;
-        let vertices: usize = asset.meshes.iter().map(|m| m.vertex_count()).sum();
-        eprintln!(
-            "wrote {}: {} joints, {} meshes ({} vertices), {} skins, {} clips",
-            args.output.display(),
-            asset.skeleton.len(),
-            asset.meshes.len(),
-            vertices,
-            asset.skins.len(),
-            asset.clips.len()
-        );
+    output::format_of(&args.output.output)?;
+    let mut input_args = args.input.clone();
+    if args.fps.is_some() {
+        if input_args.amc_fps.is_some() {
+            anyhow::bail!("give the AMC frame rate once: --fps or --amc-fps");
+        }
+        input_args.amc_fps = args.fps;
     }
-    Ok(())
+    let plan = input::single_plan(&input_args)?;
+    let imported = ctx.step(&format!("reading {}", plan.label()), || {
+        input::load(&plan, &input_args)
+    })?;
+    let mut asset = imported.asset;
+    let mut warnings = imported.warnings;
+    output::reduce_clips(&mut asset, &args.output, &mut warnings)?;
+    output::write_asset(ctx, &asset, warnings, &args.output)
 }

@@ -1,12 +1,32 @@
 //! `rigport demo`: the built-in procedural character, written with no input files.
 
 use anyhow::{Context as _, Result};
-use rigport_export::GltfOptions;
+use rigport_export::{GltfOptions, UsdOptions};
 use rigport_import::{demo, pinocchio};
 
 use super::Context;
 use crate::cli::DemoArgs;
 use crate::exit::OutputError;
+use crate::keys;
+
+/// The demo's keyframed clip: the left arm waves (bone `forearm_l` is the upper arm, bone
+/// `hand_l` the forearm: Pinocchio names a bone after the joint it ends at), the head nods,
+/// the body bobs; the last key equals the first so the clip loops.
+const WAVE_KEYS: &str = r#"{
+  "name": "wave",
+  "fps": 30,
+  "keys": [
+    {"frame": 0,  "pose": {}},
+    {"frame": 15, "pose": {"forearm_l": {"euler_deg": [0, 0, 75]}, "hand_l": {"euler_deg": [0, 0, 40]},
+                           "head": {"euler_deg": [10, 0, 0]}}, "translation": [0, -0.02, 0]},
+    {"frame": 30, "pose": {"forearm_l": {"euler_deg": [0, 0, 80]}, "hand_l": {"euler_deg": [0, 0, 80]},
+                           "head": {"euler_deg": [-5, 10, 0]}}},
+    {"frame": 45, "pose": {"forearm_l": {"euler_deg": [0, 0, 75]}, "hand_l": {"euler_deg": [0, 0, 30]},
+                           "head": {"euler_deg": [10, -10, 0]}}, "translation": [0, -0.02, 0]},
+    {"frame": 60, "pose": {}}
+  ]
+}
+"#;
 
 /// Runs `demo`.
 pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
@@ -30,13 +50,32 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     std::fs::create_dir_all(&args.output).with_context(|| OutputError {
         path: args.output.display().to_string(),
     })?;
+    // The keyframed clip, from a keys file written beside the outputs as an example for
+    // `rigport animate`.
+    let keys_path = args.output.join("wave.keys.json");
+    rigport_export::write_atomic(&keys_path, WAVE_KEYS.as_bytes()).with_context(|| {
+        OutputError {
+            path: keys_path.display().to_string(),
+        }
+    })?;
+    let mut imported = imported;
+    let wave = keys::load(&keys_path, &imported.asset.skeleton, "wave")
+        .context("the built-in demo keys are invalid (a rigport bug)")?;
+    imported.asset.clips.push(wave);
     let out = args.output.join("demo.glb");
     let prepared = rigport_export::prepare_gltf(&imported.asset, &out, &GltfOptions::default())?;
+    let out_usd = args.output.join("demo.usda");
+    let prepared_usd =
+        rigport_export::prepare_usd(&imported.asset, &out_usd, &UsdOptions::default())?;
     let mut warnings = imported.warnings.clone();
     warnings.extend(prepared.warnings().iter().cloned());
+    warnings.extend(prepared_usd.warnings().iter().cloned());
     ctx.report(&warnings)?;
     prepared.write().with_context(|| OutputError {
         path: out.display().to_string(),
+    })?;
+    prepared_usd.write().with_context(|| OutputError {
+        path: out_usd.display().to_string(),
     })?;
     if !ctx.quiet {
         let asset = &imported.asset;
@@ -53,7 +92,12 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
             "  skeleton: {} joints (one per bone, rotating about its head)",
             asset.skeleton.len()
         );
-        println!("  wrote {}", out.display());
+        println!(
+            "  clip \"wave\": {:.1} s, keyed in {}",
+            asset.clips[0].duration(),
+            keys_path.display()
+        );
+        println!("  wrote {} and {}", out.display(), out_usd.display());
     }
     Ok(())
 }

@@ -1,9 +1,14 @@
 //! One module per subcommand; `run` dispatches.
 
+mod animate;
+pub mod bake;
 mod convert;
 mod demo;
 mod eval;
 mod inspect;
+pub mod render;
+mod retime;
+mod sequence;
 
 use anyhow::Result;
 use rigport_model::Warning;
@@ -67,5 +72,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Inspect(args) => inspect::run(&ctx, &args),
         Command::Eval(args) => eval::run(&ctx, &args),
         Command::Demo(args) => demo::run(&ctx, &args),
+        Command::Animate(args) => animate::run(&ctx, &args),
+        Command::Retime(args) => retime::run(&ctx, &args),
+        Command::Sequence(args) => sequence::run(&ctx, &args),
+        Command::Bake(args) => bake::run(&ctx, &args),
+        Command::Render(args) => render::run(&ctx, &args),
     }
 }

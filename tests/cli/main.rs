@@ -12,5 +12,7 @@ mod gltf_read;
 mod gltf_samples;
 mod motion;
 mod pinocchio;
+mod render;
 mod skinning;
 mod usd;
+mod usd_import;

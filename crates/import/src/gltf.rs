@@ -1556,7 +1556,7 @@ impl<'a> Importer<'a> {
     }
 
     /// Influences from every `JOINTS_n`/`WEIGHTS_n` set: zero weights dropped, repeated
-    /// joints merged, sums kept as stored (a note reports rows that are not normalized).
+    /// joints merged, rows rescaled to sum to 1 (a warning reports rows visibly off).
     fn influences(
         &mut self,
         prim: &::gltf::Primitive<'a>,
@@ -1640,23 +1640,31 @@ impl<'a> Importer<'a> {
                 ),
             );
         }
+        // glTF 2.0 §3.7.3.3: weights must sum to 1. Rows that do not are rescaled, so what
+        // rigport evaluates is what every file it writes holds (both exporters normalize);
+        // rows visibly off are reported.
         let mut off = 0usize;
         let mut worst = 0.0f32;
-        for row in &rows {
-            let dev = (row.iter().map(|i| i.weight).sum::<f32>() - 1.0).abs();
+        for row in &mut rows {
+            let sum: f32 = row.iter().map(|i| i.weight).sum();
+            let dev = (sum - 1.0).abs();
             if dev > WEIGHT_SUM_TOLERANCE {
                 off += 1;
                 worst = worst.max(dev);
             }
+            if dev > f32::EPSILON && sum > 0.0 {
+                for i in row.iter_mut() {
+                    i.weight /= sum;
+                }
+            }
         }
         if off > 0 {
-            self.note(
-                &format!("{base}/attributes/WEIGHTS_0"),
-                format!(
-                    "{off} of {n} vertices have weights summing off 1 by more than \
-                     {WEIGHT_SUM_TOLERANCE} (largest {worst:.6}); kept as stored"
-                ),
-            );
+            self.warnings.push(Warning::WeightsRenormalized {
+                source: Location::json(self.path, format!("{base}/attributes/WEIGHTS_0"))
+                    .to_string(),
+                rows: off,
+                max_row_sum_error: worst,
+            });
         }
         Ok(Influences::from_rows(rows))
     }
@@ -2029,7 +2037,10 @@ mod tests {
             Warning::Note { location, message } | Warning::Repaired { location, message } => {
                 location.contains(location_part) && message.contains(message_part)
             }
-            _ => false,
+            other => {
+                let text = other.to_string();
+                text.contains(location_part) && text.contains(message_part)
+            }
         })
     }
 
@@ -2143,7 +2154,7 @@ mod tests {
     }
 
     #[test]
-    fn weights_from_all_sets_merged_and_kept_unnormalized() {
+    fn weights_from_all_sets_merged_and_renormalized() {
         let Imported { asset, warnings } = import_fixture("skin_weights.gltf");
         assert_eq!(
             names(&asset),
@@ -2163,11 +2174,12 @@ mod tests {
             .map(|r| r.iter().map(|i| (i.joint, i.weight)).collect())
             .collect();
         // Vertex 0: 0.5 on joint 0, 0.25 (set 0) + 51/255 (set 1, normalized u8) on joint 1,
-        // a zero weight on joint 2 dropped.
+        // a zero weight on joint 2 dropped; the row (sum 0.95) rescaled to sum 1.
         assert_eq!(rows[0].len(), 2);
-        assert_eq!(rows[0][0], (0, 0.5));
+        assert_eq!(rows[0][0].0, 0);
+        assert!((rows[0][0].1 - 0.5 / 0.95).abs() < 1e-6, "{rows:?}");
         assert_eq!(rows[0][1].0, 1);
-        assert!((rows[0][1].1 - 0.45).abs() < 1e-6, "{rows:?}");
+        assert!((rows[0][1].1 - 0.45 / 0.95).abs() < 1e-6, "{rows:?}");
         assert_eq!(rows[1], [(2, 1.0)]);
         // Vertex 2 names joint 0 twice in one set.
         assert_eq!(rows[2].len(), 1);
@@ -2181,11 +2193,11 @@ mod tests {
             "{warnings:?}"
         );
         assert!(
-            has_warning(
-                &warnings,
-                "WEIGHTS_0",
-                "1 of 3 vertices have weights summing off 1"
-            ),
+            warnings.iter().any(|w| matches!(
+                w,
+                Warning::WeightsRenormalized { source, rows: 1, max_row_sum_error }
+                    if source.contains("WEIGHTS_0") && (max_row_sum_error - 0.05).abs() < 1e-6
+            )),
             "{warnings:?}"
         );
         assert_eq!(asset.meshes[0].triangles, [[0, 1, 2]], "implicit indices");
@@ -2678,7 +2690,7 @@ mod tests {
         assert_eq!(asset.clips.len(), 1);
         assert_keys(&asset.clips[0], 57, 2, 0.0, 1.25);
         assert!(
-            has_warning(&warnings, "WEIGHTS_0", "31 of 370 vertices"),
+            has_warning(&warnings, "WEIGHTS_0", "renormalized 31 weight rows"),
             "{warnings:?}"
         );
     }
@@ -2711,7 +2723,7 @@ mod tests {
         assert_eq!(asset.clips.len(), 1);
         assert_keys(&asset.clips[0], 57, 49, 0.0, 2.0);
         assert!(
-            has_warning(&warnings, "WEIGHTS_0", "210 of 3273 vertices"),
+            has_warning(&warnings, "WEIGHTS_0", "renormalized 210 weight rows"),
             "{warnings:?}"
         );
     }
