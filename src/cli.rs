@@ -63,6 +63,15 @@ pub enum Command {
     Retime(RetimeArgs),
     /// Play clips one after another with crossfades, optionally as a seamless loop.
     Sequence(SequenceArgs),
+    /// Solve IK handles moving over time, one pose per frame, baked into a clip.
+    #[command(after_help = "HANDLES.json:\n  \
+        {\"fps\": 30, \"handles\": [{\"joint\": \"bone_12\", \"relative\": false, \"offset\": [0, 0.1, 0], \"weight\": 1,\n    \
+        \"keys\": [{\"time\": 0, \"position\": [x, y, z]}, {\"time\": 2, \"position\": [x, y, z]}]}]}\n\
+        Targets are model-space positions in the rig's length unit (\"relative\": offsets from the \
+        effector's rest position), linear between keys. \"offset\" (optional) is the effector point \
+        in the joint's frame, e.g. a bone's tip. Every ancestor of a handle may rotate; each frame \
+        starts from the previous frame's solution.")]
+    Ik(IkArgs),
     /// Bake a skinning result (DQS) into a glTF every viewer plays back exactly.
     Bake(crate::commands::bake::BakeArgs),
     /// Render rigs and clips to PNG contact sheets or GIF/APNG animations (CPU, headless).
@@ -186,6 +195,46 @@ pub struct RetimeArgs {
     /// The clip to retime (default: the first).
     #[arg(long, value_name = "NAME")]
     pub clip: Option<String>,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `rigport ik`.
+#[derive(Debug, Args)]
+pub struct IkArgs {
+    /// The rig.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// The handle tracks (see below).
+    #[arg(long, value_name = "HANDLES.json")]
+    pub handles: PathBuf,
+    /// Solver: dls (damped least squares, adaptive damping), pinv (SVD pseudo-inverse),
+    /// transpose (Jacobian transpose), ccd, fabrik.
+    #[arg(long, default_value = "dls")]
+    pub solver: String,
+    /// Frames per second of the baked clip (default: the file's, else 30).
+    #[arg(long, value_name = "F")]
+    pub fps: Option<f32>,
+    /// A handle has converged within this distance of its target (default: 1e-4 of the
+    /// skeleton's height).
+    #[arg(long, value_name = "T")]
+    pub tolerance: Option<f32>,
+    /// Most iterations per frame (per sub-step).
+    #[arg(long, default_value_t = 100, value_name = "N")]
+    pub max_iterations: u32,
+    /// Fixed damping for dls (default: adaptive from the residual).
+    #[arg(long, value_name = "L")]
+    pub lambda: Option<f32>,
+    /// Split target moves longer than D into sub-steps.
+    #[arg(long, value_name = "D")]
+    pub substep: Option<f32>,
+    /// Let the root translate too (Jacobian solvers).
+    #[arg(long)]
+    pub free_root: bool,
+    /// Print the residual summary as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
     /// Where to write.
     #[command(flatten)]
     pub output: OutputArgs,

@@ -160,7 +160,10 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
                 fps,
             }),
             "amc" => amcs.push(input.clone()),
-            "" => bail!("{}: no file extension; expected {EXPECTED}", input.display()),
+            "" => bail!(
+                "{}: no file extension; expected {EXPECTED}",
+                input.display()
+            ),
             other => bail!(
                 "{}: unsupported input type .{other}; expected {EXPECTED}",
                 input.display()
@@ -180,8 +183,7 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
                 amcs[0].display()
             ),
         }
-    } else if args.amc_fps.is_some() && !plans.iter().any(|p| matches!(p, Plan::AsfAmc { .. }))
-    {
+    } else if args.amc_fps.is_some() && !plans.iter().any(|p| matches!(p, Plan::AsfAmc { .. })) {
         bail!("--fps sets the frame rate of AMC motions and needs an .asf input; to resample a clip use `rigport retime --fps`");
     }
     let mut mesh = args.mesh.clone();

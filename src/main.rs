@@ -7,6 +7,7 @@
 mod cli;
 mod commands;
 mod exit;
+mod handles;
 mod input;
 mod keys;
 mod npz;

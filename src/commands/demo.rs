@@ -9,6 +9,19 @@ use crate::cli::DemoArgs;
 use crate::exit::OutputError;
 use crate::keys;
 
+/// The demo's IK handles: the left fingertip reaches forward and up (offsets from its rest
+/// position, metres), then returns.
+const REACH_HANDLES: &str = r#"{
+  "fps": 30,
+  "handles": [
+    {"joint": "fingertip_l", "relative": true, "offset": [0.16, 0, 0],
+     "keys": [{"time": 0, "position": [0, 0, 0]},
+              {"time": 1, "position": [-0.35, 0.15, 0.35]},
+              {"time": 2, "position": [0, 0, 0]}]}
+  ]
+}
+"#;
+
 /// The demo's keyframed clip: the left arm waves (bone `forearm_l` is the upper arm, bone
 /// `hand_l` the forearm: Pinocchio names a bone after the joint it ends at), the head nods,
 /// the body bobs; the last key equals the first so the clip loops.
@@ -62,6 +75,33 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     let wave = keys::load(&keys_path, &imported.asset.skeleton, "wave")
         .context("the built-in demo keys are invalid (a rigport bug)")?;
     imported.asset.clips.push(wave);
+    // The IK reach clip: the left fingertip (bone `fingertip_l` turns about the wrist; the
+    // offset puts the effector at the finger's tip) reaches forward and up, then back.
+    let reach_path = args.output.join("reach.handles.json");
+    rigport_export::write_atomic(&reach_path, REACH_HANDLES.as_bytes()).with_context(|| {
+        OutputError {
+            path: reach_path.display().to_string(),
+        }
+    })?;
+    let (mut reach, _, reach_warnings) = super::ik::solve(
+        ctx,
+        &imported.asset.skeleton,
+        &reach_path,
+        &super::ik::IkOptions {
+            method: rigport_eval::ik::IkMethod::Dls {
+                lambda: rigport_eval::ik::Lambda::Adaptive,
+            },
+            fps: None,
+            tolerance: None,
+            max_iterations: 100,
+            substep: None,
+            free_root: false,
+        },
+    )
+    .context("the built-in demo reach is invalid (a rigport bug)")?;
+    reach.name = "reach".into();
+    imported.warnings.extend(reach_warnings);
+    imported.asset.clips.push(reach);
     let out = args.output.join("demo.glb");
     let prepared = rigport_export::prepare_gltf(&imported.asset, &out, &GltfOptions::default())?;
     let out_usd = args.output.join("demo.usda");
@@ -96,6 +136,11 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
             "  clip \"wave\": {:.1} s, keyed in {}",
             asset.clips[0].duration(),
             keys_path.display()
+        );
+        println!(
+            "  clip \"reach\": {:.1} s, IK (damped least squares) from {}",
+            asset.clips[1].duration(),
+            reach_path.display()
         );
         println!("  wrote {} and {}", out.display(), out_usd.display());
     }

@@ -143,7 +143,11 @@ impl Dump {
         npz.add("positions", &lead(&[v, 3]), Data::F32(self.positions));
         npz.add("rest_positions", &[v, 3], Data::F32(self.rest_positions));
         npz.add("joint_names", &[j], Data::Str(self.names));
-        npz.add("joint_world", &lead(&[j, 4, 4]), Data::F32(self.joint_world));
+        npz.add(
+            "joint_world",
+            &lead(&[j, 4, 4]),
+            Data::F32(self.joint_world),
+        );
         npz.add(
             "skin_matrices",
             &lead(&[j, 4, 4]),
@@ -160,11 +164,7 @@ impl Dump {
             &[v, k],
             Data::F32(self.influence_weights),
         );
-        npz.add(
-            "skinning",
-            &[1],
-            Data::Str(vec![self.skinning.to_string()]),
-        );
+        npz.add("skinning", &[1], Data::Str(vec![self.skinning.to_string()]));
         npz
     }
 }
@@ -201,26 +201,25 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
     let mut posed = RigOutput::default();
     let clip = match (&args.pose, &args.clip) {
         (Some(_), _) => None,
-        (None, Some(name)) => Some(
-            asset
-                .clips
-                .iter()
-                .find(|c| &c.name == name)
-                .ok_or_else(|| {
-                    anyhow::anyhow!(
-                        "{}: no clip named {name:?}; clips: {}",
-                        plan.label(),
-                        clip_names(asset)
-                    )
-                })?,
-        ),
+        (None, Some(name)) => Some(asset.clips.iter().find(|c| &c.name == name).ok_or_else(
+            || {
+                anyhow::anyhow!(
+                    "{}: no clip named {name:?}; clips: {}",
+                    plan.label(),
+                    clip_names(asset)
+                )
+            },
+        )?),
         (None, None) => asset.clips.first(),
     };
     let frames = clip.is_some();
     match clip {
         None => {
             if args.fps.is_some() {
-                anyhow::bail!("{}: --fps needs a clip to sample; the rig has none", plan.label());
+                anyhow::bail!(
+                    "{}: --fps needs a clip to sample; the rig has none",
+                    plan.label()
+                );
             }
             let pose = match &args.pose {
                 Some(path) => pose::load(path, &asset.skeleton)?,

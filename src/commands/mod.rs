@@ -5,6 +5,7 @@ pub mod bake;
 mod convert;
 mod demo;
 mod eval;
+mod ik;
 mod inspect;
 pub mod render;
 mod retime;
@@ -75,6 +76,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Animate(args) => animate::run(&ctx, &args),
         Command::Retime(args) => retime::run(&ctx, &args),
         Command::Sequence(args) => sequence::run(&ctx, &args),
+        Command::Ik(args) => ik::run(&ctx, &args),
         Command::Bake(args) => bake::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
     }

@@ -3,6 +3,11 @@
     clippy::unwrap_used,
     reason = "test code: a failed unwrap is a failed test"
 )]
+#![allow(
+    clippy::type_complexity,
+    clippy::needless_range_loop,
+    reason = "test-only readers of reference data favour plain tuples and index loops"
+)]
 
 mod bad_input;
 mod common;
@@ -10,6 +15,7 @@ mod csci520;
 mod demo;
 mod gltf_read;
 mod gltf_samples;
+mod ik;
 mod motion;
 mod pinocchio;
 mod render;

@@ -53,7 +53,10 @@ fn first_applied_first(axes_and_angles: &[(char, f64)]) -> DMat3 {
 }
 
 fn nums(fields: &[&str]) -> Vec<f64> {
-    fields.iter().map(|f| f.parse::<f64>().expect("number")).collect()
+    fields
+        .iter()
+        .map(|f| f.parse::<f64>().expect("number"))
+        .collect()
 }
 
 struct RefBone {
@@ -107,7 +110,16 @@ fn parse_asf_ref(text: &str) -> RefAsf {
                 _ => {}
             },
             ":bonedata" => match key.as_str() {
-                "begin" => bone = Some((String::new(), DVec3::ZERO, 0.0, [0.0; 3], "XYZ".into(), vec![])),
+                "begin" => {
+                    bone = Some((
+                        String::new(),
+                        DVec3::ZERO,
+                        0.0,
+                        [0.0; 3],
+                        "XYZ".into(),
+                        vec![],
+                    ))
+                }
                 "name" => bone.as_mut().unwrap().0 = f[1].to_string(),
                 "direction" => bone.as_mut().unwrap().1 = DVec3::from_slice(&nums(&f[1..4])),
                 "length" => bone.as_mut().unwrap().2 = nums(&f[1..2])[0],
@@ -116,11 +128,19 @@ fn parse_asf_ref(text: &str) -> RefAsf {
                     b.3 = nums(&f[1..4]).try_into().unwrap();
                     b.4 = f[4].to_uppercase();
                 }
-                "dof" => bone.as_mut().unwrap().5 = f[1..].iter().map(|s| s.to_lowercase()).collect(),
+                "dof" => {
+                    bone.as_mut().unwrap().5 = f[1..].iter().map(|s| s.to_lowercase()).collect()
+                }
                 "end" => {
                     let (name, direction, length, axis, order, dof) = bone.take().unwrap();
                     let c = euler_by_order(&order, axis, asf.degrees);
-                    asf.bones.push(RefBone { name, direction, length, c, dof });
+                    asf.bones.push(RefBone {
+                        name,
+                        direction,
+                        length,
+                        c,
+                        dof,
+                    });
                 }
                 _ => {}
             },
@@ -141,7 +161,11 @@ fn parse_asf_ref(text: &str) -> RefAsf {
 
 /// Angles given as (x, y, z), applied in the order the axis string lists.
 fn euler_by_order(order: &str, xyz: [f64; 3], degrees: bool) -> DMat3 {
-    let scale = if degrees { std::f64::consts::PI / 180.0 } else { 1.0 };
+    let scale = if degrees {
+        std::f64::consts::PI / 180.0
+    } else {
+        1.0
+    };
     let list: Vec<(char, f64)> = order
         .chars()
         .map(|a| {
@@ -179,7 +203,11 @@ fn parse_amc_ref(text: &str) -> Vec<HashMap<String, Vec<f64>>> {
 /// World positions of every point the reference knows, by rigport's joint naming: `root`,
 /// each bone's start under the bone's name, each bone's end under `<bone>_end`.
 fn asf_fk(asf: &RefAsf, frame: &HashMap<String, Vec<f64>>) -> HashMap<String, DVec3> {
-    let scale = if asf.degrees { std::f64::consts::PI / 180.0 } else { 1.0 };
+    let scale = if asf.degrees {
+        std::f64::consts::PI / 180.0
+    } else {
+        1.0
+    };
     let root_values = frame.get("root").cloned().unwrap_or_default();
     let mut t = DVec3::ZERO;
     let mut r = Vec::new();
@@ -298,7 +326,10 @@ fn parse_bvh_ref(text: &str) -> RefBvh {
             "CHANNELS" => {
                 let j = *stack.last().unwrap();
                 let n: usize = tokens[i + 1].parse().unwrap();
-                joints[j].channels = tokens[i + 2..i + 2 + n].iter().map(|s| s.to_string()).collect();
+                joints[j].channels = tokens[i + 2..i + 2 + n]
+                    .iter()
+                    .map(|s| s.to_string())
+                    .collect();
                 joints[j].first_channel = channel_count;
                 channel_count += n;
                 i += 2 + n;
@@ -410,7 +441,7 @@ fn height(points: &[DVec3]) -> f64 {
 }
 
 /// Samples a glTF channel at `t` (glTF 2.0 §3.11: LINEAR is lerp / slerp, STEP holds).
-fn sample_channel(ch: &gltf_read::GltfChannel, t: f32) -> Vec<f32> {
+pub fn sample_channel(ch: &gltf_read::GltfChannel, t: f32) -> Vec<f32> {
     let n = ch.times.len();
     if t <= ch.times[0] || n == 1 {
         return ch.values[0].clone();
@@ -435,7 +466,7 @@ fn sample_channel(ch: &gltf_read::GltfChannel, t: f32) -> Vec<f32> {
 }
 
 /// World positions of every node of `scene` with animation `a` applied at time `t`.
-fn gltf_pose(scene: &GltfScene, a: usize, t: f32) -> Vec<Vec3> {
+pub fn gltf_pose(scene: &GltfScene, a: usize, t: f32) -> Vec<Vec3> {
     let mut local = scene.local.clone();
     for ch in &scene.animations[a].channels {
         let v = sample_channel(ch, t);
@@ -485,7 +516,12 @@ fn check_glb(
 ) {
     assert_valid(glb);
     let scene = gltf_read::read(glb);
-    assert_eq!(scene.animations.len(), 1, "{}: one animation", glb.display());
+    assert_eq!(
+        scene.animations.len(),
+        1,
+        "{}: one animation",
+        glb.display()
+    );
     let anim = &scene.animations[0];
     let keys = anim.channels.iter().map(|c| c.times.len()).max().unwrap();
     assert_eq!(keys, frames, "{}: frame count", glb.display());
@@ -559,7 +595,9 @@ fn check_eval(
             );
         }
     }
-    eprintln!("{label}: eval FK max deviation {worst:.3e} (tolerance {tolerance:.3e}, height {h:.3})");
+    eprintln!(
+        "{label}: eval FK max deviation {worst:.3e} (tolerance {tolerance:.3e}, height {h:.3})"
+    );
     h
 }
 
@@ -618,7 +656,15 @@ fn asf_amc_corpus_converts_and_matches_reference_fk() {
         check_bone_lengths(&label, &dump, &parents, h);
 
         let glb = dir.path().join("out.glb");
-        rigport_ok(&["convert", s(&asf), "--motion", s(&amc), "-o", s(&glb), "--quiet"]);
+        rigport_ok(&[
+            "convert",
+            s(&asf),
+            "--motion",
+            s(&amc),
+            "-o",
+            s(&glb),
+            "--quiet",
+        ]);
         check_glb(&glb, frames.len(), fps, &reference, 1e-5 * h);
     }
 }
@@ -636,14 +682,25 @@ fn bvh_corpus_converts_and_matches_reference_fk() {
         let fps = 1.0 / bvh.frame_time;
 
         let dump = eval_frames(&[s(&path)], dir.path(), "eval");
-        assert_eq!(dump.positions.len(), bvh.frames.len(), "{label}: frame count");
+        assert_eq!(
+            dump.positions.len(),
+            bvh.frames.len(),
+            "{label}: frame count"
+        );
         let h = check_eval(&label, &dump, &reference, fps);
         // Joints with position channels may change length; the others may not.
         let parents: HashMap<String, String> = bvh
             .joints
             .iter()
-            .filter(|j| !j.channels.iter().any(|c| c.to_ascii_lowercase().ends_with("position")))
-            .filter_map(|j| j.parent.map(|p| (j.name.clone(), bvh.joints[p].name.clone())))
+            .filter(|j| {
+                !j.channels
+                    .iter()
+                    .any(|c| c.to_ascii_lowercase().ends_with("position"))
+            })
+            .filter_map(|j| {
+                j.parent
+                    .map(|p| (j.name.clone(), bvh.joints[p].name.clone()))
+            })
             .collect();
         check_bone_lengths(&label, &dump, &parents, h);
 
@@ -666,8 +723,17 @@ fn several_amc_files_become_several_clips_and_fps_is_honoured() {
     let glb = dir.path().join("two.glb");
     // 09_06-run was captured on subject 09; CMU skeletons share bone names, so it plays on 07.
     rigport_ok(&[
-        "convert", s(&asf), "--motion", s(&walk), "--motion", s(&run), "--fps", "60", "-o",
-        s(&glb), "--quiet",
+        "convert",
+        s(&asf),
+        "--motion",
+        s(&walk),
+        "--motion",
+        s(&run),
+        "--fps",
+        "60",
+        "-o",
+        s(&glb),
+        "--quiet",
     ]);
     assert_valid(&glb);
     let scene = gltf_read::read(&glb);
@@ -691,7 +757,14 @@ fn skeleton_only_inputs_get_a_bone_mesh_unless_told_not_to() {
     let with = dir.path().join("with.glb");
     let without = dir.path().join("without.glb");
     rigport_ok(&["convert", s(&bvh), "-o", s(&with), "--quiet"]);
-    rigport_ok(&["convert", s(&bvh), "--no-bone-mesh", "-o", s(&without), "--quiet"]);
+    rigport_ok(&[
+        "convert",
+        s(&bvh),
+        "--no-bone-mesh",
+        "-o",
+        s(&without),
+        "--quiet",
+    ]);
     assert_valid(&with);
     assert_valid(&without);
     let a = gltf_read::read(&with);
@@ -702,7 +775,11 @@ fn skeleton_only_inputs_get_a_bone_mesh_unless_told_not_to() {
     // The bone mesh follows the motion: skinned by the test reader at the last frame, its
     // vertices stay close to the joints they are bound to.
     let anim = &a.animations[0];
-    let t = anim.channels.iter().map(|c| *c.times.last().unwrap()).fold(0.0f32, f32::max);
+    let t = anim
+        .channels
+        .iter()
+        .map(|c| *c.times.last().unwrap())
+        .fold(0.0f32, f32::max);
     let mut local = a.local.clone();
     for ch in &anim.channels {
         let v = sample_channel(ch, t);
@@ -729,7 +806,10 @@ fn skeleton_only_inputs_get_a_bone_mesh_unless_told_not_to() {
         let (node, _) = infl[0];
         let rest_d = (a.skins[0].positions[v] - rest_joints[node]).length();
         let posed_d = (skinned[v] - joints[node]).length();
-        assert!((rest_d - posed_d).abs() < 1e-3 * h, "vertex {v} moved off its bone");
+        assert!(
+            (rest_d - posed_d).abs() < 1e-3 * h,
+            "vertex {v} moved off its bone"
+        );
     }
 }
 
@@ -762,7 +842,15 @@ fn retime_identity_round_trip_speed_reverse_and_bad_warp() {
     let n2_s = (2 * n - 1).to_string();
 
     // Same frame count: identity.
-    rigport_ok(&["retime", s(&bvh), "--frames", &n_s, "-o", s(&p("same.glb")), "--quiet"]);
+    rigport_ok(&[
+        "retime",
+        s(&bvh),
+        "--frames",
+        &n_s,
+        "-o",
+        s(&p("same.glb")),
+        "--quiet",
+    ]);
     assert_valid(&p("same.glb"));
     let same = eval_frames(&[s(&p("same.glb"))], dir.path(), "same");
     assert_eq!(same.times.len(), n);
@@ -771,23 +859,54 @@ fn retime_identity_round_trip_speed_reverse_and_bad_warp() {
     }
 
     // Twice the frames and back: within 1e-4 rad per joint.
-    rigport_ok(&["retime", s(&bvh), "--frames", &n2_s, "-o", s(&p("double.glb")), "--quiet"]);
     rigport_ok(&[
-        "retime", s(&p("double.glb")), "--frames", &n_s, "-o", s(&p("back.glb")), "--quiet",
+        "retime",
+        s(&bvh),
+        "--frames",
+        &n2_s,
+        "-o",
+        s(&p("double.glb")),
+        "--quiet",
+    ]);
+    rigport_ok(&[
+        "retime",
+        s(&p("double.glb")),
+        "--frames",
+        &n_s,
+        "-o",
+        s(&p("back.glb")),
+        "--quiet",
     ]);
     let back = eval_frames(&[s(&p("back.glb"))], dir.path(), "back");
-    let worst = (0..n).map(|f| max_angle(&src, &back, f, f)).fold(0.0, f64::max);
+    let worst = (0..n)
+        .map(|f| max_angle(&src, &back, f, f))
+        .fold(0.0, f64::max);
     assert!(worst <= 1e-4, "2x and back: {worst} rad");
 
     // Speed 0.5 doubles the duration.
-    rigport_ok(&["retime", s(&bvh), "--speed", "0.5", "-o", s(&p("slow.glb")), "--quiet"]);
+    rigport_ok(&[
+        "retime",
+        s(&bvh),
+        "--speed",
+        "0.5",
+        "-o",
+        s(&p("slow.glb")),
+        "--quiet",
+    ]);
     let slow = eval_frames(&[s(&p("slow.glb"))], dir.path(), "slow");
     let d0 = src.times[n - 1] - src.times[0];
     let d1 = slow.times.last().unwrap() - slow.times[0];
     assert!((d1 - 2.0 * d0).abs() < 1e-4, "duration {d0} -> {d1}");
 
     // Reverse: the first frame of the result is the source's last.
-    rigport_ok(&["retime", s(&bvh), "--reverse", "-o", s(&p("rev.glb")), "--quiet"]);
+    rigport_ok(&[
+        "retime",
+        s(&bvh),
+        "--reverse",
+        "-o",
+        s(&p("rev.glb")),
+        "--quiet",
+    ]);
     let rev = eval_frames(&[s(&p("rev.glb"))], dir.path(), "rev");
     assert!(max_angle(&src, &rev, n - 1, 0) < 1e-4);
     assert!(max_angle(&src, &rev, 0, rev.times.len() - 1) < 1e-4);
@@ -795,7 +914,11 @@ fn retime_identity_round_trip_speed_reverse_and_bad_warp() {
     // Quaternion outputs are sign-continuous in the files.
     for file in ["double.glb", "slow.glb", "rev.glb"] {
         let scene = gltf_read::read(&p(file));
-        for ch in scene.animations[0].channels.iter().filter(|c| c.path == "Rotation") {
+        for ch in scene.animations[0]
+            .channels
+            .iter()
+            .filter(|c| c.path == "Rotation")
+        {
             for w in ch.values.windows(2) {
                 let d: f32 = w[0].iter().zip(&w[1]).map(|(a, b)| a * b).sum();
                 assert!(d >= 0.0, "{file}: sign flip between keys");
@@ -804,13 +927,28 @@ fn retime_identity_round_trip_speed_reverse_and_bad_warp() {
     }
 
     // A non-monotone warp curve is rejected, naming the key, and nothing is written.
-    let out = rigport(&["retime", s(&bvh), "--warp", "0:0,1:0.8,2:0.4", "-o", s(&p("warp.glb"))]);
+    let out = rigport(&[
+        "retime",
+        s(&bvh),
+        "--warp",
+        "0:0,1:0.8,2:0.4",
+        "-o",
+        s(&p("warp.glb")),
+    ]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("0.4") && err.contains("warp"), "{err}");
     assert!(!p("warp.glb").exists());
     // A monotone one works and validates.
-    rigport_ok(&["retime", s(&bvh), "--warp", "0:0,1:0.4,2:2", "-o", s(&p("warp.glb")), "--quiet"]);
+    rigport_ok(&[
+        "retime",
+        s(&bvh),
+        "--warp",
+        "0:0,1:0.4,2:2",
+        "-o",
+        s(&p("warp.glb")),
+        "--quiet",
+    ]);
     assert_valid(&p("warp.glb"));
 }
 
@@ -846,7 +984,14 @@ fn animate_three_keys_matches_eval_pose_at_each_key() {
     .unwrap();
     let glb = p("animated.glb");
     rigport_ok(&[
-        "animate", s(&mesh), s(&skel), s(&att), "--keys", s(&p("keys.json")), "-o", s(&glb),
+        "animate",
+        s(&mesh),
+        s(&skel),
+        s(&att),
+        "--keys",
+        s(&p("keys.json")),
+        "-o",
+        s(&glb),
         "--quiet",
     ]);
     assert_valid(&glb);
@@ -861,7 +1006,14 @@ fn animate_three_keys_matches_eval_pose_at_each_key() {
         // Same rig from the original files, posed directly.
         let out = p(&format!("pose{k}.npz"));
         rigport_ok(&[
-            "eval", s(&mesh), s(&skel), s(&att), "--pose", s(&pose_path), "--out", s(&out),
+            "eval",
+            s(&mesh),
+            s(&skel),
+            s(&att),
+            "--pose",
+            s(&pose_path),
+            "--out",
+            s(&out),
             "--quiet",
         ]);
         let direct = read_npz(&out);
@@ -871,12 +1023,21 @@ fn animate_three_keys_matches_eval_pose_at_each_key() {
             let c = clip.names.iter().position(|n| n == name).unwrap();
             let want = DVec3::new(jw[j * 16 + 3], jw[j * 16 + 7], jw[j * 16 + 11]);
             let d = (clip.positions[k][c] - want).length();
-            assert!(d <= 1e-6 * want.length().max(1.0), "key {k} joint {name}: {d:e}");
+            assert!(
+                d <= 1e-6 * want.length().max(1.0),
+                "key {k} joint {name}: {d:e}"
+            );
         }
         // The glTF's own pose at the key equals its clip frame, vertex by vertex.
         let out_glb = p(&format!("pose{k}_glb.npz"));
         rigport_ok(&[
-            "eval", s(&glb), "--pose", s(&pose_path), "--out", s(&out_glb), "--quiet",
+            "eval",
+            s(&glb),
+            "--pose",
+            s(&pose_path),
+            "--out",
+            s(&out_glb),
+            "--quiet",
         ]);
         let posed = &read_npz(&out_glb)["positions"].numbers;
         let framed = &clip_npz["positions"].numbers[k * v3..(k + 1) * v3];
@@ -885,7 +1046,10 @@ fn animate_three_keys_matches_eval_pose_at_each_key() {
             .zip(framed)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
-        assert!(worst <= 1e-6, "key {k}: clip frame vs eval --pose: {worst:e}");
+        assert!(
+            worst <= 1e-6,
+            "key {k}: clip frame vs eval --pose: {worst:e}"
+        );
     }
 }
 
@@ -916,9 +1080,19 @@ fn bad_motion_inputs_fail_cleanly() {
     assert!(!p("cut.glb").exists());
     // An AMC naming a bone the skeleton lacks.
     let asf_file = first(&asf, "asf").expect("fixtures/asf_amc has an .asf");
-    std::fs::write(p("bad.amc"), ":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0\nnosuchbone 1 2 3\n")
-        .unwrap();
-    let out = rigport(&["convert", s(&asf_file), "--motion", s(&p("bad.amc")), "-o", s(&p("bad.glb"))]);
+    std::fs::write(
+        p("bad.amc"),
+        ":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0\nnosuchbone 1 2 3\n",
+    )
+    .unwrap();
+    let out = rigport(&[
+        "convert",
+        s(&asf_file),
+        "--motion",
+        s(&p("bad.amc")),
+        "-o",
+        s(&p("bad.glb")),
+    ]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.amc:5"), "{err}");

@@ -79,7 +79,11 @@ fn find_config(rel: &str) -> Option<PathBuf> {
         for e in std::fs::read_dir(&dir).ok()?.flatten() {
             let p = e.path();
             if p.is_dir() {
-                if p.file_name().unwrap().to_string_lossy().to_ascii_lowercase() == want
+                if p.file_name()
+                    .unwrap()
+                    .to_string_lossy()
+                    .to_ascii_lowercase()
+                    == want
                     && p.join("skin.config").exists()
                 {
                     return Some(p);
@@ -148,7 +152,13 @@ fn usda_round_trips_through_rigport_and_matches_the_original_gltf() {
     // original, and rigport's evaluation of the re-imported .usda agree.
     rigport_ok(&["convert", s(&cesium), "-o", s(&p("c.usda")), "--quiet"]);
     rigport_ok(&["eval", s(&cesium), "--out", s(&p("orig.npz")), "--quiet"]);
-    rigport_ok(&["eval", s(&p("c.usda")), "--out", s(&p("back.npz")), "--quiet"]);
+    rigport_ok(&[
+        "eval",
+        s(&p("c.usda")),
+        "--out",
+        s(&p("back.npz")),
+        "--quiet",
+    ]);
     let (ok, text) = check_usd(&py, &p("c.usda"), Some(&p("orig.npz")));
     assert!(ok, "{text}");
     let a = read_npz(&p("orig.npz"));
@@ -174,7 +184,13 @@ fn usda_round_trips_through_rigport_and_matches_the_original_gltf() {
         .fold(0.0, f64::max);
     assert!(worst <= 1e-5 * diag, "re-imported usda deviates {worst:e}");
     // And back to a validator-clean glTF.
-    rigport_ok(&["convert", s(&p("c.usda")), "-o", s(&p("again.glb")), "--quiet"]);
+    rigport_ok(&[
+        "convert",
+        s(&p("c.usda")),
+        "-o",
+        s(&p("again.glb")),
+        "--quiet",
+    ]);
     assert_valid(&p("again.glb"));
 }
 
@@ -188,8 +204,22 @@ fn demo_and_motion_commands_write_usda_too() {
     };
     let dir = scratch();
     let p = |n: &str| dir.path().join(n);
-    rigport_ok(&["retime", s(&bvh), "--speed", "2", "-o", s(&p("fast.usda")), "--quiet"]);
-    rigport_ok(&["eval", s(&p("fast.usda")), "--out", s(&p("fast.npz")), "--quiet"]);
+    rigport_ok(&[
+        "retime",
+        s(&bvh),
+        "--speed",
+        "2",
+        "-o",
+        s(&p("fast.usda")),
+        "--quiet",
+    ]);
+    rigport_ok(&[
+        "eval",
+        s(&p("fast.usda")),
+        "--out",
+        s(&p("fast.npz")),
+        "--quiet",
+    ]);
     let (ok, text) = check_usd(&py, &p("fast.usda"), Some(&p("fast.npz")));
     assert!(ok, "{text}");
     let demo = p("demo");

@@ -117,7 +117,7 @@ fn baked_points(text: &str) -> Vec<(String, BTreeMap<i64, Vec<[f64; 3]>>)> {
         }
         let (time, values) = t.split_once(':').expect("time: values");
         let numbers: Vec<f64> = values
-            .split(|c: char| matches!(c, '[' | ']' | '(' | ')' | ','))
+            .split(['[', ']', '(', ')', ','])
             .map(str::trim)
             .filter(|s| !s.is_empty())
             .map(|s| s.parse().expect("number"))

@@ -6,6 +6,7 @@
 //! influences, not a skeleton. Parallelism is the caller's choice.
 #![warn(missing_docs)]
 
+pub mod bake;
 pub mod bone_mesh;
 pub mod dqs;
 mod error;
@@ -19,11 +20,11 @@ pub mod sample;
 pub mod sequence;
 pub mod skinning;
 
+pub use dqs::{DqsJob, DqsPalette};
 pub use error::EvalError;
 pub use fk::LocalToModelJob;
 pub use pose::Pose;
 pub use rig::{Rig, RigOutput};
-pub use dqs::{DqsJob, DqsPalette};
 pub use skinning::{
     par_skin_frames, skin_frames, skinning_matrices, LbsJob, PackedInfluences, SkinFramesJob,
     SkinningMethod,

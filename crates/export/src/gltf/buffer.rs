@@ -1,7 +1,7 @@
 //! The single binary buffer: buffer views and accessors appended as data is written.
 
 use gltf_json as json;
-use json::accessor::{ComponentType, GenericComponentType, Type};
+use json::accessor::{ComponentType, GenericComponentType, IndexComponentType, Type};
 use json::buffer::Target;
 use json::validation::{Checked, USize64};
 use json::Index;
@@ -114,6 +114,88 @@ impl Builder {
         self.accessor(view, data.len() / width, ComponentType::F32, type_, bounds)
     }
 
+    /// A `FLOAT` accessor of `type_` elements over `data` (as [`Builder::floats`]) stored
+    /// as a sparse accessor without a base buffer view (glTF 2.0 §3.6.2.3: the base is then
+    /// all zeros): only elements with a non-zero component are written, their indices as
+    /// `UNSIGNED_SHORT` (or `UNSIGNED_INT` past 65535), strictly increasing. `min`/`max`
+    /// cover the full array, implicit zeros included, as the validator computes them.
+    /// With no non-zero element, element 0 is stored (as zero) so that `sparse` is present.
+    pub(crate) fn sparse_floats(&mut self, data: &[f32], type_: Type) -> Index<json::Accessor> {
+        let width = type_.multiplicity();
+        let count = data.len() / width;
+        let (min, max) = min_max(data, width);
+        let mut nonzero: Vec<usize> = data
+            .chunks_exact(width)
+            .enumerate()
+            .filter(|(_, e)| e.iter().any(|&x| x != 0.0))
+            .map(|(i, _)| i)
+            .collect();
+        // An accessor with neither bufferView nor sparse is all zeros by the spec, but
+        // readers such as gltf-rs reject it: an all-zero array stores element 0 explicitly.
+        if nonzero.is_empty() && count > 0 {
+            nonzero.push(0);
+        }
+        let sparse = if nonzero.is_empty() {
+            None
+        } else {
+            // Sparse views carry no `target`: they are not vertex attributes themselves.
+            let (index_view, index_type) = if count <= usize::from(u16::MAX) + 1 {
+                let view = self.view(None, |bin| {
+                    for &i in &nonzero {
+                        bin.extend_from_slice(&(i as u16).to_le_bytes());
+                    }
+                });
+                (view, ComponentType::U16)
+            } else {
+                let view = self.view(None, |bin| {
+                    for &i in &nonzero {
+                        bin.extend_from_slice(&(i as u32).to_le_bytes());
+                    }
+                });
+                (view, ComponentType::U32)
+            };
+            let value_view = self.view(None, |bin| {
+                for &i in &nonzero {
+                    for v in &data[i * width..(i + 1) * width] {
+                        bin.extend_from_slice(&v.to_le_bytes());
+                    }
+                }
+            });
+            Some(json::accessor::sparse::Sparse {
+                count: USize64::from(nonzero.len()),
+                indices: json::accessor::sparse::Indices {
+                    buffer_view: index_view,
+                    byte_offset: USize64(0),
+                    component_type: Checked::Valid(IndexComponentType(index_type)),
+                    extensions: None,
+                    extras: None,
+                },
+                values: json::accessor::sparse::Values {
+                    buffer_view: value_view,
+                    byte_offset: USize64(0),
+                    extensions: None,
+                    extras: None,
+                },
+                extensions: None,
+                extras: None,
+            })
+        };
+        self.root.push(json::Accessor {
+            buffer_view: None,
+            byte_offset: None,
+            count: USize64::from(count),
+            component_type: Checked::Valid(GenericComponentType(ComponentType::F32)),
+            extensions: None,
+            extras: None,
+            type_: Checked::Valid(type_),
+            min: Some(min),
+            max: Some(max),
+            name: None,
+            normalized: false,
+            sparse,
+        })
+    }
+
     /// An unsigned-integer accessor (`data.len() / size` elements of `type_`), of `T`'s
     /// component type (`u8`, `u16` or `u32`).
     pub(crate) fn ints<T: IntComponent>(
@@ -182,3 +264,58 @@ macro_rules! int_component {
 int_component!(u8, ComponentType::U8);
 int_component!(u16, ComponentType::U16);
 int_component!(u32, ComponentType::U32);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn builder() -> Builder {
+        Builder::new(json::Asset {
+            version: "2.0".into(),
+            ..Default::default()
+        })
+    }
+
+    fn u16_at(bin: &[u8], view: &json::buffer::View, k: usize) -> u16 {
+        let at = view.byte_offset.map_or(0, |o| o.0 as usize) + 2 * k;
+        u16::from_le_bytes([bin[at], bin[at + 1]])
+    }
+
+    #[test]
+    fn sparse_floats_store_only_non_zero_elements_with_full_bounds() {
+        let mut b = builder();
+        // Elements 1 and 3 move; min/max must include the implicit zeros.
+        let data = [
+            0.0, 0.0, 0.0, 1.0, 2.0, 3.0, 0.0, 0.0, 0.0, 0.5, -4.0, 0.0, 0.0, 0.0, 0.0,
+        ];
+        let acc = b.sparse_floats(&data, Type::Vec3);
+        let a = &b.root.accessors[acc.value()];
+        assert!(a.buffer_view.is_none());
+        assert_eq!(a.count.0, 5);
+        assert_eq!(a.min, Some(serde_json::json!([0.0, -4.0, 0.0])));
+        assert_eq!(a.max, Some(serde_json::json!([1.0, 2.0, 3.0])));
+        let sparse = a.sparse.as_ref().unwrap();
+        assert_eq!(sparse.count.0, 2);
+        let iv = &b.root.buffer_views[sparse.indices.buffer_view.value()];
+        assert!(iv.target.is_none());
+        assert_eq!((u16_at(&b.bin, iv, 0), u16_at(&b.bin, iv, 1)), (1, 3));
+        let vv = &b.root.buffer_views[sparse.values.buffer_view.value()];
+        assert_eq!(vv.byte_length.0, 24);
+        let at = vv.byte_offset.map_or(0, |o| o.0 as usize);
+        let values: Vec<f32> = b.bin[at..at + 24]
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        assert_eq!(values, [1.0, 2.0, 3.0, 0.5, -4.0, 0.0]);
+        assert_eq!(at % 4, 0, "value view is 4-byte aligned");
+    }
+
+    #[test]
+    fn all_zero_sparse_floats_keep_one_explicit_element() {
+        let mut b = builder();
+        let acc = b.sparse_floats(&[0.0; 9], Type::Vec3);
+        let a = &b.root.accessors[acc.value()];
+        assert_eq!(a.sparse.as_ref().unwrap().count.0, 1);
+        assert_eq!(a.min, Some(serde_json::json!([0.0, 0.0, 0.0])));
+    }
+}

@@ -392,13 +392,20 @@ fn write_mesh(
     let with_normals = mesh.morph_targets.iter().any(|t| t.normal_deltas.is_some());
     let mut targets = Vec::with_capacity(mesh.morph_targets.len());
     for target in &mesh.morph_targets {
-        // glTF 2.0 §3.7.2.2: POSITION targets require min/max.
-        let positions = b.floats(
-            &flat3(&target.position_deltas),
-            Type::Vec3,
-            array,
-            Bounds::MinMax,
-        );
+        // glTF 2.0 §3.7.2.2: POSITION targets require min/max. Targets that move under a
+        // third of the vertices (baked correctives, most blend shapes) are written as sparse
+        // accessors (§3.6.2.3): 16 bytes per moved vertex instead of 12 per vertex.
+        let flat = flat3(&target.position_deltas);
+        let moved = target
+            .position_deltas
+            .iter()
+            .filter(|d| **d != Vec3::ZERO)
+            .count();
+        let positions = if moved * 3 < target.position_deltas.len() {
+            b.sparse_floats(&flat, Type::Vec3)
+        } else {
+            b.floats(&flat, Type::Vec3, array, Bounds::MinMax)
+        };
         let normals = with_normals.then(|| {
             let flat = match &target.normal_deltas {
                 Some(d) => flat3(d),
