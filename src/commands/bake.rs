@@ -16,11 +16,12 @@ use rigport_model::{
     Asset, Influences, Interpolation, MeshIndex, MorphTarget, Track, TrackTarget, Warning,
 };
 
-use super::eval::{clip_names, sample_times};
+use super::eval::clip_names;
 use super::Context;
 use crate::cli::{InputArgs, OutputArgs, Skinning};
 use crate::input;
 use crate::output::{self, Format};
+use rigport_eval::sample::sample_times;
 
 /// `rigport bake` arguments.
 #[derive(Debug, clap::Args)]

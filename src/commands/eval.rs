@@ -1,7 +1,7 @@
 //! `rigport eval`: pose a rig and dump the skinned result as `.npz`.
 
 use anyhow::{Context as _, Result};
-use rigport_eval::sample::{CompiledClip, SampleJob};
+use rigport_eval::sample::{sample_times, CompiledClip, SampleJob};
 use rigport_eval::skinning::SkinningMethod;
 use rigport_eval::{Pose, Rig, RigOutput};
 use rigport_model::glam::Mat4;
@@ -274,22 +274,6 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// `start, start + 1/fps, ...` through `end` (included even when off the grid).
-pub fn sample_times(start: f32, end: f32, fps: f32) -> Vec<f32> {
-    let mut times = Vec::new();
-    let mut k = 0u32;
-    loop {
-        let t = start + k as f32 / fps;
-        if t >= end - 1e-6 / fps {
-            break;
-        }
-        times.push(t);
-        k += 1;
-    }
-    times.push(end);
-    times
 }
 
 /// The clip names of an asset, for messages.

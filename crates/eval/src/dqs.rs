@@ -59,10 +59,9 @@
 //!   improper matrix instead, with an undefined quaternion.
 
 use glam::{DMat3, DQuat, DVec3, Mat3, Mat4, Quat, Vec3, Vec3A, Vec4};
-use rayon::prelude::*;
 use rigport_model::{Influence, Influences};
 
-use crate::skinning::{check_lengths, check_palette, GRAIN};
+use crate::skinning::{check_lengths, check_palette, for_vertex_chunks};
 use crate::EvalError;
 
 /// Joint matrices whose upper 3x3 has `|det| < SINGULAR_DET` are singular (the `eps`
@@ -917,7 +916,6 @@ impl DqsJob<'_> {
         let influences = self.influences;
         let rest = self.rest_positions;
         let rest_normals = self.rest_normals;
-        let n = rest.len();
         let chunk = |start: usize, out: &mut [Vec3], out_n: Option<&mut [Vec3]>| match frame.signs {
             _ if frame.aligned => dqs_rows(
                 &frame,
@@ -950,23 +948,12 @@ impl DqsJob<'_> {
                 out_n,
             ),
         };
-        if !parallel || n < 2 * GRAIN {
-            chunk(0, self.out_positions, self.out_normals.as_deref_mut());
-            return Ok(());
-        }
-        match self.out_normals.as_deref_mut() {
-            Some(out_n) => self
-                .out_positions
-                .par_chunks_mut(GRAIN)
-                .zip(out_n.par_chunks_mut(GRAIN))
-                .enumerate()
-                .for_each(|(c, (o, on))| chunk(c * GRAIN, o, Some(on))),
-            None => self
-                .out_positions
-                .par_chunks_mut(GRAIN)
-                .enumerate()
-                .for_each(|(c, o)| chunk(c * GRAIN, o, None)),
-        }
+        for_vertex_chunks(
+            parallel,
+            self.out_positions,
+            self.out_normals.as_deref_mut(),
+            chunk,
+        );
         Ok(())
     }
 }
@@ -1688,7 +1675,7 @@ mod tests {
                 )
             })
             .collect();
-        let n = 3 * GRAIN + 17;
+        let n = 3 * crate::skinning::GRAIN + 17;
         let infl = Influences::from_rows((0..n).map(|v| {
             [
                 Influence {

@@ -950,6 +950,20 @@ pub(crate) fn resample_weight_tracks(
         .collect()
 }
 
+/// Sample times on a fixed-rate grid: `start, start + 1/fps, ...` before `end`, then `end`
+/// itself (included even when off the grid), in seconds. `fps` must be finite and `> 0`.
+pub fn sample_times(start: f32, end: f32, fps: f32) -> Vec<f32> {
+    let mut times = Vec::new();
+    let mut k = 0u32;
+    // Bounded: at most (end - start) * fps steps (plus one for rounding).
+    while start + k as f32 / fps < end - 1e-6 / fps {
+        times.push(start + k as f32 / fps);
+        k += 1;
+    }
+    times.push(end);
+    times
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;

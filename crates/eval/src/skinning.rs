@@ -296,24 +296,41 @@ impl LbsJob<'_> {
         let chunk = |start: usize, out: &mut [Vec3], out_n: Option<&mut [Vec3]>| {
             lbs_rows(mats, influences, start, rest, rest_n, out, out_n);
         };
-        if !parallel || rest.len() < 2 * GRAIN {
-            chunk(0, self.out_positions, self.out_normals.as_deref_mut());
-            return Ok(());
-        }
-        match self.out_normals.as_deref_mut() {
-            Some(out_n) => self
-                .out_positions
-                .par_chunks_mut(GRAIN)
-                .zip(out_n.par_chunks_mut(GRAIN))
-                .enumerate()
-                .for_each(|(c, (o, on))| chunk(c * GRAIN, o, Some(on))),
-            None => self
-                .out_positions
-                .par_chunks_mut(GRAIN)
-                .enumerate()
-                .for_each(|(c, o)| chunk(c * GRAIN, o, None)),
-        }
+        for_vertex_chunks(
+            parallel,
+            self.out_positions,
+            self.out_normals.as_deref_mut(),
+            chunk,
+        );
         Ok(())
+    }
+}
+
+/// Runs `chunk(start, positions, normals)` over the output in one call, or over
+/// [`GRAIN`]-sized chunks on rayon when `parallel` and the output holds at least two grains
+/// (UsdSkel's serial fallback below a grain size).
+pub(crate) fn for_vertex_chunks<F>(
+    parallel: bool,
+    out_positions: &mut [Vec3],
+    out_normals: Option<&mut [Vec3]>,
+    chunk: F,
+) where
+    F: Fn(usize, &mut [Vec3], Option<&mut [Vec3]>) + Sync,
+{
+    if !parallel || out_positions.len() < 2 * GRAIN {
+        chunk(0, out_positions, out_normals);
+        return;
+    }
+    match out_normals {
+        Some(out_n) => out_positions
+            .par_chunks_mut(GRAIN)
+            .zip(out_n.par_chunks_mut(GRAIN))
+            .enumerate()
+            .for_each(|(c, (o, on))| chunk(c * GRAIN, o, Some(on))),
+        None => out_positions
+            .par_chunks_mut(GRAIN)
+            .enumerate()
+            .for_each(|(c, o)| chunk(c * GRAIN, o, None)),
     }
 }
 

@@ -236,18 +236,7 @@ pub fn clip_times(
     let compiled = CompiledClip::new(clip, &asset.skeleton)?;
     Ok(match fps {
         None => compiled.key_times(),
-        Some(fps) => {
-            let (start, end) = (compiled.start(), compiled.end());
-            let mut times = Vec::new();
-            let mut k = 0u32;
-            // Bounded: at most (end - start) * fps steps (plus one for rounding).
-            while start + k as f32 / fps < end - 1e-6 / fps {
-                times.push(start + k as f32 / fps);
-                k += 1;
-            }
-            times.push(end);
-            times
-        }
+        Some(fps) => rigport_eval::sample::sample_times(compiled.start(), compiled.end(), fps),
     })
 }
 
