@@ -73,7 +73,7 @@ const SCALE_TOLERANCE: f64 = 1e-6;
 
 /// A blended dual quaternion whose real part is shorter than this becomes the identity
 /// (`GfDualQuatd::Normalize`'s default `eps`, `GF_MIN_VECTOR_LENGTH`).
-const MIN_REAL_LENGTH: f32 = 1e-10;
+pub(crate) const MIN_REAL_LENGTH: f32 = 1e-10;
 
 /// The per-vertex hemisphere test reads a precomputed sign table (palette x palette signs
 /// per frame) when the palette has at most this many joints, else it takes dot products.
@@ -226,9 +226,10 @@ fn polar_orthogonal(a: DMat3) -> Option<DMat3> {
 /// decomposition is symmetric (it is `±(AᵀA)^½`), so this halves the per-influence blend
 /// of the scale matrices (rounding the `f64` matrix's tiny asymmetry away).
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Sym3 {
-    diag: Vec4,
-    off: Vec4,
+#[repr(C)]
+pub(crate) struct Sym3 {
+    pub(crate) diag: Vec4,
+    pub(crate) off: Vec4,
 }
 
 impl Sym3 {
@@ -273,13 +274,14 @@ impl Sym3 {
 /// One joint's data for the per-vertex DQS loop (`f32`, SIMD-friendly; 64 bytes, one
 /// cache line).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub(crate) struct JointDq {
     /// Rotation quaternion (xyzw); zero for a singular joint.
-    real: Vec4,
+    pub(crate) real: Vec4,
     /// Dual part `½ (t, 0) real`; zero for a singular joint.
-    dual: Vec4,
+    pub(crate) dual: Vec4,
     /// Scale/shear `S` (identity for a singular joint).
-    scale: Sym3,
+    pub(crate) scale: Sym3,
 }
 
 impl Default for JointDq {
@@ -465,7 +467,7 @@ fn sign_of(q: Vec4, pivot: Vec4) -> f32 {
 /// One frame of a [`DqsPalette`].
 #[derive(Clone, Copy)]
 pub(crate) struct Frame<'a> {
-    dq: &'a [JointDq],
+    pub(crate) dq: &'a [JointDq],
     normal_scale: &'a [Sym3],
     has_scale: bool,
     aligned: bool,
@@ -473,7 +475,7 @@ pub(crate) struct Frame<'a> {
 }
 
 /// How the per-vertex loop finds the hemisphere sign of joint `j` relative to the pivot.
-trait Hemisphere: Copy {
+pub(crate) trait Hemisphere: Copy {
     /// Called once per vertex.
     fn for_pivot(self, dq: &[JointDq], pivot: usize) -> Self;
     /// The sign of joint `j`.
@@ -758,6 +760,11 @@ fn skin_fixed_with<const W: usize, const SCALE: bool, H: Hemisphere>(
     rest: &[Vec3],
     out: &mut [Vec3],
 ) {
+    // With AVX2 + FMA, blocks of eight vertices go through the SIMD kernel; the rest (or
+    // everything, on other CPUs) through the portable loop below.
+    let done = crate::simd::dqs_fixed::<W, SCALE, H>(frame, h, joints, weights, rest, out);
+    let (joints, weights) = (&joints[done * W..], &weights[done * W..]);
+    let (rest, out) = (&rest[done..], &mut out[done..]);
     // Blocks of four vertices share the normalization and transform (`apply4`). The
     // lanes are spelled out so that the compiler sees constant offsets into the block.
     let mut j4 = joints.chunks_exact(4 * W);

@@ -18,6 +18,7 @@ pub mod retime;
 pub mod rig;
 pub mod sample;
 pub mod sequence;
+mod simd;
 pub mod skinning;
 
 pub use dqs::{DqsJob, DqsPalette};

@@ -546,6 +546,9 @@ fn lbs_fixed<const W: usize>(
     rest: &[Vec3],
     out: &mut [Vec3],
 ) {
+    if crate::simd::try_lbs_fixed::<W>(mats, joints, weights, rest, out) {
+        return;
+    }
     for (((j, w), p), o) in joints
         .chunks_exact(W)
         .zip(weights.chunks_exact(W))
@@ -570,6 +573,9 @@ fn lbs_sparse(
     rest: &[Vec3],
     out: &mut [Vec3],
 ) {
+    if crate::simd::try_lbs_sparse(mats, offsets, base, joints, weights, rest, out) {
+        return;
+    }
     for ((o2, p), o) in offsets.windows(2).zip(rest).zip(out) {
         let (a, b) = (o2[0] as usize - base, o2[1] as usize - base);
         let mut m = Mat4::ZERO;
@@ -786,8 +792,9 @@ impl Block<'_> {
             self.skin(&mut outs, v0);
             return;
         }
-        // Split at a multiple of 4 (the DQS loop's SIMD lane block).
-        let mid = (n / 2) & !3;
+        // Split at a multiple of 8 (the DQS kernels' vertex block: 8 AVX2 lanes, or 4 SSE
+        // lanes), so serial and parallel runs group vertices alike and agree bit for bit.
+        let mid = (n / 2) & !7;
         let mut left: [&mut [Vec3]; FRAME_BLOCK] = Default::default();
         let mut right: [&mut [Vec3]; FRAME_BLOCK] = Default::default();
         for ((o, l), r) in outs.iter_mut().zip(&mut left).zip(&mut right) {
