@@ -310,4 +310,12 @@ pub struct DemoArgs {
     /// Mesh detail: 1 (default, several thousand vertices) and up.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4))]
     pub detail: u32,
+    /// The shared corpus folder: one rig of each family in it is rendered to
+    /// DIR/corpus/<family>.png (default: `../shared/corpus` relative to the current
+    /// directory; skipped with a note when absent).
+    #[arg(long, value_name = "CORPUS_DIR", conflicts_with = "no_corpus")]
+    pub corpus: Option<PathBuf>,
+    /// Do not render corpus rigs.
+    #[arg(long)]
+    pub no_corpus: bool,
 }

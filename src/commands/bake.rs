@@ -102,27 +102,88 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
         });
         return output::write_asset(ctx, &asset, warnings, &out_args);
     }
-    if asset.skins.is_empty() {
-        bail!(
-            "{}: nothing to bake: the rig has no skinned mesh",
-            plan.label()
-        );
+    let lines = bake_dqs(
+        ctx,
+        &plan.label(),
+        &mut asset,
+        &DqsBakeOptions {
+            clip: args.clip.as_deref(),
+            fps: args.fps,
+            threshold: args.threshold,
+            correctives: args.correctives,
+            max_influences: args.max_influences,
+        },
+        &mut warnings,
+    )?;
+    output::write_asset(ctx, &asset, warnings, &out_args)?;
+    if !ctx.quiet {
+        for line in &lines {
+            eprintln!("{line}");
+        }
+        let mut size = std::fs::metadata(&args.output).map_or(0, |m| m.len());
+        if args
+            .output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("gltf"))
+        {
+            size += std::fs::metadata(args.output.with_extension("bin")).map_or(0, |m| m.len());
+        }
+        eprintln!("file size: {size} bytes");
     }
-    let clip_index = match &args.clip {
+    Ok(())
+}
+
+/// What [`bake_dqs`] bakes (the options of `rigport bake --skinning dqs`).
+pub(crate) struct DqsBakeOptions<'a> {
+    /// The clip to bake (default: the first).
+    pub clip: Option<&'a str>,
+    /// Sample rate in frames per second (default: the clip's key times).
+    pub fps: Option<f32>,
+    /// Corrections no longer than this (bind-space units) stay out of the sparse targets
+    /// (default: 1e-6 of the skinned meshes' bounding-box diagonal).
+    pub threshold: Option<f32>,
+    /// Compress to this many shared targets (PCA) instead of one per frame.
+    pub correctives: Option<u32>,
+    /// Influences per vertex the glTF will hold (1 to 8): the bake inverts exactly the LBS a
+    /// viewer computes from them, so the file must be written with the same limit.
+    pub max_influences: u8,
+}
+
+/// Bakes the DQS result of one clip of `asset` into corrective morph targets (bind space,
+/// one per sampled frame or `correctives` shared ones) on every skinned mesh, and a morph
+/// weight track on that clip, so a glTF viewer's LBS of the written file lands on DQS.
+/// Near-singular fallbacks go into `warnings`; returns one report line per mesh (frames,
+/// targets, vertices corrected, the baked-vs-DQS deviation). `label` names the input in
+/// messages.
+///
+/// # Errors
+/// No skinned mesh, no such clip (or no clip), a skinned mesh that already has morph
+/// targets, a clip that does not fit the skeleton, a bad `fps`, evaluation failures.
+pub(crate) fn bake_dqs(
+    ctx: &Context,
+    label: &str,
+    asset: &mut Asset,
+    opts: &DqsBakeOptions<'_>,
+    warnings: &mut Vec<Warning>,
+) -> Result<Vec<String>> {
+    if asset.skins.is_empty() {
+        bail!("{}: nothing to bake: the rig has no skinned mesh", label);
+    }
+    let clip_index = match opts.clip {
         Some(name) => asset
             .clips
             .iter()
-            .position(|c| &c.name == name)
+            .position(|c| c.name == name)
             .ok_or_else(|| {
                 anyhow::anyhow!(
                     "{}: no clip named {name:?}; clips: {}",
-                    plan.label(),
-                    clip_names(&asset)
+                    label,
+                    clip_names(asset)
                 )
             })?,
         None if asset.clips.is_empty() => bail!(
             "{}: the rig has no clip to bake (make one with `rigport animate`)",
-            plan.label()
+            label
         ),
         None => 0,
     };
@@ -131,7 +192,7 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
             if !mesh.morph_targets.is_empty() {
                 bail!(
                     "{}: mesh {:?} already has morph targets; baking correctives on top of them is not supported",
-                    plan.label(),
+                    label,
                     mesh.name
                 );
             }
@@ -142,7 +203,7 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
         let clip = &asset.clips[clip_index];
         let compiled = CompiledClip::new(clip, &asset.skeleton)
             .with_context(|| format!("clip {:?} does not fit the skeleton", clip.name))?;
-        let times = match args.fps {
+        let times = match opts.fps {
             None => compiled.key_times(),
             Some(fps) => {
                 if !(fps.is_finite() && fps > 0.0) {
@@ -180,8 +241,8 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
     let frames = times.len();
     let joint_count = asset.skeleton.len();
 
-    let diagonal = skinned_diagonal(&asset);
-    let threshold = args.threshold.unwrap_or(1e-6 * diagonal);
+    let diagonal = skinned_diagonal(asset);
+    let threshold = opts.threshold.unwrap_or(1e-6 * diagonal);
     let mut bakes = Vec::with_capacity(asset.skins.len());
     ctx.step("baking DQS correctives", || -> Result<()> {
         for skin in &asset.skins {
@@ -193,7 +254,7 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
             let influences = rigport_export::gltf_influences(
                 &asset.skeleton,
                 skin,
-                usize::from(args.max_influences),
+                usize::from(opts.max_influences),
             );
             let joints = skin.joints.len();
             let mut frame_matrices = vec![Mat4::IDENTITY; frames * joints];
@@ -234,7 +295,7 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
     for bake in &bakes {
         let mesh = &asset.meshes[bake.mesh];
         let v = mesh.positions.len();
-        let (targets, weights) = match args.correctives {
+        let (targets, weights) = match opts.correctives {
             Some(k) => {
                 let c = compress_correctives(&bake.deltas, frames, k as usize)?;
                 let targets: Vec<MorphTarget> = c
@@ -311,22 +372,7 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
         asset.meshes[bake.mesh].morph_targets = targets;
         asset.clips[clip_index].tracks.push(track);
     }
-    output::write_asset(ctx, &asset, warnings, &out_args)?;
-    if !ctx.quiet {
-        for line in &lines {
-            eprintln!("{line}");
-        }
-        let mut size = std::fs::metadata(&args.output).map_or(0, |m| m.len());
-        if args
-            .output
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("gltf"))
-        {
-            size += std::fs::metadata(args.output.with_extension("bin")).map_or(0, |m| m.len());
-        }
-        eprintln!("file size: {size} bytes");
-    }
-    Ok(())
+    Ok(lines)
 }
 
 /// The bounding-box diagonal of the skinned meshes' bind positions.

@@ -6,17 +6,17 @@ use crate::common::{corpus, rigport, rigport_ok, PINOCCHIO_RIGS};
 use crate::motion::{ASF_AMC, BVH};
 
 /// The renderer's background colour (rigport_render::BACKGROUND).
-const BACKGROUND: [u8; 4] = [38, 41, 48, 255];
+pub(crate) const BACKGROUND: [u8; 4] = [38, 41, 48, 255];
 
 /// A decoded RGBA8 picture.
-struct Picture {
-    width: usize,
-    height: usize,
-    rgba: Vec<u8>,
+pub(crate) struct Picture {
+    pub(crate) width: usize,
+    pub(crate) height: usize,
+    pub(crate) rgba: Vec<u8>,
 }
 
 impl Picture {
-    fn read(path: &Path) -> Picture {
+    pub(crate) fn read(path: &Path) -> Picture {
         let file = std::fs::File::open(path).unwrap();
         let mut reader = png::Decoder::new(std::io::BufReader::new(file))
             .read_info()
@@ -33,13 +33,13 @@ impl Picture {
         }
     }
 
-    fn is_background(&self, x: usize, y: usize) -> bool {
+    pub(crate) fn is_background(&self, x: usize, y: usize) -> bool {
         let i = (y * self.width + x) * 4;
         self.rgba[i..i + 4] == BACKGROUND
     }
 
     /// Share of pixels that are not background.
-    fn coverage(&self) -> f64 {
+    pub(crate) fn coverage(&self) -> f64 {
         let n = (0..self.height)
             .flat_map(|y| (0..self.width).map(move |x| (x, y)))
             .filter(|&(x, y)| !self.is_background(x, y))
@@ -48,7 +48,7 @@ impl Picture {
     }
 
     /// Whether every pixel on the outer border is background.
-    fn border_is_clear(&self) -> bool {
+    pub(crate) fn border_is_clear(&self) -> bool {
         let (w, h) = (self.width, self.height);
         (0..w).all(|x| self.is_background(x, 0) && self.is_background(x, h - 1))
             && (0..h).all(|y| self.is_background(0, y) && self.is_background(w - 1, y))
@@ -81,7 +81,7 @@ fn check_sheet(dir: &Path, label: &str, inputs: &[&str], extra: &[&str]) -> Path
 
 fn demo_glb(dir: &Path) -> PathBuf {
     let demo = dir.join("demo");
-    rigport_ok(&["demo", "-o", s(&demo)]);
+    rigport_ok(&["demo", "--no-corpus", "-o", s(&demo)]);
     demo.join("demo.glb")
 }
 

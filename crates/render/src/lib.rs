@@ -348,6 +348,17 @@ pub fn render_frames(
                     let at = i64::from(2 * scale);
                     panel.number(f.number, at, at, scale, TEXT_COLOR);
                 }
+                if methods.len() > 1 {
+                    // Side by side: name each panel's method in its top-right corner.
+                    let label = match method {
+                        SkinningMethod::Lbs => "LBS",
+                        SkinningMethod::Dqs => "DQS",
+                    };
+                    let scale = (w.min(h) / 128).max(1);
+                    let s = i64::from(scale);
+                    let x = i64::from(w) - (4 * label.len() as i64 + 1) * s;
+                    panel.text(label, x, 2 * s, scale, TEXT_COLOR);
+                }
                 picture.blit(&panel, k as u32 * w, 0);
             }
             Ok(picture)

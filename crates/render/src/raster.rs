@@ -196,14 +196,18 @@ impl Framebuffer {
         }
     }
 
-    /// Writes the decimal `number` with the built-in 3x5 digit font, each font pixel
-    /// `scale` x `scale` screen pixels, top-left corner at `(x, y)`, one font pixel between
-    /// digits.
+    /// Writes the decimal `number` with the built-in 3x5 font (see [`Framebuffer::text`]).
     pub fn number(&mut self, number: u64, x: i64, y: i64, scale: u32, color: Rgba) {
-        let text = number.to_string();
+        self.text(&number.to_string(), x, y, scale, color);
+    }
+
+    /// Writes `text` with the built-in 3x5 font (digits and the letters of `LBS`/`DQS`;
+    /// other characters leave a gap), each font pixel `scale` x `scale` screen pixels,
+    /// top-left corner at `(x, y)`, one font pixel between characters.
+    pub fn text(&mut self, text: &str, x: i64, y: i64, scale: u32, color: Rgba) {
         let s = i64::from(scale.max(1));
         for (k, ch) in text.bytes().enumerate() {
-            let Some(glyph) = DIGITS.get(usize::from(ch.wrapping_sub(b'0'))) else {
+            let Some(glyph) = glyph(ch) else {
                 continue;
             };
             let gx = x + k as i64 * 4 * s;
@@ -219,6 +223,19 @@ impl Framebuffer {
                 }
             }
         }
+    }
+}
+
+/// The 3x5 glyph of `ch`, if the font has one.
+fn glyph(ch: u8) -> Option<&'static [u8; 5]> {
+    match ch {
+        b'0'..=b'9' => DIGITS.get(usize::from(ch - b'0')),
+        b'L' => Some(&[0b100, 0b100, 0b100, 0b100, 0b111]),
+        b'B' => Some(&[0b110, 0b101, 0b110, 0b101, 0b110]),
+        b'S' => Some(&[0b111, 0b100, 0b111, 0b001, 0b111]),
+        b'D' => Some(&[0b110, 0b101, 0b101, 0b101, 0b110]),
+        b'Q' => Some(&[0b010, 0b101, 0b101, 0b110, 0b011]),
+        _ => None,
     }
 }
 
@@ -330,5 +347,18 @@ mod tests {
         // "1" has 8 lit cells, "8" has 13; each is 2x2 pixels.
         assert_eq!(count(&fb, RED), (8 + 13) * 4);
         assert!((0..32).all(|x| fb.get(x, 0) == Some(BG)));
+    }
+
+    #[test]
+    fn labels_use_their_own_glyphs_and_skip_unknown_characters() {
+        let lit = |text: &str| {
+            let mut fb = Framebuffer::new(16, 8, BG);
+            fb.text(text, 1, 1, 1, RED);
+            count(&fb, RED)
+        };
+        // L 7 + B 10 + S 11 cells; D 10 + Q 9 + S 11.
+        assert_eq!(lit("LBS"), 7 + 10 + 11);
+        assert_eq!(lit("DQS"), 10 + 9 + 11);
+        assert_eq!(lit("x?"), 0);
     }
 }
