@@ -99,7 +99,7 @@ use rigport_model::{
     Asset, Clip, Interpolation, Joint, JointIndex, Skeleton, Track, TrackTarget, Transform, Warning,
 };
 
-use crate::{read_file, ImportError, Imported, Location, Problem};
+use crate::{number, read_file, ImportError, Imported, Location, Problem};
 
 /// One BVH channel: a position or rotation about one axis of the joint's parent frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -561,18 +561,26 @@ fn clip(
     for (index, joint) in bvh.joints.iter().enumerate() {
         let index = JointIndex(u32::try_from(index).map_err(|_| broken(joint))?);
         let range = joint.first_channel..joint.first_channel + joint.channels.len();
-        let has_position = joint.channels.iter().any(|c| !c.is_rotation());
-        let has_rotation = joint.channels.iter().any(|c| c.is_rotation());
+        // The joint's channels by kind, as (index within the joint's values, axis), in file
+        // order: worked out once rather than per frame.
+        let positions: Vec<(usize, usize)> = (joint.channels.iter().enumerate())
+            .filter(|(_, c)| !c.is_rotation())
+            .map(|(k, c)| (k, c.axis()))
+            .collect();
+        let rotations: Vec<(usize, DVec3)> = (joint.channels.iter().enumerate())
+            .filter(|(_, c)| c.is_rotation())
+            .map(|(k, c)| (k, AXES[c.axis()]))
+            .collect();
+        let has_position = !positions.is_empty();
+        let has_rotation = !rotations.is_empty();
         if has_position {
             let mut values = Vec::with_capacity(3 * frames);
             for frame in bvh.motion.chunks_exact(channel_count) {
                 let own = frame.get(range.clone()).ok_or_else(|| broken(joint))?;
                 let mut t = joint.offset.to_array();
-                for (&c, &v) in joint.channels.iter().zip(own) {
-                    if !c.is_rotation() {
-                        if let Some(slot) = t.get_mut(c.axis()) {
-                            *slot = v;
-                        }
+                for &(k, axis) in &positions {
+                    if let (Some(slot), Some(&v)) = (t.get_mut(axis), own.get(k)) {
+                        *slot = v;
                     }
                 }
                 values.extend_from_slice(&t);
@@ -590,10 +598,10 @@ fn clip(
             for frame in bvh.motion.chunks_exact(channel_count) {
                 let own = frame.get(range.clone()).ok_or_else(|| broken(joint))?;
                 let mut q = DQuat::IDENTITY;
-                for (&c, &v) in joint.channels.iter().zip(own) {
-                    if c.is_rotation() {
+                for &(k, axis) in &rotations {
+                    if let Some(&v) = own.get(k) {
                         // The first listed rotation is the outermost: R = R1 · R2 · R3.
-                        q *= DQuat::from_axis_angle(AXES[c.axis()], f64::from(v).to_radians());
+                        q *= DQuat::from_axis_angle(axis, f64::from(v).to_radians());
                     }
                 }
                 q = q.normalize();
@@ -769,7 +777,7 @@ impl<'a> Parser<'a, '_> {
 
     /// A finite `f32`.
     fn number(&self, t: Token<'_>) -> Result<f32, ImportError> {
-        let v: f32 = t.text.parse().map_err(|_| self.syntax(t, "a number"))?;
+        let v = number::parse_f32(t.text).ok_or_else(|| self.syntax(t, "a number"))?;
         if v.is_finite() {
             Ok(v)
         } else {
@@ -1179,17 +1187,25 @@ fn frame_values<'l>(
     channels: usize,
     out: &mut Vec<f32>,
 ) -> Result<(), BadFrame<'l>> {
-    let mut tokens = line.split_ascii_whitespace();
+    // One pass over the bytes: tokens are cut where `split_ascii_whitespace` cuts them and
+    // read by `number::leading_f32`, which gives `str::parse::<f32>`'s bits.
+    let mut rest = line;
     let mut n = 0_usize;
-    while let Some(token) = tokens.next() {
+    loop {
+        rest = rest.trim_ascii_start();
+        if rest.is_empty() {
+            break;
+        }
+        let (token, value) = number::leading_f32(rest);
+        rest = rest.get(token.len()..).unwrap_or_default();
         n += 1;
-        match token.parse::<f32>() {
-            Ok(v) if v.is_finite() => out.push(v),
+        match value {
+            Some(v) if v.is_finite() => out.push(v),
             _ => {
-                let rest = tokens.count();
+                let after = rest.split_ascii_whitespace().count();
                 return Err(BadFrame {
-                    tokens: n + rest,
-                    bad: Some((token, rest == 0)),
+                    tokens: n + after,
+                    bad: Some((token, after == 0)),
                 });
             }
         }

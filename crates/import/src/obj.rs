@@ -472,88 +472,9 @@ fn out_of_range(
     )
 }
 
-/// Exact powers of ten in `f32` (10^10 = 2^10 * 9765625 still fits the 24-bit mantissa).
-const POW10_F32: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
-
-/// Parses a float exactly as `token.parse::<f32>()` does (`None` where it fails).
-///
-/// Plain decimals (`-0.0881862`, `0.9825`, `12`) with at most 7 significant digits and 10
-/// decimals, which is most OBJ coordinates and every Pinocchio weight, take Clinger's fast
-/// path: the digits as an integer below 2^24 and 10^k are both exact in `f32`, and IEEE
-/// division rounds correctly, so the result is the correctly rounded value `str::parse`
-/// returns (W. D. Clinger, "How to read floating point numbers accurately", PLDI 1990).
-/// Anything else goes to `str::parse`. A property test compares the two.
-#[inline]
-pub(crate) fn parse_f32(token: &str) -> Option<f32> {
-    fast_f32(token.as_bytes()).or_else(|| token.parse().ok())
-}
-
-/// [`parse_f32`]'s fast path; `None` when the token is not a short plain decimal.
-#[inline]
-fn fast_f32(bytes: &[u8]) -> Option<f32> {
-    let (negative, digits) = match bytes.split_first()? {
-        (b'-', rest) => (true, rest),
-        _ => (false, bytes),
-    };
-    let mut number = Decimal::default();
-    for &b in digits {
-        if !number.push(b) {
-            return None;
-        }
-    }
-    let value = number.value()?;
-    Some(if negative { -value } else { value })
-}
-
-/// An unsigned decimal (`12`, `0.9991`, `.5`, `3.`) read one byte at a time, for the fast
-/// paths of the text parsers.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Decimal {
-    mantissa: u32,
-    significant: u32,
-    decimals: usize,
-    any_digit: bool,
-    dot: bool,
-}
-
-impl Decimal {
-    /// Takes the next byte; `false` when it is neither a digit nor the first `.`, or the
-    /// number has more than 7 significant digits (then the caller takes the slow path).
-    pub(crate) fn push(&mut self, b: u8) -> bool {
-        match b {
-            b'0'..=b'9' => {
-                self.any_digit = true;
-                if self.mantissa != 0 || b != b'0' {
-                    self.significant += 1;
-                    if self.significant > 7 {
-                        return false;
-                    }
-                    self.mantissa = self.mantissa * 10 + u32::from(b - b'0');
-                }
-                if self.dot {
-                    self.decimals += 1;
-                }
-                true
-            }
-            b'.' if !self.dot => {
-                self.dot = true;
-                true
-            }
-            _ => false,
-        }
-    }
-
-    /// The value, `None` without any digit or with too many decimals.
-    ///
-    /// The mantissa is below 2^24 and the power of ten exact in `f32`, so the one
-    /// division is correctly rounded: the same `f32` as `str::parse` (Clinger's fast path).
-    pub(crate) fn value(&self) -> Option<f32> {
-        if !self.any_digit {
-            return None;
-        }
-        Some(self.mantissa as f32 / *POW10_F32.get(self.decimals)?)
-    }
-}
+// The float reader moved to `crate::number` (shared with the BVH reader); re-exported
+// here for the Pinocchio reader, which reaches it as `obj::parse_f32` / `obj::Decimal`.
+pub(crate) use crate::number::{parse_f32, Decimal};
 
 /// Parses one number, which must be finite.
 fn read_number(token: &str, expected: &str, at: &dyn Fn() -> Location) -> Result<f32, ImportError> {
@@ -855,66 +776,11 @@ mod tests {
 
     proptest::proptest! {
         #[test]
-        fn fast_float_path_equals_str_parse(
-            digits in "[0-9]{0,9}",
-            dot in 0_usize..11,
-            negative in proptest::bool::ANY,
-        ) {
-            let mut token = digits.clone();
-            if dot <= token.len() {
-                token.insert(dot, '.');
-            }
-            if negative {
-                token.insert(0, '-');
-            }
-            let ours = parse_f32(&token).map(f32::to_bits);
-            let std = token.parse::<f32>().ok().map(f32::to_bits);
-            proptest::prop_assert_eq!(ours, std, "{}", token);
-        }
-    }
-
-    proptest::proptest! {
-        #[test]
         fn never_panics_on_random_obj_text(text in "([vtnfgol] |[0-9 ./eE+\\-]|nan|inf|\r?\n|#){0,300}") {
             if let Ok((mesh, _)) = parse(text.as_bytes(), Path::new("r.obj")) {
                 let asset = Asset { meshes: vec![mesh], ..Asset::default() };
                 proptest::prop_assert!(asset.validate().is_ok());
             }
-        }
-    }
-
-    #[test]
-    fn fast_float_path_edge_cases() {
-        for token in [
-            "0",
-            "-0",
-            "0.9825",
-            "-0.0881862",
-            "1.",
-            ".5",
-            ".",
-            "-",
-            "",
-            "+1",
-            "1e3",
-            "0.00000000001",
-            "0.0000000001",
-            "16777217",
-            "9999999",
-            "0.1234567",
-            "nan",
-            "inf",
-            "1..2",
-            "--1",
-            "0x1",
-            "-.",
-            "00000000000012",
-        ] {
-            assert_eq!(
-                parse_f32(token).map(f32::to_bits),
-                token.parse::<f32>().ok().map(f32::to_bits),
-                "{token:?}"
-            );
         }
     }
 
