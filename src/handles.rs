@@ -67,6 +67,62 @@ impl HandleTrack {
     }
 }
 
+impl HandleTrack {
+    /// The model-space target at time `t`: [`HandleTrack::at`], plus `rest_effector` (the
+    /// effector's model-space rest position, see [`rest_effectors`]) when the track is
+    /// `relative`.
+    pub fn target_at(&self, t: f32, rest_effector: Vec3) -> Vec3 {
+        let p = self.at(t);
+        if self.relative {
+            rest_effector + p
+        } else {
+            p
+        }
+    }
+}
+
+/// Model-space rest position of each track's effector point (the joint's rest matrix
+/// applied to its offset), in track order: what `relative` positions are offsets from.
+pub fn rest_effectors(skeleton: &Skeleton, tracks: &[HandleTrack]) -> Vec<Vec3> {
+    let rest = skeleton.model_rest_matrices();
+    tracks
+        .iter()
+        .map(|t| {
+            rest.get(t.joint.get())
+                .map_or(Vec3::NAN, |m| m.transform_point3(t.offset))
+        })
+        .collect()
+}
+
+/// The model-space targets of a handles file over time, as `rigport ik` solves for them:
+/// drawn as markers by `rigport render --handles` and the demo's reach picture.
+pub struct Targets {
+    tracks: Vec<HandleTrack>,
+    rest_effectors: Vec<Vec3>,
+}
+
+impl Targets {
+    /// The targets of `tracks` (loaded for `skeleton`).
+    pub fn new(skeleton: &Skeleton, tracks: Vec<HandleTrack>) -> Self {
+        let rest_effectors = rest_effectors(skeleton, &tracks);
+        Self {
+            tracks,
+            rest_effectors,
+        }
+    }
+}
+
+impl rigport_render::Markers for Targets {
+    fn markers_at(&self, time: f32, out: &mut Vec<Vec3>) {
+        out.extend(
+            self.tracks
+                .iter()
+                .zip(&self.rest_effectors)
+                .map(|(t, &rest)| t.target_at(time, rest)),
+        );
+    }
+}
+
 /// The handles of a file, and its frame rate if it gives one.
 pub struct Handles {
     /// Frames per second the file asks for.

@@ -12,6 +12,7 @@ use super::bake::{bake_dqs, DqsBakeOptions};
 use super::Context;
 use crate::cli::{DemoArgs, InputArgs};
 use crate::exit::OutputError;
+use crate::handles::{self, Targets};
 use crate::{input, keys};
 
 /// The demo's IK handles: the left fingertip reaches forward and up (offsets from its rest
@@ -201,6 +202,13 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     .context("the built-in demo reach is invalid (a rigport bug)")?;
     reach.name = "reach".into();
     imported.warnings.extend(reach_warnings);
+    // The targets the reach was solved for, drawn as markers on its picture.
+    let reach_targets = Targets::new(
+        &imported.asset.skeleton,
+        handles::load(&reach_path, &imported.asset.skeleton)
+            .context("the built-in demo reach is invalid (a rigport bug)")?
+            .tracks,
+    );
     imported.asset.clips.push(reach);
     // The twist clip, keyed like wave (the LBS-vs-DQS comparison of issue 5).
     let twist_path = args.output.join("twist.keys.json");
@@ -256,7 +264,7 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
         path: out_dqs.display().to_string(),
     })?;
     let pictures = ctx.step("rendering pictures", || {
-        demo_pictures(&imported.asset, &args.output)
+        demo_pictures(&imported.asset, &reach_targets, &args.output)
     })?;
     let corpus_lines = match corpus_dir(args) {
         None => Vec::new(),
@@ -323,26 +331,39 @@ fn write(path: &Path, bytes: &[u8]) -> Result<()> {
     })
 }
 
-/// Renders the demo's pictures into `dir`; returns each file with a description.
+/// Renders the demo's pictures into `dir`, the reach clip with its IK `reach_targets` as
+/// markers; returns each file with a description.
 ///
 /// # Errors
 /// Rendering (a rigport bug for the built-in rig) or writing fails.
-fn demo_pictures(asset: &Asset, dir: &Path) -> Result<Vec<(PathBuf, String)>> {
+fn demo_pictures(
+    asset: &Asset,
+    reach_targets: &Targets,
+    dir: &Path,
+) -> Result<Vec<(PathBuf, String)>> {
     let sheet = RenderOptions {
         width: CELL_PX,
         height: CELL_PX,
         ..RenderOptions::default()
     };
     let mut written = Vec::new();
-    for clip in ["wave", "reach"] {
+    for (clip, markers) in [
+        ("wave", None),
+        ("reach", Some(reach_targets as &dyn rigport_render::Markers)),
+    ] {
         let path = dir.join(format!("{clip}.png"));
-        let bytes = rigport_render::render_clip_png(asset, Some(clip), &sheet)
+        let bytes = rigport_render::render_clip_png(asset, Some(clip), markers, &sheet)
             .with_context(|| format!("cannot render the demo's {clip:?} clip (a rigport bug)"))?;
         write(&path, &bytes)?;
-        written.push((path, format!("contact sheet of clip {clip:?}, LBS")));
+        let extra = if markers.is_some() {
+            ", IK targets as magenta crosshairs"
+        } else {
+            ""
+        };
+        written.push((path, format!("contact sheet of clip {clip:?}, LBS{extra}")));
     }
     let path = dir.join("wave.gif");
-    let bytes = rigport_render::render_clip_gif(asset, Some("wave"), GIF_FPS, &sheet)
+    let bytes = rigport_render::render_clip_gif(asset, Some("wave"), None, GIF_FPS, &sheet)
         .context("cannot render the demo's wave clip (a rigport bug)")?;
     write(&path, &bytes)?;
     written.push((
@@ -360,6 +381,7 @@ fn demo_pictures(asset: &Asset, dir: &Path) -> Result<Vec<(PathBuf, String)>> {
             number: 30,
             time: TWIST_PEAK_S,
         }],
+        None,
         &RenderOptions {
             width: TWIST_PX,
             height: TWIST_PX,
@@ -367,6 +389,7 @@ fn demo_pictures(asset: &Asset, dir: &Path) -> Result<Vec<(PathBuf, String)>> {
             skinning: SkinningChoice::Both,
             skeleton: false,
             frame_counter: false,
+            ..RenderOptions::default()
         },
     )
     .context("cannot render the demo's twist clip (a rigport bug)")?;
@@ -447,7 +470,7 @@ fn corpus_picture(corpus: &Path, out: &Path, rig: &CorpusRig) -> Result<String> 
         view: rig.view,
         ..RenderOptions::default()
     };
-    let bytes = rigport_render::render_sheet_png(asset, clip, &frames, &options)?;
+    let bytes = rigport_render::render_sheet_png(asset, clip, &frames, None, &options)?;
     let path = out.join(format!("{}.png", rig.family));
     write(&path, &bytes)?;
     let what = match clip {

@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use super::Context;
 use crate::cli::IkArgs;
-use crate::handles::{self, HandleTrack};
+use crate::handles;
 use crate::{input, output};
 
 /// Per-handle residual summary.
@@ -61,15 +61,6 @@ fn method(args: &IkArgs) -> Result<IkMethod> {
     })
 }
 
-/// Model-space rest position of each handle's effector point.
-fn rest_effectors(skeleton: &rigport_model::Skeleton, tracks: &[HandleTrack]) -> Vec<Vec3> {
-    let rest = skeleton.model_rest_matrices();
-    tracks
-        .iter()
-        .map(|t| rest[t.joint.get()].transform_point3(t.offset))
-        .collect()
-}
-
 /// What a solve needs besides the skeleton and the handles file.
 pub struct IkOptions {
     /// The solver.
@@ -105,7 +96,7 @@ pub fn solve(
         bail!("--fps {fps}: expected a positive frame rate");
     }
     let tracks = file.tracks;
-    let rest_points = rest_effectors(skeleton, &tracks);
+    let rest_points = handles::rest_effectors(skeleton, &tracks);
     let height = {
         let rest = skeleton.model_rest_matrices();
         let (lo, hi) = rest.iter().fold(
@@ -157,12 +148,7 @@ pub fn solve(
     ctx.step("solving", || -> Result<()> {
         for &t in &times {
             for (h, track) in tracks.iter().enumerate() {
-                let p = track.at(t);
-                targets[h].target = if track.relative {
-                    rest_points[h] + p
-                } else {
-                    p
-                };
+                targets[h].target = track.target_at(t, rest_points[h]);
                 targets[h].weight = track.weight;
             }
             IkSolveJob {

@@ -1,14 +1,14 @@
-//! `rigport render`: pictures of a rig or clip (PNG contact sheet or GIF animation), drawn
-//! on the CPU by `rigport-render`.
+//! `rigport render`: pictures of a rig or clip (PNG contact sheet or GIF/APNG animation),
+//! drawn on the CPU by `rigport-render`, optionally with IK handle targets as markers.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Context as _, Result};
-use rigport_render::{RenderOptions, SkinningChoice, View};
+use rigport_render::{Markers, Projection, RenderOptions, SkinningChoice, View};
 
 use super::Context;
 use crate::exit::OutputError;
-use crate::input;
+use crate::{handles, input};
 
 /// The GIF frame rate when `--fps` is not given.
 const DEFAULT_GIF_FPS: f32 = 25.0;
@@ -20,7 +20,16 @@ const DEFAULT_GIF_FPS: f32 = 25.0;
 chosen from the sampled ones. A .gif output is a looping animation of every sampled frame \
 (default 25 fps; the frame delay follows --fps, at least 0.02 s); .apng likewise, in full \
 colour. All frames share one camera \
-framed on the bounds of all of them. A rig without clips renders its rest pose."
+framed on the bounds of all of them. A rig without clips renders its rest pose.
+
+--handles HANDLES.json (the file `rigport ik` takes; see `rigport ik --help`) draws each \
+handle's target at each frame's time as a magenta crosshair over the mesh and skeleton; \
+`relative` positions are offsets from the effector's rest position, as for `rigport ik`. \
+The targets take part in the framing, so one away from the body is in the picture too.
+
+--camera perspective frames the same bounds with a 35 deg (vertical) pinhole camera on the \
+view axis through their centre, as far away as needed for their nearest face to be drawn \
+at the orthographic scale, so everything fits inside the margin."
 )]
 pub struct RenderArgs {
     /// The rig.
@@ -42,10 +51,16 @@ pub struct RenderArgs {
     /// Size of one view in pixels (`--skinning both` pictures are twice as wide).
     #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Where the orthographic camera looks from: front (+Z), side (+X), top (+Y) or
-    /// three-quarter.
+    /// Where the camera looks from: front (+Z), side (+X), top (+Y) or three-quarter.
     #[arg(long, value_enum, default_value_t = ViewArg::Front)]
     pub view: ViewArg,
+    /// Orthographic (parallel) or perspective (35 deg field of view) projection.
+    #[arg(long, value_enum, default_value_t = CameraArg::Ortho)]
+    pub camera: CameraArg,
+    /// Draw the targets of these IK handles (HANDLES.json, as `rigport ik` reads it) as
+    /// markers, at each frame's time.
+    #[arg(long, value_name = "HANDLES.json")]
+    pub handles: Option<PathBuf>,
     /// Skinning method; `both` draws LBS (left) and DQS (right) with the same camera.
     #[arg(long, value_enum, default_value_t = SkinningArg::Lbs)]
     pub skinning: SkinningArg,
@@ -77,6 +92,15 @@ pub enum ViewArg {
     Top,
     /// From the front-right, slightly above.
     ThreeQuarter,
+}
+
+/// `--camera`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CameraArg {
+    /// Orthographic: sizes do not change with depth.
+    Ortho,
+    /// Perspective, 35 deg vertical field of view.
+    Perspective,
 }
 
 /// `--skinning`.
@@ -160,6 +184,10 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
             ViewArg::Top => View::Top,
             ViewArg::ThreeQuarter => View::ThreeQuarter,
         },
+        projection: match args.camera {
+            CameraArg::Ortho => Projection::Orthographic,
+            CameraArg::Perspective => Projection::PERSPECTIVE,
+        },
         skinning: match args.skinning {
             SkinningArg::Lbs => SkinningChoice::Lbs,
             SkinningArg::Dqs => SkinningChoice::Dqs,
@@ -168,6 +196,15 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
         skeleton: !args.no_skeleton,
         frame_counter: !args.no_frame_counter,
     };
+    // Read before rendering, so a bad file fails fast and writes nothing.
+    let targets = match &args.handles {
+        Some(path) => {
+            let file = handles::load(path, &asset.skeleton)?;
+            Some(handles::Targets::new(&asset.skeleton, file.tracks))
+        }
+        None => None,
+    };
+    let markers = targets.as_ref().map(|t| t as &dyn Markers);
     let clip =
         rigport_render::find_clip(asset, args.clip.as_deref()).with_context(|| plan.label())?;
     let fps = match (format, args.fps) {
@@ -186,11 +223,14 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
     }
     let bytes = ctx
         .step("rendering", || match format {
-            Format::Png => rigport_render::render_sheet_png(asset, clip, &frames, &options),
+            Format::Png => {
+                rigport_render::render_sheet_png(asset, clip, &frames, markers, &options)
+            }
             Format::Gif => rigport_render::render_gif(
                 asset,
                 clip,
                 &frames,
+                markers,
                 rigport_render::gif_delay_cs(fps.unwrap_or(DEFAULT_GIF_FPS)),
                 &options,
             ),
@@ -198,6 +238,7 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
                 asset,
                 clip,
                 &frames,
+                markers,
                 rigport_render::apng_delay_ms(fps.unwrap_or(DEFAULT_GIF_FPS)),
                 &options,
             ),

@@ -1,12 +1,12 @@
 //! Acceptance 5: the demo needs no input and its output validates clean. Issue 8
 //! (acceptance 1, 2): the demo's pictures, and one per corpus family, show the character
-//! unclipped and are deterministic. Issue 5: the twisting-limb LBS-vs-DQS comparison and
+//! unclipped and are deterministic; the reach picture marks its IK targets. Issue 5: the twisting-limb LBS-vs-DQS comparison and
 //! its DQS bake.
 
 use std::path::{Path, PathBuf};
 
 use crate::common::*;
-use crate::render::{Picture, BACKGROUND};
+use crate::render::{Picture, BACKGROUND, MARKER};
 
 /// The pictures the demo always writes.
 const DEMO_PICTURES: [&str; 4] = ["wave.png", "reach.png", "wave.gif", "twist_lbs_vs_dqs.png"];
@@ -138,6 +138,10 @@ fn demo_pictures_show_the_character_unclipped_and_are_deterministic() {
     for p in &written {
         check_picture(p);
     }
+    // The reach sheet shows the IK targets it was solved for; the others have no markers.
+    let marked = |name: &str| !Picture::read(&out.join(name)).pixels_of(MARKER).is_empty();
+    assert!(marked("reach.png"), "reach.png shows no IK target");
+    assert!(!marked("wave.png"));
     let gif = gif_frames(&out.join("wave.gif"));
     // 2 s at 15 fps, both ends included, 256x256.
     assert_eq!(gif.len(), 31);

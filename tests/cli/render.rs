@@ -2,8 +2,11 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::common::{corpus, rigport, rigport_ok, PINOCCHIO_RIGS};
+use crate::common::{corpus, repo, rigport, rigport_ok, PINOCCHIO_RIGS};
 use crate::motion::{ASF_AMC, BVH};
+
+/// The colour IK targets are drawn in.
+pub(crate) const MARKER: [u8; 4] = rigport_render::MARKER_COLOR;
 
 /// The renderer's background colour (rigport_render::BACKGROUND).
 pub(crate) const BACKGROUND: [u8; 4] = [38, 41, 48, 255];
@@ -45,6 +48,17 @@ impl Picture {
             .filter(|&(x, y)| !self.is_background(x, y))
             .count();
         n as f64 / (self.width * self.height) as f64
+    }
+
+    /// The pixels of colour `color`, as `(x, y)`.
+    pub(crate) fn pixels_of(&self, color: [u8; 4]) -> Vec<(usize, usize)> {
+        (0..self.height)
+            .flat_map(|y| (0..self.width).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let i = (y * self.width + x) * 4;
+                self.rgba[i..i + 4] == color
+            })
+            .collect()
     }
 
     /// Whether every pixel on the outer border is background.
@@ -215,4 +229,247 @@ fn one_corpus_rig_of_each_family_renders_unclipped() {
     if let Some(gltf) = corpus("5_gltf/khronos_samples__nobuyuki83_delfem2/CesiumMan.glb") {
         check_sheet(dir.path(), "gltf", &[s(&gltf)], &["--skinning", "dqs"]);
     }
+}
+
+/// The branch fixture (`fixtures/pinocchio/branch*`): a 2-unit-tall strip in the z = 0
+/// plane, x in [-0.1, 0.3], y in [0, 2]; joints `root`, `bone_1` .. `bone_4`.
+fn branch_rig() -> Vec<String> {
+    ["branch.obj", "branch_skeleton.out", "branch_attachment.out"]
+        .iter()
+        .map(|f| {
+            repo()
+                .join("fixtures/pinocchio")
+                .join(f)
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect()
+}
+
+/// Renders the branch rig to a 128x128 `out` with `extra` options.
+fn render_branch(out: &Path, extra: &[&str]) -> Picture {
+    let rig = branch_rig();
+    let mut args: Vec<&str> = vec!["render"];
+    args.extend(rig.iter().map(String::as_str));
+    args.extend_from_slice(&["-o", s(out), "--size", "128x128"]);
+    args.extend_from_slice(extra);
+    rigport_ok(&args);
+    Picture::read(out)
+}
+
+/// The branch rig's handles: two absolute targets far outside the body and a relative one
+/// at `bone_4`'s rest origin (Pinocchio joint 3, the knee at (0.2, 0.5, 0)).
+const BRANCH_HANDLES: &str = r#"{"handles": [
+  {"joint": "bone_2", "keys": [{"time": 0, "position": [3, 5, 0]}]},
+  {"joint": "bone_1", "keys": [{"time": 0, "position": [-3, -3, 0]}]},
+  {"joint": "bone_4", "relative": true, "keys": [{"time": 0, "position": [0, 0, 0]}]}
+]}"#;
+
+#[test]
+fn handles_draw_ik_targets_as_markers_inside_the_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let handles = dir.path().join("branch.handles.json");
+    std::fs::write(&handles, BRANCH_HANDLES).unwrap();
+
+    let plain = render_branch(&dir.path().join("plain.png"), &[]);
+    assert!(
+        plain.pixels_of(MARKER).is_empty(),
+        "markers without --handles"
+    );
+    let marked = render_branch(&dir.path().join("marked.png"), &["--handles", s(&handles)]);
+    // The targets span x in [-3, 3], y in [-3, 5] and hold the body, so they set the framing:
+    // 128 px less 8% on each side is 107.52 px for 8 units, 13.44 px per unit around
+    // (0, 1). Expected centres: (64 + 13.44 x, 64 - 13.44 (y - 1)).
+    let expected = [(104.32, 10.24), (23.68, 117.76), (66.69, 70.72)];
+    let at = marked.pixels_of(MARKER);
+    for (cx, cy) in expected {
+        let near = at
+            .iter()
+            .filter(|&&(x, y)| {
+                (x as f64 + 0.5 - cx).abs() < 6.0 && (y as f64 + 0.5 - cy).abs() < 6.0
+            })
+            .count();
+        assert!(near >= 12, "{near} marker pixels near ({cx}, {cy})");
+    }
+    // Nothing else is drawn in the marker colour, and the far targets are not clipped.
+    assert!(at.iter().all(|&(x, y)| expected
+        .iter()
+        .any(|&(cx, cy)| (x as f64 + 0.5 - cx).abs() < 7.0 && (y as f64 + 0.5 - cy).abs() < 7.0)));
+    assert!(marked.border_is_clear(), "a target is clipped");
+    // Framing on the targets makes the body smaller.
+    assert!(marked.coverage() < plain.coverage());
+
+    // Deterministic, also as a GIF (the marker colour is in the fixed palette).
+    let again = render_branch(&dir.path().join("again.png"), &["--handles", s(&handles)]);
+    assert_eq!(marked.rgba, again.rgba);
+    let gif = dir.path().join("marked.gif");
+    render_branch_gif(&gif, &handles);
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let mut decoder = options
+        .read_info(std::io::BufReader::new(std::fs::File::open(&gif).unwrap()))
+        .unwrap();
+    let frame = decoder.read_next_frame().unwrap().unwrap();
+    assert!(frame.buffer.chunks(4).any(|c| c == MARKER));
+}
+
+fn render_branch_gif(out: &Path, handles: &Path) {
+    let rig = branch_rig();
+    let mut args: Vec<&str> = vec!["render"];
+    args.extend(rig.iter().map(String::as_str));
+    args.extend_from_slice(&["-o", s(out), "--size", "64x64", "--handles", s(handles)]);
+    rigport_ok(&args);
+}
+
+#[test]
+fn bad_handles_file_fails_with_its_name_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let rig = branch_rig();
+    let bad_joint = dir.path().join("bad_joint.json");
+    std::fs::write(
+        &bad_joint,
+        r#"{"handles": [{"joint": "nope", "keys": [{"time": 0, "position": [0, 0, 0]}]}]}"#,
+    )
+    .unwrap();
+    let bad_syntax = dir.path().join("bad_syntax.json");
+    std::fs::write(&bad_syntax, "{\"handles\": [\n  {\"joint\": }\n]}").unwrap();
+    let missing = dir.path().join("missing.json");
+    for (handles, needle) in [
+        (&bad_joint, "no joint named \"nope\""),
+        (&bad_syntax, "bad_syntax.json:2:"),
+        (&missing, "cannot read"),
+    ] {
+        let out = dir.path().join("out.png");
+        let mut args: Vec<&str> = vec!["render"];
+        args.extend(rig.iter().map(String::as_str));
+        args.extend_from_slice(&["-o", s(&out), "--handles", s(handles)]);
+        let res = rigport(&args);
+        let stderr = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains(s(handles)), "names the file: {stderr}");
+        assert!(stderr.contains(needle), "{needle:?}: {stderr}");
+        assert!(!out.exists(), "{} written", out.display());
+    }
+}
+
+#[test]
+fn perspective_render_is_deterministic_and_inside_the_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    // The flat branch strip seen from three-quarters: its near and far ends are drawn at
+    // different scales, so the picture differs from the orthographic one.
+    let extra = ["--view", "three-quarter", "--no-skeleton"];
+    let ortho = render_branch(&dir.path().join("ortho.png"), &extra);
+    let mut persp_args = extra.to_vec();
+    persp_args.extend_from_slice(&["--camera", "perspective"]);
+    let persp = render_branch(&dir.path().join("persp.png"), &persp_args);
+    let again = render_branch(&dir.path().join("again.png"), &persp_args);
+    assert_eq!(
+        std::fs::read(dir.path().join("persp.png")).unwrap(),
+        std::fs::read(dir.path().join("again.png")).unwrap()
+    );
+    assert_eq!(persp.rgba, again.rgba);
+    assert_ne!(persp.rgba, ortho.rgba);
+    assert!(persp.border_is_clear());
+    let (cp, co) = (persp.coverage(), ortho.coverage());
+    assert!(cp > 0.2 * co && cp <= co * 1.05, "{cp} vs {co}");
+    // `--camera ortho` is the default: same bytes.
+    let mut ortho_args = extra.to_vec();
+    ortho_args.extend_from_slice(&["--camera", "ortho"]);
+    render_branch(&dir.path().join("ortho2.png"), &ortho_args);
+    assert_eq!(
+        std::fs::read(dir.path().join("ortho.png")).unwrap(),
+        std::fs::read(dir.path().join("ortho2.png")).unwrap()
+    );
+}
+
+#[test]
+fn demo_reach_shows_its_targets_in_every_view_and_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = demo_glb(dir.path());
+    let handles = dir.path().join("demo/reach.handles.json");
+    for camera in ["ortho", "perspective"] {
+        for view in ["front", "side", "top", "three-quarter"] {
+            let label = format!("reach_{camera}_{view}");
+            let out = check_sheet(
+                dir.path(),
+                &label,
+                &[s(&glb)],
+                &[
+                    "--clip",
+                    "reach",
+                    "--handles",
+                    s(&handles),
+                    "--camera",
+                    camera,
+                    "--view",
+                    view,
+                ],
+            );
+            // A 4 x 4 sheet of 128 px cells: a marker in every cell.
+            let pic = Picture::read(&out);
+            let at = pic.pixels_of(MARKER);
+            for cell in 0..16 {
+                let (cx, cy) = (cell % 4 * 128, cell / 4 * 128);
+                assert!(
+                    at.iter()
+                        .any(|&(x, y)| (cx..cx + 128).contains(&x) && (cy..cy + 128).contains(&y)),
+                    "{label}: no marker in cell {cell}"
+                );
+            }
+        }
+    }
+    let plain = check_sheet(dir.path(), "reach_plain", &[s(&glb)], &["--clip", "reach"]);
+    assert!(Picture::read(&plain).pixels_of(MARKER).is_empty());
+    // Perspective of a whole character, deterministic.
+    let again = dir.path().join("again.png");
+    rigport_ok(&[
+        "render",
+        s(&glb),
+        "-o",
+        s(&again),
+        "--size",
+        "128x128",
+        "--clip",
+        "reach",
+        "--handles",
+        s(&handles),
+        "--camera",
+        "perspective",
+        "--view",
+        "three-quarter",
+    ]);
+    assert_eq!(
+        std::fs::read(dir.path().join("reach_perspective_three-quarter.png")).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
+}
+
+#[test]
+fn handles_fixture_on_its_corpus_rig_marks_the_targets() {
+    // fixtures/ik/pinocchio_two_hand_reach.json is written for the corpus's Model1.
+    let (_, mesh, skel, att) = PINOCCHIO_RIGS[3];
+    let (Some(m), Some(sk), Some(a)) = (corpus(mesh), corpus(skel), corpus(att)) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let handles = repo().join("fixtures/ik/pinocchio_two_hand_reach.json");
+    // The IK clip solved for those handles, then its picture with the targets.
+    let glb = dir.path().join("reach.glb");
+    rigport_ok(&[
+        "ik",
+        s(&m),
+        s(&sk),
+        s(&a),
+        "--handles",
+        s(&handles),
+        "-o",
+        s(&glb),
+    ]);
+    let out = check_sheet(
+        dir.path(),
+        "model1_reach",
+        &[s(&glb)],
+        &["--handles", s(&handles), "--camera", "perspective"],
+    );
+    assert!(!Picture::read(&out).pixels_of(MARKER).is_empty());
 }

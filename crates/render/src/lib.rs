@@ -1,11 +1,16 @@
 //! rigport's CPU renderer: pictures of rigs and clips on a headless machine.
 //!
 //! A small z-buffered triangle rasterizer ([`raster`]) draws the skinned meshes with flat,
-//! two-sided shading (a fixed directional light plus ambient) through an orthographic
-//! camera ([`camera`]) framed once on the bounds of every rendered frame, so the character
-//! does not jump. The skeleton is drawn on top (bones as lines, joints as discs) and an
-//! optional frame counter in a corner. [`render_clip_png`] writes a contact sheet,
-//! [`render_clip_gif`] an animation.
+//! two-sided shading (a fixed directional light plus ambient) through a camera
+//! ([`camera`]), orthographic by default or perspective ([`Projection`], near-plane
+//! clipped), framed once on the bounds of every rendered frame, so the character does not
+//! jump. The skeleton is drawn on top (bones as lines, joints as discs), then optional
+//! markers ([`Markers`]: model-space points over time, such as IK targets, which take part
+//! in the framing so a point outside the body stays in the picture), and an optional frame
+//! counter in a corner. [`render_sheet_png`] writes a contact sheet, [`render_gif`] and
+//! [`render_apng`] animations; [`render_clip_png`] and [`render_clip_gif`] are shortcuts
+//! for a named clip. The crate reads no file format: callers resolve their inputs (clips,
+//! IK handle files) into an [`Asset`] and [`Markers`].
 //!
 //! Output is deterministic: frames are evaluated independently (in parallel with rayon),
 //! bounds are combined with exact min/max, and nothing depends on time or hash order.
@@ -21,7 +26,7 @@ use rigport_eval::{EvalError, Pose, Rig, RigOutput, SkinningMethod};
 use rigport_model::glam::{Mat4, Vec3};
 use rigport_model::{Asset, Clip};
 
-pub use camera::{Bounds, Camera, View};
+pub use camera::{Bounds, Camera, ClippedPolygon, Lens, Projection, View};
 pub use encode::{
     apng_delay_ms, contact_sheet, encode_apng, encode_gif, encode_png, gif_delay_cs, pick_evenly,
 };
@@ -35,6 +40,8 @@ pub const BONE_COLOR: Rgba = [240, 96, 64, 255];
 pub const JOINT_COLOR: Rgba = [255, 214, 80, 255];
 /// The frame counter.
 pub const TEXT_COLOR: Rgba = [235, 235, 235, 255];
+/// Markers ([`Markers`], e.g. IK targets): a magenta that no mesh shade or overlay uses.
+pub const MARKER_COLOR: Rgba = [255, 48, 255, 255];
 /// Base colours of meshes, mesh `i` uses entry `i % 4`.
 pub const MESH_COLORS: [Rgba; 4] = [
     [222, 196, 164, 255],
@@ -53,7 +60,9 @@ const MARGIN: f32 = 0.08;
 pub const SHEET_FRAMES: usize = 16;
 
 /// Every colour the renderer writes: background, overlay, text, then
-/// [`SHADE_LEVELS`] shades of each mesh colour (at most 256 entries, one GIF palette).
+/// [`SHADE_LEVELS`] shades of each mesh colour, then the marker colour (at most 256
+/// entries, one GIF palette; later additions go last so earlier colours keep their GIF
+/// indices).
 pub fn palette() -> Vec<Rgba> {
     let mut p = vec![BACKGROUND, BONE_COLOR, JOINT_COLOR, TEXT_COLOR];
     for base in MESH_COLORS {
@@ -61,6 +70,7 @@ pub fn palette() -> Vec<Rgba> {
             p.push(shade(base, level));
         }
     }
+    p.push(MARKER_COLOR);
     p
 }
 
@@ -103,6 +113,8 @@ pub struct RenderOptions {
     pub height: u32,
     /// Where the camera looks from.
     pub view: View,
+    /// Orthographic or perspective, framed on the same bounds.
+    pub projection: Projection,
     /// Skinning method(s).
     pub skinning: SkinningChoice,
     /// Draw the skeleton on top.
@@ -117,10 +129,51 @@ impl Default for RenderOptions {
             width: 512,
             height: 512,
             view: View::Front,
+            projection: Projection::Orthographic,
             skinning: SkinningChoice::Lbs,
             skeleton: true,
             frame_counter: true,
         }
+    }
+}
+
+/// Points drawn over every frame as markers (a crosshair in [`MARKER_COLOR`] on top of the
+/// meshes and the skeleton), e.g. the targets of IK handles. Their positions take part in
+/// the camera's framing, so a marker away from the body is in the picture too.
+///
+/// Closures `Fn(f32, &mut Vec<Vec3>)` implement it, and a `Vec` or array of points is a set
+/// of markers that stay put:
+///
+/// ```
+/// use rigport_render::Markers;
+/// use rigport_model::glam::Vec3;
+/// let rising = |t: f32, out: &mut Vec<Vec3>| out.push(Vec3::new(0.0, t, 0.0));
+/// let mut at = Vec::new();
+/// rising.markers_at(2.0, &mut at);
+/// [Vec3::X].markers_at(2.0, &mut at);
+/// assert_eq!(at, [Vec3::new(0.0, 2.0, 0.0), Vec3::X]);
+/// ```
+pub trait Markers: Sync {
+    /// Appends the model-space positions of the markers at `time` (seconds into the clip,
+    /// as [`FrameTime::time`]) to `out`. Non-finite positions are not drawn.
+    fn markers_at(&self, time: f32, out: &mut Vec<Vec3>);
+}
+
+impl<F: Fn(f32, &mut Vec<Vec3>) + Sync> Markers for F {
+    fn markers_at(&self, time: f32, out: &mut Vec<Vec3>) {
+        self(time, out);
+    }
+}
+
+impl Markers for Vec<Vec3> {
+    fn markers_at(&self, _time: f32, out: &mut Vec<Vec3>) {
+        out.extend_from_slice(self);
+    }
+}
+
+impl<const N: usize> Markers for [Vec3; N] {
+    fn markers_at(&self, _time: f32, out: &mut Vec<Vec3>) {
+        out.extend_from_slice(self);
     }
 }
 
@@ -275,9 +328,10 @@ fn origin(m: &Mat4) -> Vec3 {
 }
 
 /// Renders `frames` of `clip` (the rest pose without a clip), one picture per frame: the
-/// meshes as `rig` skins them and the skeleton, all frames through one camera framed on
-/// the bounds of all of them. Pictures are `options.width` x `options.height`, twice as
-/// wide for [`SkinningChoice::Both`].
+/// meshes as `rig` skins them, the skeleton and the `markers` at each frame's time, all
+/// frames through one camera framed on the bounds of all of them (markers included).
+/// Pictures are `options.width` x `options.height`, twice as wide for
+/// [`SkinningChoice::Both`].
 ///
 /// # Errors
 /// [`RenderError::Size`] for a zero or over-large size, [`RenderError::Eval`] /
@@ -286,6 +340,7 @@ pub fn render_frames(
     asset: &Asset,
     clip: Option<&Clip>,
     frames: &[FrameTime],
+    markers: Option<&dyn Markers>,
     options: &RenderOptions,
 ) -> Result<Vec<Framebuffer>, RenderError> {
     let (w, h) = (options.width, options.height);
@@ -307,62 +362,80 @@ pub fn render_frames(
     };
     let methods = options.skinning.methods();
     let rotation = options.view.model_to_view();
-    let init = || (rest.clone(), RigOutput::default());
+    let init = || (rest.clone(), RigOutput::default(), Vec::new());
 
     // Pass 1: view-space bounds over every frame and method (exact min/max, so the result
     // does not depend on how rayon splits the work).
     let bounds = frames
         .par_iter()
-        .map_init(init, |(pose, out), f| -> Result<Bounds, RenderError> {
-            let mut b = Bounds::default();
-            for &method in methods {
-                eval.pose(f.time, method, pose, out)?;
-                for positions in &out.positions {
-                    for &p in positions {
+        .map_init(
+            init,
+            |(pose, out, points), f| -> Result<Bounds, RenderError> {
+                let mut b = Bounds::default();
+                if let Some(markers) = markers {
+                    points.clear();
+                    markers.markers_at(f.time, points);
+                    for &p in points.iter() {
                         b.add(rotation * p);
                     }
                 }
-                for m in &out.joint_model {
-                    b.add(rotation * origin(m));
+                for &method in methods {
+                    eval.pose(f.time, method, pose, out)?;
+                    for positions in &out.positions {
+                        for &p in positions {
+                            b.add(rotation * p);
+                        }
+                    }
+                    for m in &out.joint_model {
+                        b.add(rotation * origin(m));
+                    }
                 }
-            }
-            Ok(b)
-        })
+                Ok(b)
+            },
+        )
         .try_reduce(Bounds::default, |a, b| Ok(a.union(b)))?;
-    let camera = Camera::framing(options.view, bounds, w, h, MARGIN);
+    let camera = Camera::framing_with(options.view, options.projection, bounds, w, h, MARGIN);
 
     // Pass 2: draw. Evaluating again costs less memory than keeping every frame's vertices.
     frames
         .par_iter()
-        .map_init(init, |(pose, out), f| -> Result<Framebuffer, RenderError> {
-            let mut picture = Framebuffer::color_only(w * methods.len() as u32, h, BACKGROUND);
-            for (k, &method) in methods.iter().enumerate() {
-                eval.pose(f.time, method, pose, out)?;
-                let mut panel = Framebuffer::new(w, h, BACKGROUND);
-                draw_meshes(&mut panel, asset, &out.positions, &camera);
-                if options.skeleton {
-                    draw_skeleton(&mut panel, asset, &out.joint_model, &camera);
+        .map_init(
+            init,
+            |(pose, out, points), f| -> Result<Framebuffer, RenderError> {
+                let mut picture = Framebuffer::color_only(w * methods.len() as u32, h, BACKGROUND);
+                points.clear();
+                if let Some(markers) = markers {
+                    markers.markers_at(f.time, points);
                 }
-                if options.frame_counter {
-                    let scale = (w.min(h) / 128).max(1);
-                    let at = i64::from(2 * scale);
-                    panel.number(f.number, at, at, scale, TEXT_COLOR);
+                for (k, &method) in methods.iter().enumerate() {
+                    eval.pose(f.time, method, pose, out)?;
+                    let mut panel = Framebuffer::new(w, h, BACKGROUND);
+                    draw_meshes(&mut panel, asset, &out.positions, &camera);
+                    if options.skeleton {
+                        draw_skeleton(&mut panel, asset, &out.joint_model, &camera);
+                    }
+                    draw_markers(&mut panel, points, &camera);
+                    if options.frame_counter {
+                        let scale = (w.min(h) / 128).max(1);
+                        let at = i64::from(2 * scale);
+                        panel.number(f.number, at, at, scale, TEXT_COLOR);
+                    }
+                    if methods.len() > 1 {
+                        // Side by side: name each panel's method in its top-right corner.
+                        let label = match method {
+                            SkinningMethod::Lbs => "LBS",
+                            SkinningMethod::Dqs => "DQS",
+                        };
+                        let scale = (w.min(h) / 128).max(1);
+                        let s = i64::from(scale);
+                        let x = i64::from(w) - (4 * label.len() as i64 + 1) * s;
+                        panel.text(label, x, 2 * s, scale, TEXT_COLOR);
+                    }
+                    picture.blit(&panel, k as u32 * w, 0);
                 }
-                if methods.len() > 1 {
-                    // Side by side: name each panel's method in its top-right corner.
-                    let label = match method {
-                        SkinningMethod::Lbs => "LBS",
-                        SkinningMethod::Dqs => "DQS",
-                    };
-                    let scale = (w.min(h) / 128).max(1);
-                    let s = i64::from(scale);
-                    let x = i64::from(w) - (4 * label.len() as i64 + 1) * s;
-                    panel.text(label, x, 2 * s, scale, TEXT_COLOR);
-                }
-                picture.blit(&panel, k as u32 * w, 0);
-            }
-            Ok(picture)
-        })
+                Ok(picture)
+            },
+        )
         .collect()
 }
 
@@ -385,10 +458,10 @@ fn draw_meshes(fb: &mut Framebuffer, asset: &Asset, positions: &[Vec<Vec3>], cam
             let lit = n.dot(light).abs();
             let level = (lit * (SHADE_LEVELS - 1) as f32).round() as usize;
             let color = shade(base, level.min(SHADE_LEVELS - 1));
-            fb.triangle(
-                [camera.project(a), camera.project(b), camera.project(c)],
-                color,
-            );
+            // Clipped to the near plane under perspective: 0, 1 or 2 triangles.
+            for t in camera.clip_triangle([a, b, c]).triangles() {
+                fb.triangle(t, color);
+            }
         }
     }
 }
@@ -398,19 +471,43 @@ fn draw_skeleton(fb: &mut Framebuffer, asset: &Asset, joint_model: &[Mat4], came
     let size = fb.width().min(fb.height());
     let thickness = (size / 256).max(1);
     let radius = (size as f32 / 128.0).max(1.5);
-    let screen = |m: &Mat4| {
-        let p = camera.project(origin(m));
-        [p[0], p[1]]
-    };
     for (j, parent) in asset.skeleton.parents().enumerate() {
         if let (Some(p), Some(m)) = (parent, joint_model.get(j)) {
             if let Some(pm) = joint_model.get(p.get()) {
-                fb.line(screen(pm), screen(m), thickness, BONE_COLOR);
+                if let Some([a, b]) = camera.clip_segment(origin(pm), origin(m)) {
+                    fb.line(a, b, thickness, BONE_COLOR);
+                }
             }
         }
     }
     for m in joint_model {
-        fb.disc(screen(m), radius, JOINT_COLOR);
+        if let Some([x, y, _]) = camera.project(origin(m)) {
+            fb.disc([x, y], radius, JOINT_COLOR);
+        }
+    }
+}
+
+/// Draws each marker as a crosshair (a ring with a cross through it) in [`MARKER_COLOR`],
+/// outlined in the background colour so it stands out on the mesh and the skeleton alike;
+/// over everything, ignoring depth. Points behind the camera are skipped.
+fn draw_markers(fb: &mut Framebuffer, points: &[Vec3], camera: &Camera) {
+    let size = fb.width().min(fb.height());
+    let radius = (size as f32 / 40.0).max(3.0);
+    let thickness = (size / 256).max(1) + 1;
+    let arm = radius * 1.6;
+    let screen: Vec<[f32; 2]> = points
+        .iter()
+        .filter_map(|&p| camera.project(p))
+        .map(|[x, y, _]| [x, y])
+        .collect();
+    // All outlines first, so one marker's outline does not cut into another's colour.
+    for (color, width) in [(BACKGROUND, thickness + 2), (MARKER_COLOR, thickness)] {
+        for &[x, y] in &screen {
+            let half = width as f32 * 0.5;
+            fb.ring([x, y], radius - half, radius + half, color);
+            fb.line([x - arm, y], [x + arm, y], width, color);
+            fb.line([x, y - arm], [x, y + arm], width, color);
+        }
     }
 }
 
@@ -440,8 +537,9 @@ pub fn frame_list(
         .collect())
 }
 
-/// A PNG contact sheet of `frames`: up to [`SHEET_FRAMES`] of them evenly chosen, framed
-/// on the chosen ones, laid out by [`contact_sheet`].
+/// A PNG contact sheet of `frames` (with `markers`, see [`render_frames`]): up to
+/// [`SHEET_FRAMES`] of them evenly chosen, framed on the chosen ones, laid out by
+/// [`contact_sheet`].
 ///
 /// # Errors
 /// As [`render_frames`] and [`encode_png`]; [`RenderError::EmptyAnimation`] without frames.
@@ -449,6 +547,7 @@ pub fn render_sheet_png(
     asset: &Asset,
     clip: Option<&Clip>,
     frames: &[FrameTime],
+    markers: Option<&dyn Markers>,
     options: &RenderOptions,
 ) -> Result<Vec<u8>, RenderError> {
     if frames.is_empty() {
@@ -458,12 +557,12 @@ pub fn render_sheet_png(
         .into_iter()
         .filter_map(|i| frames.get(i).copied())
         .collect();
-    let pictures = render_frames(asset, clip, &chosen, options)?;
+    let pictures = render_frames(asset, clip, &chosen, markers, options)?;
     encode_png(&contact_sheet(&pictures, BACKGROUND))
 }
 
-/// A looping GIF of `frames`, `delay_cs` hundredths of a second each (see
-/// [`gif_delay_cs`]).
+/// A looping GIF of `frames` (with `markers`, see [`render_frames`]), `delay_cs`
+/// hundredths of a second each (see [`gif_delay_cs`]).
 ///
 /// # Errors
 /// As [`render_frames`] and [`encode_gif`].
@@ -471,15 +570,16 @@ pub fn render_gif(
     asset: &Asset,
     clip: Option<&Clip>,
     frames: &[FrameTime],
+    markers: Option<&dyn Markers>,
     delay_cs: u16,
     options: &RenderOptions,
 ) -> Result<Vec<u8>, RenderError> {
-    let pictures = render_frames(asset, clip, frames, options)?;
+    let pictures = render_frames(asset, clip, frames, markers, options)?;
     encode_gif(&pictures, delay_cs)
 }
 
-/// A looping animated PNG of `frames`, `delay_ms` milliseconds each (see
-/// [`apng_delay_ms`]).
+/// A looping animated PNG of `frames` (with `markers`, see [`render_frames`]), `delay_ms`
+/// milliseconds each (see [`apng_delay_ms`]).
 ///
 /// # Errors
 /// As [`render_frames`] and [`encode_apng`].
@@ -487,42 +587,46 @@ pub fn render_apng(
     asset: &Asset,
     clip: Option<&Clip>,
     frames: &[FrameTime],
+    markers: Option<&dyn Markers>,
     delay_ms: u16,
     options: &RenderOptions,
 ) -> Result<Vec<u8>, RenderError> {
-    let pictures = render_frames(asset, clip, frames, options)?;
+    let pictures = render_frames(asset, clip, frames, markers, options)?;
     encode_apng(&pictures, delay_ms)
 }
 
 /// The demo's helper: a PNG contact sheet of the clip named `clip` (the first clip when
-/// `None`, the rest pose when the asset has none), sampled at its key times.
+/// `None`, the rest pose when the asset has none), sampled at its key times, with
+/// `markers` (see [`render_frames`]).
 ///
 /// # Errors
 /// [`RenderError::NoClip`], and as [`render_sheet_png`].
 pub fn render_clip_png(
     asset: &Asset,
     clip: Option<&str>,
+    markers: Option<&dyn Markers>,
     options: &RenderOptions,
 ) -> Result<Vec<u8>, RenderError> {
     let clip = find_clip(asset, clip)?;
     let frames = frame_list(asset, clip, None, None)?;
-    render_sheet_png(asset, clip, &frames, options)
+    render_sheet_png(asset, clip, &frames, markers, options)
 }
 
 /// The demo's helper: a GIF of the clip named `clip` (as [`render_clip_png`]) sampled at
-/// `fps` frames per second and played at that rate.
+/// `fps` frames per second and played at that rate, with `markers`.
 ///
 /// # Errors
 /// [`RenderError::NoClip`], [`RenderError::Fps`], and as [`render_gif`].
 pub fn render_clip_gif(
     asset: &Asset,
     clip: Option<&str>,
+    markers: Option<&dyn Markers>,
     fps: f32,
     options: &RenderOptions,
 ) -> Result<Vec<u8>, RenderError> {
     let clip = find_clip(asset, clip)?;
     let frames = frame_list(asset, clip, Some(fps), None)?;
-    render_gif(asset, clip, &frames, gif_delay_cs(fps), options)
+    render_gif(asset, clip, &frames, markers, gif_delay_cs(fps), options)
 }
 
 #[cfg(test)]
@@ -569,7 +673,7 @@ mod tests {
         };
         let frames = frame_list(&asset, None, None, None).unwrap();
         assert_eq!(frames.len(), 1);
-        let pics = render_frames(&asset, None, &frames, &options).unwrap();
+        let pics = render_frames(&asset, None, &frames, None, &options).unwrap();
         let drawn: Vec<usize> = pics[0]
             .pixels()
             .iter()
@@ -590,7 +694,7 @@ mod tests {
             view: View::Side,
             ..options
         };
-        let pics = render_frames(&asset, None, &frames, &side).unwrap();
+        let pics = render_frames(&asset, None, &frames, None, &side).unwrap();
         assert!(pics[0].pixels().iter().all(|&c| c == BACKGROUND));
     }
 
@@ -604,7 +708,7 @@ mod tests {
             ..RenderOptions::default()
         };
         let frames = frame_list(&asset, None, None, None).unwrap();
-        let pics = render_frames(&asset, None, &frames, &options).unwrap();
+        let pics = render_frames(&asset, None, &frames, None, &options).unwrap();
         assert_eq!((pics[0].width(), pics[0].height()), (80, 30));
         assert!(pics[0].pixels().contains(&JOINT_COLOR));
         assert!(pics[0].pixels().contains(&TEXT_COLOR));
@@ -613,6 +717,7 @@ mod tests {
                 &asset,
                 None,
                 &frames,
+                None,
                 &RenderOptions {
                     width: 0,
                     ..options
@@ -621,7 +726,7 @@ mod tests {
             Err(RenderError::Size { .. })
         ));
         assert!(matches!(
-            render_clip_png(&asset, Some("walk"), &options),
+            render_clip_png(&asset, Some("walk"), None, &options),
             Err(RenderError::NoClip { .. })
         ));
     }
@@ -664,7 +769,7 @@ mod tests {
         let frames = frame_list(&asset, clip, Some(2.0), None).unwrap();
         let times: Vec<f32> = frames.iter().map(|f| f.time).collect();
         assert_eq!(times, vec![0.0, 0.5, 1.0]);
-        let pics = render_frames(&asset, clip, &frames, &options).unwrap();
+        let pics = render_frames(&asset, clip, &frames, None, &options).unwrap();
         // Bounds x in [-1, 5], y in [-1, 1]: 84 px over 6 units is 14 px per unit, so the
         // 2-unit square is 28 px wide in every frame and slides from the left margin (8) to
         // the right one (92, exclusive).
@@ -673,17 +778,261 @@ mod tests {
         assert_eq!(e[1], (36, 63, 28 * 28));
         assert_eq!(e[2], (64, 91, 28 * 28));
         // Only the chosen frames are framed: the last one alone fills the picture's width.
-        let last = render_frames(&asset, clip, &frames[2..], &options).unwrap();
+        let last = render_frames(&asset, clip, &frames[2..], None, &options).unwrap();
         assert_eq!(extent(&last[0]).2, 84 * 84);
         // Rendering again, or in a different split, gives the same pixels.
-        let again = render_frames(&asset, clip, &frames, &options).unwrap();
+        let again = render_frames(&asset, clip, &frames, None, &options).unwrap();
         assert_eq!(pics, again);
+    }
+
+    /// The pixels of `color` in `fb`, as `(x, y)`.
+    fn pixels_of(fb: &Framebuffer, color: Rgba) -> Vec<(u32, u32)> {
+        (0..fb.height())
+            .flat_map(|y| (0..fb.width()).map(move |x| (x, y)))
+            .filter(|&(x, y)| fb.get(x, y) == Some(color))
+            .collect()
+    }
+
+    #[test]
+    fn markers_are_framed_and_drawn_on_top() {
+        let asset = square();
+        let options = RenderOptions {
+            width: 100,
+            height: 100,
+            skeleton: false,
+            frame_counter: false,
+            ..RenderOptions::default()
+        };
+        let frames = frame_list(&asset, None, None, None).unwrap();
+        let plain = render_frames(&asset, None, &frames, None, &options).unwrap();
+        assert!(pixels_of(&plain[0], MARKER_COLOR).is_empty());
+        // One marker far to the right, one behind the square's centre.
+        let points = [Vec3::new(5.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -3.0)];
+        let marked = render_frames(&asset, None, &frames, Some(&points), &options).unwrap();
+        let fb = &marked[0];
+        // Bounds x in [-1, 5]: 14 px per unit from x = 8, so the far marker's centre is at
+        // (92, 50) (a pixel corner) and the square spans columns 8..36.
+        for (x, y) in [(91, 49), (92, 50), (91, 50), (92, 49)] {
+            assert_eq!(fb.get(x, y), Some(MARKER_COLOR), "far marker at ({x}, {y})");
+        }
+        // The behind one is drawn over the square, depth ignored.
+        assert_eq!(fb.get(21, 50), Some(MARKER_COLOR));
+        // The crosshair is inside the picture, clear of its border.
+        assert!(pixels_all(fb)
+            .iter()
+            .all(|&(x, y)| (1..99).contains(&x) && (1..99).contains(&y)));
+        // The square got smaller to make room: 28 px instead of 84.
+        let square_px = fb
+            .pixels()
+            .iter()
+            .filter(|&&c| c != BACKGROUND && c != MARKER_COLOR)
+            .count();
+        assert!(square_px < 28 * 28, "{square_px}");
+        // Markers move with time: a closure of time, evaluated at each frame's time.
+        let moving = |t: f32, out: &mut Vec<Vec3>| out.push(Vec3::new(t, 0.0, 0.0));
+        let at_zero = render_frames(&asset, None, &frames, Some(&moving), &options).unwrap();
+        assert_eq!(at_zero[0].get(50, 50), Some(MARKER_COLOR));
+        // Deterministic.
+        let again = render_frames(&asset, None, &frames, Some(&points), &options).unwrap();
+        assert_eq!(marked, again);
+    }
+
+    /// A closed box `[-1, 1] x [0, 3] x [-0.5, 0.5]`, unskinned, 12 triangles.
+    fn boxy() -> Asset {
+        let mut asset = square();
+        let (lo, hi) = (Vec3::new(-1.0, 0.0, -0.5), Vec3::new(1.0, 3.0, 0.5));
+        let positions: Vec<Vec3> = (0..8)
+            .map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            })
+            .collect();
+        let quads = [
+            [0, 1, 3, 2],
+            [4, 6, 7, 5],
+            [0, 4, 5, 1],
+            [2, 3, 7, 6],
+            [0, 2, 6, 4],
+            [1, 5, 7, 3],
+        ];
+        asset.meshes[0].triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        asset.meshes[0].source_vertex = (0..8).collect();
+        asset.meshes[0].positions = positions;
+        asset
+    }
+
+    #[test]
+    fn perspective_keeps_the_silhouette_inside_and_is_deterministic() {
+        let asset = boxy();
+        let frames = frame_list(&asset, None, None, None).unwrap();
+        for view in [View::Front, View::Side, View::Top, View::ThreeQuarter] {
+            let ortho = RenderOptions {
+                width: 120,
+                height: 100,
+                view,
+                skeleton: false,
+                frame_counter: false,
+                ..RenderOptions::default()
+            };
+            let persp = RenderOptions {
+                projection: Projection::PERSPECTIVE,
+                ..ortho
+            };
+            let o = render_frames(&asset, None, &frames, None, &ortho).unwrap();
+            let p = render_frames(&asset, None, &frames, None, &persp).unwrap();
+            let (po, pp) = (extent(&o[0]), extent(&p[0]));
+            // Inside the margin (8% of 120 px = 9.6 px per side), not empty, and no larger
+            // than the orthographic picture, whose nearest face it draws at the same scale.
+            assert!(pp.0 >= 9 && pp.1 <= 120 - 10, "{view:?}: columns {pp:?}");
+            assert!(
+                pp.2 > po.2 / 3 && pp.2 <= po.2 + 2 * 120,
+                "{view:?}: {pp:?} vs {po:?}"
+            );
+            let rows: Vec<u32> = pixels_all(&p[0]).iter().map(|&(_, y)| y).collect();
+            assert!(rows.iter().all(|&y| (8..=91).contains(&y)), "{view:?}");
+            // Seen head-on along an axis, the box's near face hides the rest and is drawn at
+            // the orthographic scale (checked below); from three-quarters the far parts shrink.
+            if view == View::ThreeQuarter {
+                assert!(o != p, "{view:?}: perspective differs from orthographic");
+            }
+            let again = render_frames(&asset, None, &frames, None, &persp).unwrap();
+            assert!(p == again, "{view:?}: not deterministic");
+            assert!(p[0].pixels().iter().all(|c| palette().contains(c)));
+        }
+        // Seen from the front, the near face (z = 0.5) hides the far one: the perspective
+        // silhouette of a box seen head-on is its near face, drawn at the orthographic scale.
+        let front = RenderOptions {
+            width: 100,
+            height: 100,
+            skeleton: false,
+            frame_counter: false,
+            projection: Projection::PERSPECTIVE,
+            ..RenderOptions::default()
+        };
+        let p = render_frames(&asset, None, &frames, None, &front).unwrap();
+        let o = render_frames(
+            &asset,
+            None,
+            &frames,
+            None,
+            &RenderOptions {
+                projection: Projection::Orthographic,
+                ..front
+            },
+        )
+        .unwrap();
+        let (cp, co) = (extent(&p[0]).2, extent(&o[0]).2);
+        assert!(cp.abs_diff(co) <= 2 * 84, "{cp} vs {co}");
+    }
+
+    #[test]
+    fn perspective_shrinks_far_things_and_depth_test_keeps_the_near_one() {
+        // Two equal squares facing the camera, the second 3 units farther and shifted right
+        // so that the near one hides part of it.
+        let near = square().meshes.remove(0);
+        let mut far = near.clone();
+        for p in &mut far.positions {
+            *p += Vec3::new(1.0, 0.0, -3.0);
+        }
+        let options = RenderOptions {
+            width: 100,
+            height: 100,
+            skeleton: false,
+            frame_counter: false,
+            projection: Projection::PERSPECTIVE,
+            ..RenderOptions::default()
+        };
+        let mut a = square();
+        a.meshes = vec![near.clone(), far.clone()];
+        let mut b = square();
+        b.meshes = vec![far, near];
+        let frames = frame_list(&a, None, None, None).unwrap();
+        let pa = render_frames(&a, None, &frames, None, &options).unwrap();
+        let pb = render_frames(&b, None, &frames, None, &options).unwrap();
+        // Facing the camera, each square is one shade of its mesh's colour.
+        let color = |fb: &Framebuffer, base: Rgba| -> Rgba {
+            fb.pixels()
+                .iter()
+                .copied()
+                .find(|&c| (0..SHADE_LEVELS).any(|l| shade(base, l) == c))
+                .unwrap()
+        };
+        let (a0, a1) = (color(&pa[0], MESH_COLORS[0]), color(&pa[0], MESH_COLORS[1]));
+        let (b0, b1) = (color(&pb[0], MESH_COLORS[0]), color(&pb[0], MESH_COLORS[1]));
+        // Drawn in either order, the near square wins the same pixels.
+        assert_eq!(pixels_of(&pa[0], a0), pixels_of(&pb[0], b1));
+        assert_eq!(pixels_of(&pa[0], a1), pixels_of(&pb[0], b0));
+        // The far square is drawn smaller: fewer rows than the near one.
+        let rows = |px: Vec<(u32, u32)>| {
+            let (lo, hi) = px
+                .iter()
+                .fold((u32::MAX, 0), |(lo, hi), &(_, y)| (lo.min(y), hi.max(y)));
+            hi + 1 - lo
+        };
+        let (near_rows, far_rows) = (rows(pixels_of(&pa[0], a0)), rows(pixels_of(&pa[0], a1)));
+        assert!(
+            far_rows + 10 < near_rows,
+            "near {near_rows} rows, far {far_rows}"
+        );
+    }
+
+    /// Every non-background pixel.
+    fn pixels_all(fb: &Framebuffer) -> Vec<(u32, u32)> {
+        (0..fb.height())
+            .flat_map(|y| (0..fb.width()).map(move |x| (x, y)))
+            .filter(|&(x, y)| fb.get(x, y) != Some(BACKGROUND))
+            .collect()
+    }
+
+    #[test]
+    fn geometry_behind_or_across_the_near_plane_does_not_panic() {
+        // A camera framed on a small region near the origin, then a mesh, bones and markers
+        // that reach behind the eye.
+        let mut b = Bounds::default();
+        b.add(Vec3::new(-1.0, -1.0, -1.0));
+        b.add(Vec3::new(1.0, 1.0, 1.0));
+        let camera = Camera::framing_with(View::Front, Projection::PERSPECTIVE, b, 64, 64, 0.08);
+        let Lens::Perspective { eye_z, .. } = camera.lens else {
+            panic!("{:?}", camera.lens);
+        };
+        let mut asset = square();
+        asset.meshes[0].positions = vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(0.0, 1.0, eye_z + 10.0),
+            Vec3::new(0.0, 0.0, eye_z),
+            Vec3::new(0.0, 0.0, f32::NAN),
+        ];
+        asset.meshes[0].source_vertex = (0..5).collect();
+        asset.meshes[0].triangles = vec![[0, 1, 2], [2, 3, 4], [0, 1, 3], [0, 3, 4]];
+        let mut fb = Framebuffer::new(64, 64, BACKGROUND);
+        let positions = [asset.meshes[0].positions.clone()];
+        draw_meshes(&mut fb, &asset, &positions, &camera);
+        let drawn = pixels_all(&fb).len();
+        assert!(drawn > 0, "the part in front of the near plane is drawn");
+        let behind = Mat4::from_translation(Vec3::new(0.0, 0.0, eye_z + 5.0));
+        draw_skeleton(&mut fb, &asset, &[behind], &camera);
+        draw_markers(
+            &mut fb,
+            &[Vec3::new(0.0, 0.0, eye_z + 1.0), Vec3::NAN, Vec3::ZERO],
+            &camera,
+        );
+        assert!(fb.pixels().contains(&MARKER_COLOR));
+        assert!(!fb.pixels().contains(&JOINT_COLOR));
     }
 
     #[test]
     fn palette_fits_a_gif() {
         let p = palette();
         assert!(p.len() <= 256);
+        assert_eq!(p.last(), Some(&MARKER_COLOR));
+        assert_eq!(p.iter().filter(|&&c| c == MARKER_COLOR).count(), 1);
         let mut sorted = p.clone();
         sorted.sort_unstable();
         sorted.dedup();

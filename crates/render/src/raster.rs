@@ -1,5 +1,5 @@
-//! The framebuffer and the primitives drawn into it: z-buffered triangles, lines, discs and
-//! a 3x5 digit font.
+//! The framebuffer and the primitives drawn into it: z-buffered triangles, lines, discs,
+//! rings and a 3x5 digit font.
 //!
 //! Screen space: pixel `(x, y)` covers `[x, x + 1) x [y, y + 1)`, `y` grows downwards, pixel
 //! centres sit at `+0.5`. Depth grows towards the viewer (larger is nearer).
@@ -196,6 +196,30 @@ impl Framebuffer {
         }
     }
 
+    /// Draws the ring of pixels whose centres lie between `inner` and `outer` pixels from `c`
+    /// (screen space) on top of everything, ignoring depth.
+    pub fn ring(&mut self, c: [f32; 2], inner: f32, outer: f32, color: Rgba) {
+        if !(c[0].is_finite() && c[1].is_finite() && inner.is_finite() && outer.is_finite()) {
+            return;
+        }
+        let r1 = outer.clamp(0.0, 1e4);
+        let r0 = inner.clamp(0.0, r1);
+        let x0 = (c[0] - r1).floor() as i64;
+        let x1 = (c[0] + r1).ceil() as i64;
+        let y0 = (c[1] - r1).floor() as i64;
+        let y1 = (c[1] + r1).ceil() as i64;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let dx = x as f32 + 0.5 - c[0];
+                let dy = y as f32 + 0.5 - c[1];
+                let d2 = dx * dx + dy * dy;
+                if d2 >= r0 * r0 && d2 <= r1 * r1 {
+                    self.put(x, y, color);
+                }
+            }
+        }
+    }
+
     /// Writes the decimal `number` with the built-in 3x5 font (see [`Framebuffer::text`]).
     pub fn number(&mut self, number: u64, x: i64, y: i64, scale: u32, color: Rgba) {
         self.text(&number.to_string(), x, y, scale, color);
@@ -338,6 +362,21 @@ mod tests {
             0
         );
         assert_eq!(count(&fb, RED), 0);
+    }
+
+    #[test]
+    fn ring_leaves_its_middle_and_clips_at_the_border() {
+        let mut fb = Framebuffer::new(32, 32, BG);
+        fb.ring([16.0, 16.0], 4.0, 6.0, RED);
+        assert_eq!(fb.get(16, 16), Some(BG));
+        assert_eq!(fb.get(16 + 4, 16), Some(RED));
+        assert_eq!(fb.get(16 + 7, 16), Some(BG));
+        // Area between the circles is about pi (36 - 16) = 63 pixels.
+        assert!((55..=71).contains(&count(&fb, RED)), "{}", count(&fb, RED));
+        // Partly outside, or not finite: no panic, only pixels inside drawn.
+        fb.ring([0.0, 0.0], 2.0, 50.0, BLUE);
+        fb.ring([f32::NAN, 0.0], 2.0, 5.0, BLUE);
+        assert!(count(&fb, BLUE) > 0);
     }
 
     #[test]
