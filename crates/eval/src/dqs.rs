@@ -310,9 +310,6 @@ pub struct DqsPalette {
     frames: usize,
     /// `frames x joints`.
     dq: Vec<JointDq>,
-    /// `frames x joints`: each joint's entry, and the same with the dual quaternion
-    /// negated (the SIMD kernel picks one by the hemisphere sign instead of multiplying).
-    dq_pm: Vec<[JointDq; 2]>,
     /// `frames x joints`: the scale/shear part `S⁻¹` of each joint's normal matrix.
     normal_scale: Vec<Sym3>,
     /// Per frame: does any joint have scale or shear (UsdSkel's `hasJointScale`)?
@@ -341,7 +338,6 @@ impl DqsPalette {
             joints: 0,
             frames: 0,
             dq: vec![JointDq::default(); n],
-            dq_pm: vec![[JointDq::default(); 2]; n],
             normal_scale: vec![Sym3::IDENTITY; n],
             has_scale: vec![false; frames],
             aligned: vec![false; frames],
@@ -423,17 +419,6 @@ impl DqsPalette {
             }
             self.has_scale[f] = has_scale;
             self.aligned[f] = false;
-            for (d, pm) in self.dq[range.clone()]
-                .iter()
-                .zip(&mut self.dq_pm[range.clone()])
-            {
-                pm[0] = *d;
-                pm[1] = JointDq {
-                    real: -d.real,
-                    dual: -d.dual,
-                    scale: d.scale,
-                };
-            }
             if table {
                 let dq = &self.dq[range];
                 let signs = &mut self.signs[f * joints * joints..(f + 1) * joints * joints];
@@ -460,7 +445,6 @@ impl DqsPalette {
         };
         Frame {
             dq: &self.dq[f * j..(f + 1) * j],
-            dq_pm: &self.dq_pm[f * j..(f + 1) * j],
             normal_scale: &self.normal_scale[f * j..(f + 1) * j],
             has_scale: self.has_scale[f],
             aligned: self.aligned[f],
@@ -484,8 +468,6 @@ fn sign_of(q: Vec4, pivot: Vec4) -> f32 {
 #[derive(Clone, Copy)]
 pub(crate) struct Frame<'a> {
     pub(crate) dq: &'a [JointDq],
-    /// [`DqsPalette::dq_pm`] of this frame.
-    pub(crate) dq_pm: &'a [[JointDq; 2]],
     normal_scale: &'a [Sym3],
     has_scale: bool,
     aligned: bool,
@@ -498,12 +480,6 @@ pub(crate) trait Hemisphere: Copy {
     fn for_pivot(self, dq: &[JointDq], pivot: usize) -> Self;
     /// The sign of joint `j`.
     fn sign(self, dq: &JointDq, j: usize) -> f32;
-    /// 1 when joint `j` enters the blend negated, else 0 (branch-free: the signs of a
-    /// real palette are unpredictable).
-    #[inline(always)]
-    fn negated(self, dq: &JointDq, j: usize) -> usize {
-        (self.sign(dq, j).to_bits() >> 31) as usize
-    }
 }
 
 /// Reads the precomputed sign table.

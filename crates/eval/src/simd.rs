@@ -241,19 +241,15 @@ mod x86 {
             return acc;
         };
         let h = h.for_pivot(frame.dq, pivot as usize);
-        // A local copy of the slice, so its pointer stays in a register.
-        let palette = frame.dq_pm;
-        for (&jk, wk) in j.iter().zip(w) {
-            let jk = jk as usize;
-            let Some(pm) = palette.get(jk) else {
+        for (&jk, &wk) in j.iter().zip(w) {
+            let Some(d) = frame.dq.get(jk as usize) else {
                 continue;
             };
-            // The entry with the dual quaternion already negated when the joint lies in
-            // the other hemisphere: one weight serves both blends.
-            let [dq, sc] = joint_dq(&pm[h.negated(&pm[0], jk) & 1]);
-            let w = simd.avx._mm256_broadcast_ss(wk);
-            acc[0] = simd.fma._mm256_fmadd_ps(dq, w, acc[0]);
+            let [dq, sc] = joint_dq(d);
+            let sw = simd.avx._mm256_set1_ps(wk * h.sign(d, jk as usize));
+            acc[0] = simd.fma._mm256_fmadd_ps(dq, sw, acc[0]);
             if SCALE {
+                let w = simd.avx._mm256_set1_ps(wk);
                 acc[1] = simd.fma._mm256_fmadd_ps(sc, w, acc[1]);
             }
         }
