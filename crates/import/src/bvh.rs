@@ -557,9 +557,50 @@ fn clip(
             format!("the motion has no values for joint {:?}", j.name),
         )
     };
+    let joints = &bvh.joints;
+    // Joints' tracks are independent: a large clip builds them on two threads, the joints
+    // split where half the channels are done, and keeps them in joint order.
+    let tracks = if bvh.motion.len() >= PARALLEL_TRACK_VALUES && joints.len() >= 2 {
+        let half = channel_count / 2;
+        let mid = joints
+            .iter()
+            .position(|j| j.first_channel >= half)
+            .unwrap_or(joints.len())
+            .clamp(1, joints.len() - 1);
+        let (first, second) = joints.split_at(mid);
+        let (a, b) = crate::join(
+            || joint_tracks(bvh, 0, first, channel_count, &times),
+            || joint_tracks(bvh, mid, second, channel_count, &times),
+        );
+        let mut tracks = a.map_err(broken)?;
+        tracks.extend(b.map_err(broken)?);
+        tracks
+    } else {
+        joint_tracks(bvh, 0, joints, channel_count, &times).map_err(broken)?
+    };
+    Ok(Clip {
+        name: name.to_string(),
+        tracks,
+    })
+}
+
+/// Clips of at least this many values build their tracks on two threads.
+const PARALLEL_TRACK_VALUES: usize = 16 * 1024;
+
+/// The translation and rotation tracks of `joints`, the joints of `bvh` from index `first`
+/// on (in joint order, translation first), keyed at `times`. `Err(joint)`: the joint's
+/// channels lie outside the frame values, or its index does not fit a [`JointIndex`].
+fn joint_tracks<'b>(
+    bvh: &Bvh,
+    first: usize,
+    joints: &'b [BvhJoint],
+    channel_count: usize,
+    times: &[f32],
+) -> Result<Vec<Track>, &'b BvhJoint> {
+    let frames = times.len();
     let mut tracks = Vec::new();
-    for (index, joint) in bvh.joints.iter().enumerate() {
-        let index = JointIndex(u32::try_from(index).map_err(|_| broken(joint))?);
+    for (i, joint) in (first..).zip(joints) {
+        let index = JointIndex(u32::try_from(i).map_err(|_| joint)?);
         let range = joint.first_channel..joint.first_channel + joint.channels.len();
         // The joint's channels by kind, as (index within the joint's values, axis), in file
         // order: worked out once rather than per frame.
@@ -571,12 +612,10 @@ fn clip(
             .filter(|(_, c)| c.is_rotation())
             .map(|(k, c)| (k, AXES[c.axis()]))
             .collect();
-        let has_position = !positions.is_empty();
-        let has_rotation = !rotations.is_empty();
-        if has_position {
+        if !positions.is_empty() {
             let mut values = Vec::with_capacity(3 * frames);
             for frame in bvh.motion.chunks_exact(channel_count) {
-                let own = frame.get(range.clone()).ok_or_else(|| broken(joint))?;
+                let own = frame.get(range.clone()).ok_or(joint)?;
                 let mut t = joint.offset.to_array();
                 for &(k, axis) in &positions {
                     if let (Some(slot), Some(&v)) = (t.get_mut(axis), own.get(k)) {
@@ -588,15 +627,15 @@ fn clip(
             tracks.push(Track {
                 target: TrackTarget::Translation(index),
                 interpolation: Interpolation::Linear,
-                times: times.clone(),
+                times: times.to_vec(),
                 values,
             });
         }
-        if has_rotation {
+        if !rotations.is_empty() {
             let mut values = Vec::with_capacity(4 * frames);
             let mut previous = DQuat::IDENTITY;
             for frame in bvh.motion.chunks_exact(channel_count) {
-                let own = frame.get(range.clone()).ok_or_else(|| broken(joint))?;
+                let own = frame.get(range.clone()).ok_or(joint)?;
                 let mut q = DQuat::IDENTITY;
                 for &(k, axis) in &rotations {
                     if let Some(&v) = own.get(k) {
@@ -614,15 +653,12 @@ fn clip(
             tracks.push(Track {
                 target: TrackTarget::Rotation(index),
                 interpolation: Interpolation::Linear,
-                times: times.clone(),
+                times: times.to_vec(),
                 values,
             });
         }
     }
-    Ok(Clip {
-        name: name.to_string(),
-        tracks,
-    })
+    Ok(tracks)
 }
 
 /// Unit axes by [`Channel::axis`].
@@ -1038,6 +1074,22 @@ impl<'a> Parser<'a, '_> {
         // Frames of no values are blank lines: with no channels there is nothing to read,
         // and any text after the header is an extra line.
         let mut frame_count = if channels == 0 { frames_declared } else { 0 };
+        // Large, well-formed motion is read on two threads; anything unusual (a bad or
+        // cut-off line, a frame count other than declared) takes the line-by-line path
+        // below, which reports it.
+        let data = lines
+            .clone()
+            .next()
+            .and_then(|first| rest.get(offset_in(rest, first)?..));
+        if let Some(values) = data.and_then(|d| frames_on_two_threads(d, channels, frames_declared))
+        {
+            return Ok(Motion {
+                frames_declared,
+                frame_count: frames_declared,
+                frame_time,
+                values,
+            });
+        }
         let mut cut_off_line = None;
         let mut last_data_line = line_no;
         while frame_count < frames_declared {
@@ -1100,6 +1152,53 @@ impl<'a> Parser<'a, '_> {
             values,
         })
     }
+}
+
+/// Motion text of at least this many bytes is read on two threads (below it, starting a
+/// thread costs about what it saves).
+const PARALLEL_MOTION_BYTES: usize = 64 * 1024;
+
+/// The values of `data` (the frame lines after the motion header) read on two threads, when
+/// `data` is large and holds exactly `frames` frame lines of `channels` finite values each
+/// plus blank lines; `None` otherwise (the caller then reads it line by line and reports
+/// what is wrong). Same values, bit for bit, as the line-by-line reader.
+fn frames_on_two_threads(data: &str, channels: usize, frames: usize) -> Option<Vec<f32>> {
+    if channels == 0 || data.len() < PARALLEL_MOTION_BYTES {
+        return None;
+    }
+    // Cut after the line break nearest the middle: both halves hold whole lines.
+    let mid = data.len() / 2;
+    let cut = mid
+        + 1
+        + data
+            .as_bytes()
+            .get(mid..)?
+            .iter()
+            .position(|&b| b == b'\n')?;
+    let (first, second) = (data.get(..cut)?, data.get(cut..)?);
+    // Every value takes at least two bytes, so a half cannot hold more than len / 2 + 1.
+    let capacity = frames.saturating_mul(channels).min(data.len() / 2 + 1);
+    let read = |text: &str, capacity: usize| -> Option<(Vec<f32>, usize)> {
+        let mut values = Vec::with_capacity(capacity);
+        let mut count = 0_usize;
+        for line in text.split('\n') {
+            if !line.trim_ascii().is_empty() {
+                frame_values(line, channels, &mut values).ok()?;
+                count += 1;
+            }
+        }
+        Some((values, count))
+    };
+    let (a, b) = crate::join(
+        || read(first, capacity),
+        || read(second, capacity.min(second.len() / 2 + 1)),
+    );
+    let ((mut values, count_a), (rest, count_b)) = (a?, b?);
+    if count_a.checked_add(count_b)? != frames {
+        return None;
+    }
+    values.extend_from_slice(&rest);
+    Some(values)
 }
 
 /// Splits a `Frames: 20` / `Frame Time: 0.033` line: the label (before the first `:`, or
@@ -1742,6 +1841,70 @@ mod tests {
         for (text, expected) in cases {
             assert_eq!(&err(text), expected, "{text}");
         }
+    }
+
+    /// `BASE`'s hierarchy with `frames` frame lines (`Frames:` says `declared`), large
+    /// enough past a few thousand frames for the two-thread reader.
+    fn long_motion(frames: usize, declared: usize) -> String {
+        let mut text = BASE.split("Frames").next().unwrap().to_string();
+        text.push_str(&format!("Frames: {declared}\nFrame Time: 0.01\n"));
+        for k in 0..frames {
+            let a = k as f32 * 0.37;
+            text.push_str(&format!("{a} {} -{} {}e-1\r\n", a * 2.0, k % 91, k));
+            if k % 1000 == 7 {
+                text.push_str("  \n");
+            }
+        }
+        text
+    }
+
+    /// Large motion read on two threads equals the line-by-line reading, value for value;
+    /// a bad, cut-off or extra line in either half is still reported at its own line.
+    #[test]
+    fn two_thread_motion_equals_line_by_line() {
+        let text = long_motion(6000, 6000);
+        let body = &text[text.find("Frame Time").unwrap()..];
+        let data = &body[body.find('\n').unwrap() + 1..];
+        assert!(data.len() >= 2 * PARALLEL_MOTION_BYTES);
+        let fast = frames_on_two_threads(data, 4, 6000).expect("the two-thread path applies");
+        let mut slow = Vec::new();
+        for line in data.split('\n').filter(|l| !l.trim_ascii().is_empty()) {
+            frame_values(line, 4, &mut slow).unwrap_or_else(|_| panic!("{line}"));
+        }
+        assert_eq!(fast.len(), 6000 * 4);
+        assert!(fast
+            .iter()
+            .zip(&slow)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        let bvh = parse_str(&text).unwrap();
+        assert_eq!((bvh.frames_declared, bvh.frame_count), (6000, 6000));
+        assert!(bvh.warnings.is_empty());
+        assert!(bvh
+            .motion
+            .iter()
+            .zip(&slow)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+
+        // Not the declared count, or a bad line in the second half: the line-by-line path
+        // takes over and says where.
+        assert!(frames_on_two_threads(data, 4, 5999).is_none());
+        let bvh = parse_str(&long_motion(6000, 5000)).unwrap();
+        assert_eq!(bvh.frame_count, 5000);
+        assert!(
+            matches!(&bvh.warnings[..], [Warning::Repaired { message, .. }]
+            if message.starts_with("1000 lines after the 5000 frames"))
+        );
+        let bvh = parse_str(&long_motion(5000, 6000)).unwrap();
+        assert_eq!(bvh.frame_count, 5000);
+        assert!(matches!(&bvh.warnings[..], [Warning::Incomplete { .. }]));
+        let lines: Vec<&str> = text.split('\n').collect();
+        let bad_line = lines.len() - 100;
+        let mut broken = lines.clone();
+        broken[bad_line - 1] = "1 2 x 4";
+        assert_eq!(
+            err(&broken.join("\n")),
+            format!("t.bvh:{bad_line}:5: expected a number, found \"x\"")
+        );
     }
 
     #[test]

@@ -30,6 +30,22 @@ pub struct Imported {
     pub warnings: Vec<Warning>,
 }
 
+/// Runs `a` on the calling thread and `b` on a scoped helper thread, and returns both
+/// results. A panic on the helper is a bug: it is resumed on the caller.
+pub(crate) fn join<A, B>(a: impl FnOnce() -> A, b: impl FnOnce() -> B + Send) -> (A, B)
+where
+    B: Send,
+{
+    std::thread::scope(|scope| {
+        let helper = scope.spawn(b);
+        let a = a();
+        match helper.join() {
+            Ok(b) => (a, b),
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
+    })
+}
+
 /// Reads a whole file, mapping failure to an [`ImportError`] that names it.
 pub(crate) fn read_file(path: &std::path::Path) -> Result<Vec<u8>, ImportError> {
     std::fs::read(path).map_err(|e| ImportError::new(Location::file(path), Problem::Io(e)))

@@ -125,16 +125,7 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
             expected_vertices,
         ))
     };
-    let (mesh_result, rig_result) = std::thread::scope(|scope| {
-        let rig = scope.spawn(read_rig);
-        let mesh_result = obj::parse(&mesh_bytes, mesh);
-        // A panic on the other thread is a bug; surface it as one.
-        let rig_result = match rig.join() {
-            Ok(r) => r,
-            Err(panic) => std::panic::resume_unwind(panic),
-        };
-        (mesh_result, rig_result)
-    });
+    let (mesh_result, rig_result) = crate::join(|| obj::parse(&mesh_bytes, mesh), read_rig);
     // Errors in file order: the mesh first.
     let (mesh_data, mut warnings) = mesh_result?;
     let (pino, attachment_bytes, parsed, mut influences, expected_vertices) = rig_result?;
