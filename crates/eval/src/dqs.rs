@@ -815,6 +815,20 @@ pub(crate) fn skin_sparse(
     rest: &[Vec3],
     out: &mut [Vec3],
 ) {
+    // With AVX2 + FMA, blocks of eight vertices go through the SIMD kernel; the rest (or
+    // everything, on other CPUs) through the portable loop below.
+    let done = match (frame.aligned, frame.signs) {
+        (true, _) => simd_sparse(frame, Aligned, offsets, base, joints, weights, rest, out),
+        (false, Some(signs)) => {
+            let h = table(signs, frame);
+            simd_sparse(frame, h, offsets, base, joints, weights, rest, out)
+        }
+        (false, None) => {
+            let h = Dot { pivot: Vec4::ZERO };
+            simd_sparse(frame, h, offsets, base, joints, weights, rest, out)
+        }
+    };
+    let (offsets, rest, out) = (&offsets[done..], &rest[done..], &mut out[done..]);
     let h_table = frame.signs.map(|s| table(s, frame));
     for ((w2, p), o) in offsets.windows(2).zip(rest).zip(out) {
         let (a, b) = (w2[0] as usize - base, w2[1] as usize - base);
@@ -847,6 +861,25 @@ pub(crate) fn skin_sparse(
         }
         let scaled = if frame.has_scale { s.mul_vec3a(pv) } else { pv };
         *o = Vec3::from(apply(real, dual, scaled));
+    }
+}
+
+/// [`crate::simd::dqs_sparse`] with the frame's scale flag.
+#[allow(clippy::too_many_arguments)]
+fn simd_sparse<H: Hemisphere>(
+    frame: &Frame<'_>,
+    h: H,
+    offsets: &[u32],
+    base: usize,
+    joints: &[u32],
+    weights: &[f32],
+    rest: &[Vec3],
+    out: &mut [Vec3],
+) -> usize {
+    if frame.has_scale {
+        crate::simd::dqs_sparse::<true, H>(frame, h, offsets, base, joints, weights, rest, out)
+    } else {
+        crate::simd::dqs_sparse::<false, H>(frame, h, offsets, base, joints, weights, rest, out)
     }
 }
 

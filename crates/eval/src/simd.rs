@@ -225,10 +225,10 @@ mod x86 {
         ]
     }
 
-    /// `[Σ ±wₖ real | Σ ±wₖ dual]` and `[Σ wₖ diag | Σ wₖ off]` of one vertex (pivot in
-    /// slot 0, as `dqs::blend_fixed`).
+    /// `[Σ ±wₖ real | Σ ±wₖ dual]` and `[Σ wₖ diag | Σ wₖ off]` of one vertex's
+    /// influences (pivot first, as `dqs::blend_fixed`).
     #[inline(always)]
-    fn dq_blend<const W: usize, const SCALE: bool, H: Hemisphere>(
+    fn dq_blend<const SCALE: bool, H: Hemisphere>(
         simd: V3,
         frame: &Frame<'_>,
         h: H,
@@ -256,6 +256,80 @@ mod x86 {
         acc
     }
 
+    /// Finishes eight vertices of a DQS block: `dq[l]` is lane `l`'s blended
+    /// `[real | dual]`, `sc[l]` its blended `[diag | off]` scale/shear (used when `SCALE`);
+    /// writes `o[l]` from rest point `r[l]` (`r` and `o` hold eight points).
+    #[inline(always)]
+    fn dq_apply8<const SCALE: bool>(
+        simd: V3,
+        dq: [__m256; 8],
+        sc: [__m256; 8],
+        r: &[Vec3; 8],
+        o: &mut [Vec3; 8],
+    ) {
+        let (a, f) = (simd.avx, simd.fma);
+        let min_n2 = a._mm256_set1_ps(MIN_REAL_LENGTH * MIN_REAL_LENGTH);
+        let two = a._mm256_set1_ps(2.0);
+        // Structure of arrays: one register per component, one lane per vertex.
+        let [rx, ry, rz, rw, dx, dy, dz, dw] = transpose8(simd, dq);
+        let lanes = |c: fn(&Vec3) -> f32| {
+            cast::<[f32; 8], __m256>([
+                c(&r[0]),
+                c(&r[1]),
+                c(&r[2]),
+                c(&r[3]),
+                c(&r[4]),
+                c(&r[5]),
+                c(&r[6]),
+                c(&r[7]),
+            ])
+        };
+        let (mut px, mut py, mut pz) = (lanes(|p| p.x), lanes(|p| p.y), lanes(|p| p.z));
+        if SCALE {
+            // Σ wₖ Sₖ p with S symmetric: diag (d0, d1, d2), off (xy, xz, yz).
+            let [d0, d1, d2, _, oxy, oxz, oyz, _] = transpose8(simd, sc);
+            let sx =
+                f._mm256_fmadd_ps(oxz, pz, f._mm256_fmadd_ps(oxy, py, a._mm256_mul_ps(d0, px)));
+            let sy =
+                f._mm256_fmadd_ps(oyz, pz, f._mm256_fmadd_ps(d1, py, a._mm256_mul_ps(oxy, px)));
+            let sz =
+                f._mm256_fmadd_ps(d2, pz, f._mm256_fmadd_ps(oyz, py, a._mm256_mul_ps(oxz, px)));
+            (px, py, pz) = (sx, sy, sz);
+        }
+        // As `dqs::apply4`: p + (rw u + r × u − dw r) · 2/|r|², u = r × p + d; a blend
+        // with |r| below the threshold (or NaN) leaves p.
+        let n2 = f._mm256_fmadd_ps(
+            rw,
+            rw,
+            f._mm256_fmadd_ps(rz, rz, f._mm256_fmadd_ps(ry, ry, a._mm256_mul_ps(rx, rx))),
+        );
+        let valid = a._mm256_cmp_ps::<29>(n2, min_n2); // _CMP_GE_OQ
+        let s = a._mm256_and_ps(valid, a._mm256_div_ps(two, n2));
+        let cross = |ax, ay, az, bx, by, bz| {
+            (
+                f._mm256_fmsub_ps(ay, bz, a._mm256_mul_ps(az, by)),
+                f._mm256_fmsub_ps(az, bx, a._mm256_mul_ps(ax, bz)),
+                f._mm256_fmsub_ps(ax, by, a._mm256_mul_ps(ay, bx)),
+            )
+        };
+        let (cx, cy, cz) = cross(rx, ry, rz, px, py, pz);
+        let (ux, uy, uz) = (
+            a._mm256_add_ps(cx, dx),
+            a._mm256_add_ps(cy, dy),
+            a._mm256_add_ps(cz, dz),
+        );
+        let (vx, vy, vz) = cross(rx, ry, rz, ux, uy, uz);
+        let tx = f._mm256_fnmadd_ps(dw, rx, f._mm256_fmadd_ps(rw, ux, vx));
+        let ty = f._mm256_fnmadd_ps(dw, ry, f._mm256_fmadd_ps(rw, uy, vy));
+        let tz = f._mm256_fnmadd_ps(dw, rz, f._mm256_fmadd_ps(rw, uz, vz));
+        let ox = cast::<__m256, [f32; 8]>(f._mm256_fmadd_ps(tx, s, px));
+        let oy = cast::<__m256, [f32; 8]>(f._mm256_fmadd_ps(ty, s, py));
+        let oz = cast::<__m256, [f32; 8]>(f._mm256_fmadd_ps(tz, s, pz));
+        for (l, o) in o.iter_mut().enumerate() {
+            *o = Vec3::new(ox[l], oy[l], oz[l]);
+        }
+    }
+
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     pub(super) fn dqs_fixed<const W: usize, const SCALE: bool, H: Hemisphere>(
@@ -267,9 +341,7 @@ mod x86 {
         rest: &[Vec3],
         out: &mut [Vec3],
     ) -> usize {
-        let (a, f) = (simd.avx, simd.fma);
-        let min_n2 = a._mm256_set1_ps(MIN_REAL_LENGTH * MIN_REAL_LENGTH);
-        let two = a._mm256_set1_ps(2.0);
+        let zero = simd.avx._mm256_setzero_ps();
         let mut done = 0;
         for (((j, w), r), o) in joints
             .chunks_exact(8 * W)
@@ -277,72 +349,56 @@ mod x86 {
             .zip(rest.chunks_exact(8))
             .zip(out.chunks_exact_mut(8))
         {
-            let mut dq = [a._mm256_setzero_ps(); 8];
-            let mut sc = [a._mm256_setzero_ps(); 8];
+            let (Ok(r), Ok(o)) = (<&[Vec3; 8]>::try_from(r), <&mut [Vec3; 8]>::try_from(o)) else {
+                break;
+            };
+            let mut dq = [zero; 8];
+            let mut sc = [zero; 8];
             for l in 0..8 {
                 let s = l * W..(l + 1) * W;
-                let [d, c] = dq_blend::<W, SCALE, H>(simd, frame, h, &j[s.clone()], &w[s]);
-                dq[l] = d;
-                sc[l] = c;
+                [dq[l], sc[l]] = dq_blend::<SCALE, H>(simd, frame, h, &j[s.clone()], &w[s]);
             }
-            // Structure of arrays: one register per component, one lane per vertex.
-            let [rx, ry, rz, rw, dx, dy, dz, dw] = transpose8(simd, dq);
-            let lanes = |c: fn(&Vec3) -> f32| {
-                cast::<[f32; 8], __m256>([
-                    c(&r[0]),
-                    c(&r[1]),
-                    c(&r[2]),
-                    c(&r[3]),
-                    c(&r[4]),
-                    c(&r[5]),
-                    c(&r[6]),
-                    c(&r[7]),
-                ])
+            dq_apply8::<SCALE>(simd, dq, sc, r, o);
+            done += 8;
+        }
+        done
+    }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn dqs_sparse<const SCALE: bool, H: Hemisphere>(
+        simd: V3,
+        frame: &Frame<'_>,
+        h: H,
+        offsets: &[u32],
+        base: usize,
+        joints: &[u32],
+        weights: &[f32],
+        rest: &[Vec3],
+        out: &mut [Vec3],
+    ) -> usize {
+        let zero = simd.avx._mm256_setzero_ps();
+        let mut done = 0;
+        for ((offs, r), o) in offsets
+            .chunks_exact(8)
+            .zip(offsets.get(1..).unwrap_or_default().chunks_exact(8))
+            .zip(rest.chunks_exact(8))
+            .zip(out.chunks_exact_mut(8))
+            .map(|(((a, b), r), o)| ((a.iter().zip(b), r), o))
+        {
+            let (Ok(r), Ok(o)) = (<&[Vec3; 8]>::try_from(r), <&mut [Vec3; 8]>::try_from(o)) else {
+                break;
             };
-            let (mut px, mut py, mut pz) = (lanes(|p| p.x), lanes(|p| p.y), lanes(|p| p.z));
-            if SCALE {
-                // Σ wₖ Sₖ p with S symmetric: diag (d0, d1, d2), off (xy, xz, yz).
-                let [d0, d1, d2, _, oxy, oxz, oyz, _] = transpose8(simd, sc);
-                let sx =
-                    f._mm256_fmadd_ps(oxz, pz, f._mm256_fmadd_ps(oxy, py, a._mm256_mul_ps(d0, px)));
-                let sy =
-                    f._mm256_fmadd_ps(oyz, pz, f._mm256_fmadd_ps(d1, py, a._mm256_mul_ps(oxy, px)));
-                let sz =
-                    f._mm256_fmadd_ps(d2, pz, f._mm256_fmadd_ps(oyz, py, a._mm256_mul_ps(oxz, px)));
-                (px, py, pz) = (sx, sy, sz);
+            let mut dq = [zero; 8];
+            let mut sc = [zero; 8];
+            for (l, (&a, &b)) in offs.enumerate() {
+                let range = a as usize - base..b as usize - base;
+                let (Some(j), Some(w)) = (joints.get(range.clone()), weights.get(range)) else {
+                    continue;
+                };
+                [dq[l], sc[l]] = dq_blend::<SCALE, H>(simd, frame, h, j, w);
             }
-            // As `dqs::apply4`: p + (rw u + r × u − dw r) · 2/|r|², u = r × p + d; a blend
-            // with |r| below the threshold (or NaN) leaves p.
-            let n2 = f._mm256_fmadd_ps(
-                rw,
-                rw,
-                f._mm256_fmadd_ps(rz, rz, f._mm256_fmadd_ps(ry, ry, a._mm256_mul_ps(rx, rx))),
-            );
-            let valid = a._mm256_cmp_ps::<29>(n2, min_n2); // _CMP_GE_OQ
-            let s = a._mm256_and_ps(valid, a._mm256_div_ps(two, n2));
-            let cross = |ax, ay, az, bx, by, bz| {
-                (
-                    f._mm256_fmsub_ps(ay, bz, a._mm256_mul_ps(az, by)),
-                    f._mm256_fmsub_ps(az, bx, a._mm256_mul_ps(ax, bz)),
-                    f._mm256_fmsub_ps(ax, by, a._mm256_mul_ps(ay, bx)),
-                )
-            };
-            let (cx, cy, cz) = cross(rx, ry, rz, px, py, pz);
-            let (ux, uy, uz) = (
-                a._mm256_add_ps(cx, dx),
-                a._mm256_add_ps(cy, dy),
-                a._mm256_add_ps(cz, dz),
-            );
-            let (vx, vy, vz) = cross(rx, ry, rz, ux, uy, uz);
-            let tx = f._mm256_fnmadd_ps(dw, rx, f._mm256_fmadd_ps(rw, ux, vx));
-            let ty = f._mm256_fnmadd_ps(dw, ry, f._mm256_fmadd_ps(rw, uy, vy));
-            let tz = f._mm256_fnmadd_ps(dw, rz, f._mm256_fmadd_ps(rw, uz, vz));
-            let ox = cast::<__m256, [f32; 8]>(f._mm256_fmadd_ps(tx, s, px));
-            let oy = cast::<__m256, [f32; 8]>(f._mm256_fmadd_ps(ty, s, py));
-            let oz = cast::<__m256, [f32; 8]>(f._mm256_fmadd_ps(tz, s, pz));
-            for (l, o) in o.iter_mut().enumerate() {
-                *o = Vec3::new(ox[l], oy[l], oz[l]);
-            }
+            dq_apply8::<SCALE>(simd, dq, sc, r, o);
             done += 8;
         }
         done
@@ -370,6 +426,38 @@ pub(crate) fn dqs_fixed<const W: usize, const SCALE: bool, H: Hemisphere>(
         );
     }
     let _ = (frame, h, joints, weights, rest, out);
+    0
+}
+
+/// DQS of the leading blocks of eight vertices of a sparse (CSR) chunk, as
+/// `dqs::skin_sparse` (`offsets` has one more entry than `rest` and indexes the full
+/// arrays, of which `joints`/`weights` start at `base`; each row's pivot first; the point
+/// scaled by the blended scale/shear when `SCALE`). Returns how many vertices it skinned (a
+/// multiple of 8; 0 without AVX2 + FMA); the caller skins the rest.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn dqs_sparse<const SCALE: bool, H: Hemisphere>(
+    frame: &Frame<'_>,
+    h: H,
+    offsets: &[u32],
+    base: usize,
+    joints: &[u32],
+    weights: &[f32],
+    rest: &[Vec3],
+    out: &mut [Vec3],
+) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = x86::V3::try_new().filter(|_| enabled()) {
+        return simd.vectorize(
+            #[inline(always)]
+            || {
+                x86::dqs_sparse::<SCALE, H>(
+                    simd, frame, h, offsets, base, joints, weights, rest, out,
+                )
+            },
+        );
+    }
+    let _ = (frame, h, offsets, base, joints, weights, rest, out);
     0
 }
 
