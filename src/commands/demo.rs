@@ -347,16 +347,22 @@ fn demo_pictures(
         ..RenderOptions::default()
     };
     let mut written = Vec::new();
-    for (clip, markers) in [
-        ("wave", None),
-        ("reach", Some(reach_targets as &dyn rigport_render::Markers)),
+    // The reach goes forward as much as up: seen from the front it would hardly move.
+    for (clip, markers, view) in [
+        ("wave", None, View::Front),
+        (
+            "reach",
+            Some(reach_targets as &dyn rigport_render::Markers),
+            View::ThreeQuarter,
+        ),
     ] {
         let path = dir.join(format!("{clip}.png"));
-        let bytes = rigport_render::render_clip_png(asset, Some(clip), markers, &sheet)
+        let options = RenderOptions { view, ..sheet };
+        let bytes = rigport_render::render_clip_png(asset, Some(clip), markers, &options)
             .with_context(|| format!("cannot render the demo's {clip:?} clip (a rigport bug)"))?;
         write(&path, &bytes)?;
         let extra = if markers.is_some() {
-            ", IK targets as magenta crosshairs"
+            ", three-quarter view, IK targets as magenta crosshairs"
         } else {
             ""
         };
