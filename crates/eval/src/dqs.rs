@@ -469,7 +469,9 @@ fn sign_of(q: Vec4, pivot: Vec4) -> f32 {
 pub(crate) struct Frame<'a> {
     pub(crate) dq: &'a [JointDq],
     normal_scale: &'a [Sym3],
-    has_scale: bool,
+    /// Does any joint have scale or shear (then points are scaled by the blended
+    /// scale/shear before the rigid part)?
+    pub(crate) has_scale: bool,
     aligned: bool,
     signs: Option<&'a [f32]>,
 }
@@ -817,15 +819,16 @@ pub(crate) fn skin_sparse(
 ) {
     // With AVX2 + FMA, blocks of eight vertices go through the SIMD kernel; the rest (or
     // everything, on other CPUs) through the portable loop below.
+    use crate::simd::dqs_sparse as simd;
     let done = match (frame.aligned, frame.signs) {
-        (true, _) => simd_sparse(frame, Aligned, offsets, base, joints, weights, rest, out),
+        (true, _) => simd(frame, Aligned, offsets, base, joints, weights, rest, out),
         (false, Some(signs)) => {
             let h = table(signs, frame);
-            simd_sparse(frame, h, offsets, base, joints, weights, rest, out)
+            simd(frame, h, offsets, base, joints, weights, rest, out)
         }
         (false, None) => {
             let h = Dot { pivot: Vec4::ZERO };
-            simd_sparse(frame, h, offsets, base, joints, weights, rest, out)
+            simd(frame, h, offsets, base, joints, weights, rest, out)
         }
     };
     let (offsets, rest, out) = (&offsets[done..], &rest[done..], &mut out[done..]);
@@ -861,25 +864,6 @@ pub(crate) fn skin_sparse(
         }
         let scaled = if frame.has_scale { s.mul_vec3a(pv) } else { pv };
         *o = Vec3::from(apply(real, dual, scaled));
-    }
-}
-
-/// [`crate::simd::dqs_sparse`] with the frame's scale flag.
-#[allow(clippy::too_many_arguments)]
-fn simd_sparse<H: Hemisphere>(
-    frame: &Frame<'_>,
-    h: H,
-    offsets: &[u32],
-    base: usize,
-    joints: &[u32],
-    weights: &[f32],
-    rest: &[Vec3],
-    out: &mut [Vec3],
-) -> usize {
-    if frame.has_scale {
-        crate::simd::dqs_sparse::<true, H>(frame, h, offsets, base, joints, weights, rest, out)
-    } else {
-        crate::simd::dqs_sparse::<false, H>(frame, h, offsets, base, joints, weights, rest, out)
     }
 }
 

@@ -432,11 +432,11 @@ pub(crate) fn dqs_fixed<const W: usize, const SCALE: bool, H: Hemisphere>(
 /// DQS of the leading blocks of eight vertices of a sparse (CSR) chunk, as
 /// `dqs::skin_sparse` (`offsets` has one more entry than `rest` and indexes the full
 /// arrays, of which `joints`/`weights` start at `base`; each row's pivot first; the point
-/// scaled by the blended scale/shear when `SCALE`). Returns how many vertices it skinned (a
-/// multiple of 8; 0 without AVX2 + FMA); the caller skins the rest.
+/// scaled by the blended scale/shear when the frame has joint scale). Returns how many
+/// vertices it skinned (a multiple of 8; 0 without AVX2 + FMA); the caller skins the rest.
 #[inline]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn dqs_sparse<const SCALE: bool, H: Hemisphere>(
+pub(crate) fn dqs_sparse<H: Hemisphere>(
     frame: &Frame<'_>,
     h: H,
     offsets: &[u32],
@@ -451,9 +451,15 @@ pub(crate) fn dqs_sparse<const SCALE: bool, H: Hemisphere>(
         return simd.vectorize(
             #[inline(always)]
             || {
-                x86::dqs_sparse::<SCALE, H>(
-                    simd, frame, h, offsets, base, joints, weights, rest, out,
-                )
+                if frame.has_scale {
+                    x86::dqs_sparse::<true, H>(
+                        simd, frame, h, offsets, base, joints, weights, rest, out,
+                    )
+                } else {
+                    x86::dqs_sparse::<false, H>(
+                        simd, frame, h, offsets, base, joints, weights, rest, out,
+                    )
+                }
             },
         );
     }
