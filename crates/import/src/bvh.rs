@@ -1064,16 +1064,6 @@ impl<'a> Parser<'a, '_> {
         }
 
         let channels = self.channel_total;
-        let location = |line: usize| format!("{}:{line}", path.display());
-        // Reserve for the declared frames, but never more than the rest of the file can
-        // hold (each value takes at least 2 bytes), so a huge `Frames:` cannot exhaust memory.
-        let capacity = frames_declared
-            .saturating_mul(channels)
-            .min(rest.len() / 2 + 1);
-        let mut values: Vec<f32> = Vec::with_capacity(capacity);
-        // Frames of no values are blank lines: with no channels there is nothing to read,
-        // and any text after the header is an extra line.
-        let mut frame_count = if channels == 0 { frames_declared } else { 0 };
         // Large, well-formed motion is read on two threads; anything unusual (a bad or
         // cut-off line, a frame count other than declared) takes the line-by-line path
         // below, which reports it.
@@ -1090,6 +1080,16 @@ impl<'a> Parser<'a, '_> {
                 values,
             });
         }
+        let location = |line: usize| format!("{}:{line}", path.display());
+        // Reserve for the declared frames, but never more than the rest of the file can
+        // hold (each value takes at least 2 bytes), so a huge `Frames:` cannot exhaust memory.
+        let capacity = frames_declared
+            .saturating_mul(channels)
+            .min(rest.len() / 2 + 1);
+        let mut values: Vec<f32> = Vec::with_capacity(capacity);
+        // Frames of no values are blank lines: with no channels there is nothing to read,
+        // and any text after the header is an extra line.
+        let mut frame_count = if channels == 0 { frames_declared } else { 0 };
         let mut cut_off_line = None;
         let mut last_data_line = line_no;
         while frame_count < frames_declared {
