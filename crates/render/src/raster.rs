@@ -177,23 +177,7 @@ impl Framebuffer {
     /// Draws a filled disc of `radius` pixels centred at `c` (screen space) on top of
     /// everything, ignoring depth.
     pub fn disc(&mut self, c: [f32; 2], radius: f32, color: Rgba) {
-        if !(c[0].is_finite() && c[1].is_finite() && radius.is_finite()) {
-            return;
-        }
-        let r = radius.clamp(0.0, 1e4);
-        let x0 = (c[0] - r).floor() as i64;
-        let x1 = (c[0] + r).ceil() as i64;
-        let y0 = (c[1] - r).floor() as i64;
-        let y1 = (c[1] + r).ceil() as i64;
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                let dx = x as f32 + 0.5 - c[0];
-                let dy = y as f32 + 0.5 - c[1];
-                if dx * dx + dy * dy <= r * r {
-                    self.put(x, y, color);
-                }
-            }
-        }
+        self.ring(c, 0.0, radius, color);
     }
 
     /// Draws the ring of pixels whose centres lie between `inner` and `outer` pixels from `c`
