@@ -10,7 +10,7 @@
 # Input: the Pinocchio "human_model1" rig from the shared corpus,
 #   ../shared/corpus/1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/
 # (override the folder with RIGPORT_BENCH_MODEL_DIR; RIGPORT_BENCH_BIN=path
-# times that rigport binary instead of building target/release/rigport).
+# times that rigport binary instead of building target/dist/rigport).
 #
 # Installs nothing. Needs: cargo, python3 (reads hyperfine's JSON), and
 #   assimp    Debian package assimp-utils
@@ -75,14 +75,14 @@ BONES="$(grep -c . "$SKEL" || true)"
 
 # ------------------------------------------------------------------ build
 TARGET_DIR="${CARGO_TARGET_DIR:-$ROOT/target}"
-RIGPORT="$TARGET_DIR/release/rigport"
+RIGPORT="$TARGET_DIR/dist/rigport"
 if [[ -n "${RIGPORT_BENCH_BIN:-}" ]]; then
   RIGPORT="$(cd "$(dirname "$RIGPORT_BENCH_BIN")" && pwd)/$(basename "$RIGPORT_BENCH_BIN")"
   [[ -x "$RIGPORT" ]] || { say "RIGPORT_BENCH_BIN=$RIGPORT_BENCH_BIN is not an executable"; exit 2; }
   say "using RIGPORT_BENCH_BIN=$RIGPORT (no cargo build)"
 elif (( ! ASSIMP_ONLY )); then
-  say "cargo build --release --bin rigport"
-  cargo build --release --bin rigport >&2
+  say "cargo build --profile dist --bin rigport"
+  cargo build --profile dist --bin rigport >&2
   [[ -x "$RIGPORT" ]] || { say "built, but no binary at $RIGPORT (CARGO_TARGET_DIR?)"; exit 2; }
 fi
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Peer comparison robust to machine drift: rigport vs Assimp, runs interleaved.
 
-    python3 benches/compare_assimp_interleaved.py [--case model1|bvh|asf] [--pairs N] [--bin target/release/rigport]
+    python3 benches/compare_assimp_interleaved.py [--case model1|bvh|asf] [--pairs N] [--bin target/dist/rigport]
 
 hyperfine (benches/compare_assimp.sh) times all runs of one command, then all of the other;
 on a shared VM the load drifts between the two blocks and the ratio swings (0.24x to 0.46x
@@ -14,7 +14,7 @@ Cases (inputs under ../shared/corpus):
   bvh     the largest corpus BVH (Bandai Namco kick, 443 KB) -> .glb; Assimp reads the BVH.
   asf     131-dance.asf + 131_04-dance.amc -> .glb; Assimp has no ASF/AMC reader, so its
           column times the BVH case instead and only rigport's median is meaningful.
-Needs: a release build of rigport and `assimp` (Debian assimp-utils). Exit 2 if missing.
+Needs: the dist build of rigport (cargo build --profile dist) and `assimp` (Debian assimp-utils). Exit 2 if missing.
 """
 import argparse
 import os
@@ -49,10 +49,10 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=120)
     ap.add_argument("--case", default="model1", choices=["model1", "bvh", "asf"])
-    ap.add_argument("--bin", default=os.path.join(ROOT, "target/release/rigport"))
+    ap.add_argument("--bin", default=os.path.join(ROOT, "target/dist/rigport"))
     args = ap.parse_args()
     if not os.path.exists(args.bin):
-        print(f"compare: {args.bin} missing: run cargo build --release", file=sys.stderr)
+        print(f"compare: {args.bin} missing: run cargo build --profile dist", file=sys.stderr)
         return 2
     if shutil.which("assimp") is None:
         print("compare: assimp missing: apt-get install -y assimp-utils", file=sys.stderr)

@@ -10,15 +10,15 @@
 # (both arms rise sideways and come back down, the demo's clip slowed down), then times
 #   rigport render arms.glb --fps 25 --frames 0..100 --size 512x512 -o arms.gif
 # (100 frames: LBS, skeleton overlay, frame counter) with hyperfine, and prints the GIF's
-# size and frame count. Needs a release build (cargo build --release) and hyperfine
+# size and frame count. Needs the dist build (cargo build --profile dist) and hyperfine
 # (Debian package `hyperfine`). Exit 2 when something is missing.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="${RIGPORT_BIN:-$ROOT/target/release/rigport}"
+BIN="${RIGPORT_BIN:-$ROOT/target/dist/rigport}"
 RUNS=10
 if [[ "${1:-}" == "--runs" ]]; then RUNS="$2"; fi
 MODEL="$ROOT/../shared/corpus/1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1"
-[[ -x "$BIN" ]] || { echo "render_gif: $BIN missing: run cargo build --release" >&2; exit 2; }
+[[ -x "$BIN" ]] || { echo "render_gif: $BIN missing: run cargo build --profile dist" >&2; exit 2; }
 command -v hyperfine >/dev/null || { echo "render_gif: hyperfine missing: apt-get install -y hyperfine" >&2; exit 2; }
 [[ -f "$MODEL/Model1.obj" ]] || { echo "render_gif: corpus rig $MODEL missing" >&2; exit 2; }
 

@@ -6,7 +6,11 @@
 #  3. Rust tests             cargo nextest run --workspace (cargo test if no nextest)
 #  4. doctests               cargo test --doc --workspace (with nextest only)
 #  5. USD smoke              tools/.venv/bin/python tools/usd_smoke.py
-# then a summary. Steps 3-5 all run even if one fails; the exit status is 0
+#  6. rustfmt                cargo fmt --all -- --check
+#  7. clippy                 cargo clippy --workspace --all-targets --locked -- -D warnings
+#  8. output hashes          tools/output_hashes.sh (the demo and every corpus conversion
+#                            hash as recorded in tools/output_hashes.txt)
+# then a summary. Steps 3-8 all run even if one fails; the exit status is 0
 # only if every step passed.
 #
 # The Rust tests see:
@@ -216,5 +220,41 @@ if "$RIGPORT_PYTHON" tools/usd_smoke.py; then
   record "$CURRENT_STEP" PASS "$((SECONDS - t0))" "pxr.Usd, pxr.UsdSkel, numpy import; skeleton round-trips"
 else
   record "$CURRENT_STEP" FAIL "$((SECONDS - t0))"
+fi
+
+# ---------------------------------------------------------------- 6 rustfmt
+CURRENT_STEP="rustfmt (cargo fmt --check)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+if cargo fmt --all -- --check; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "run cargo fmt --all"
+fi
+
+# ----------------------------------------------------------------- 7 clippy
+CURRENT_STEP="clippy (-D warnings, $PROFILE)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+if cargo clippy --workspace --all-targets --locked "${PROFILE_ARGS[@]}" -- -D warnings; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))"
+fi
+
+# ---------------------------------------------------------- 8 output hashes
+# What rigport writes for the demo and the corpus is recorded in tools/output_hashes.txt;
+# a change that means to alter output updates that file in the same commit. Uses the test
+# profile's binary: dev and release write the same bytes (no fast-math; checked by running
+# the script with both), and CI then builds no release binary.
+CURRENT_STEP="output hashes (tools/output_hashes.sh, $PROFILE)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+BIN_DIR="$( [[ "$PROFILE" == release ]] && echo release || echo debug)"
+if cargo build --locked "${PROFILE_ARGS[@]}" --bin rigport \
+  && RIGPORT_BIN="${CARGO_TARGET_DIR:-$ROOT/target}/$BIN_DIR/rigport" bash tools/output_hashes.sh; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "outputs differ from tools/output_hashes.txt"
 fi
 # The EXIT trap prints the summary and sets the exit status.
