@@ -14,6 +14,7 @@ pub mod fk;
 pub mod ik;
 pub mod pose;
 pub mod reduce;
+pub mod refit;
 pub mod retime;
 pub mod rig;
 pub mod sample;

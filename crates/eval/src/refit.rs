@@ -1,0 +1,708 @@
+//! Influence refit: fewer influences per vertex that keep the deformation.
+//!
+//! glTF viewers skin with 4 influences per vertex (three.js, model-viewer, Filament, Bevy
+//! and Unity read only `JOINTS_0`/`WEIGHTS_0`), and Pinocchio or CSCI 520 rigs carry up to
+//! 18. Keeping the largest K weights and renormalizing (what Blender, gltfpack,
+//! glTF-Transform and Assimp do) changes the deformation wherever the dropped weights
+//! mattered. [`RefitJob`] instead chooses, per vertex, at most K of its original influences
+//! and weights `w >= 0`, `sum w = 1`, that minimise the squared distance between the
+//! K-influence linear blend and the full-weight linear blend over a set of poses
+//! (Kavan et al. 2010, "Fast and Efficient Skinning of Animated Meshes", and Le & Deng
+//! 2012, "Smooth Skinning Decomposition with Rigid Bones", solve the same per-vertex
+//! constrained least squares when they fit weights to poses).
+//!
+//! # The problem per vertex
+//! With `a_pi = M_p[j_i] · x` (the vertex moved by influence `i`'s skinning matrix in pose
+//! `p`) and `y_p = Σ w_i a_pi` (the full-weight result), any weights summing to 1 give the
+//! error `Σ_p |Σ_i c_i (a_pi - y_p)|² = cᵀ H c` with `H = Σ_p D_pᵀ D_p`, `D_p` the 3 x n
+//! matrix of columns `a_pi - y_p`. The bind pose (every skinning matrix the identity) has
+//! `a_pi = x` for every `i`, so **any** convex weights reproduce the bind shape exactly.
+//!
+//! rigport minimises `cᵀ H c + ε |c - t|²` over the simplex `{c >= 0, Σ c = 1}` by a
+//! primal active-set method (KKT systems of at most 19 unknowns, `f64`), where `t` is the
+//! truncated-and-renormalized row and `ε = 1e-9 · trace(H) / n` a tiny ridge that makes `H`
+//! definite and breaks ties toward the truncation (joints that never move apart in the
+//! pose set). When more than K weights stay positive, the smallest is removed and the
+//! problem solved again (backward elimination). Finally the refit row is kept only if its
+//! error over the fit poses is no larger than the truncation's: the refit is never worse
+//! than truncation on the poses it was fitted to.
+//!
+//! # Pose sets
+//! [`RefitJob`] takes skinning matrices per pose from the caller: a clip's frames when the
+//! asset has clips, otherwise [`range_of_motion`] (documented there). Held-out poses (a
+//! different seed) measure how well a refit generalizes.
+
+use std::num::NonZeroUsize;
+
+use glam::{DMat4, DVec3, Mat4, Quat, Vec3};
+use rayon::prelude::*;
+use rigport_model::{Influence, Influences, Skeleton, Transform};
+
+use crate::{EvalError, Pose};
+
+/// Largest number of influences per vertex the refit solves for (Pinocchio rigs carry up to
+/// 21 bones, CSCI 520 rigs up to 18 weights per vertex); rows with more are first cut to
+/// the largest ones.
+pub const MAX_CANDIDATES: usize = 24;
+
+/// How far a set of weights deforms away from the full-weight linear blend over a pose set.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Deviation {
+    /// Largest distance of any vertex in any pose, in the mesh's length unit.
+    pub max: f64,
+    /// Root mean square over all vertices and poses.
+    pub rms: f64,
+}
+
+/// Fits at most `max_influences` influences per vertex to the full-weight deformation over
+/// a set of poses. Parallel over vertices (rayon; the caller's pool).
+pub struct RefitJob<'a> {
+    /// Bind-space positions, one per vertex (what the skinning matrices apply to).
+    pub positions: &'a [Vec3],
+    /// The full influences, one row per vertex, indexing the palette.
+    pub influences: &'a Influences,
+    /// Skinning matrices (`model · inv_bind`) of every pose, `palette_len` per pose, pose
+    /// after pose.
+    pub pose_matrices: &'a [Mat4],
+    /// Palette length (matrices per pose).
+    pub palette_len: usize,
+    /// K: the most influences a vertex may keep.
+    pub max_influences: NonZeroUsize,
+}
+
+/// What [`RefitJob::run`] returns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Refit {
+    /// At most K influences per vertex, non-negative, summing to 1 (in `f64`, then rounded
+    /// to `f32`), sorted by decreasing weight.
+    pub influences: Influences,
+    /// Vertices whose refit row differs from the truncated one.
+    pub changed: usize,
+}
+
+impl RefitJob<'_> {
+    /// Checks sizes and indices.
+    ///
+    /// # Errors
+    /// [`EvalError::Length`] when the positions and influences disagree or the matrices do
+    /// not fill whole poses; [`EvalError::Index`] for an influence outside the palette;
+    pub fn validate(&self) -> Result<(), EvalError> {
+        if self.influences.vertex_count() != self.positions.len() {
+            return Err(EvalError::Length {
+                what: "refit influences",
+                expected: self.positions.len(),
+                found: self.influences.vertex_count(),
+            });
+        }
+        if self.palette_len == 0 || self.pose_matrices.len() % self.palette_len != 0 {
+            return Err(EvalError::Length {
+                what: "refit pose matrices (whole poses)",
+                expected: self.palette_len,
+                found: self.pose_matrices.len(),
+            });
+        }
+        if let Some(i) = self
+            .influences
+            .entries()
+            .iter()
+            .find(|i| i.joint as usize >= self.palette_len)
+        {
+            return Err(EvalError::Index {
+                what: "refit influence joint",
+                index: i.joint as usize,
+            });
+        }
+        Ok(())
+    }
+
+    /// Runs the refit.
+    ///
+    /// # Errors
+    /// As [`RefitJob::validate`].
+    pub fn run(&self) -> Result<Refit, EvalError> {
+        self.validate()?;
+        let poses: Vec<DMat4> = self.pose_matrices.iter().map(|m| m.as_dmat4()).collect();
+        let k = self.max_influences.get();
+        let rows: Vec<(Vec<Influence>, bool)> = (0..self.positions.len())
+            .into_par_iter()
+            .with_min_len(64)
+            .map(|v| {
+                refit_row(
+                    self.positions[v].as_dvec3(),
+                    self.influences.vertex(v),
+                    &poses,
+                    self.palette_len,
+                    k,
+                )
+            })
+            .collect();
+        let changed = rows.iter().filter(|(_, c)| *c).count();
+        Ok(Refit {
+            influences: Influences::from_rows(rows.into_iter().map(|(r, _)| r)),
+            changed,
+        })
+    }
+}
+
+/// The largest `k` weights of a row (ties: lower joint first), renormalized in `f64`.
+pub fn truncate_row(row: &[Influence], k: usize) -> Vec<Influence> {
+    let mut sorted: Vec<Influence> = row.iter().copied().filter(|i| i.weight > 0.0).collect();
+    sorted.sort_by(|a, b| b.weight.total_cmp(&a.weight).then(a.joint.cmp(&b.joint)));
+    sorted.truncate(k);
+    let sum: f64 = sorted.iter().map(|i| f64::from(i.weight)).sum();
+    if sum > 0.0 {
+        for i in &mut sorted {
+            i.weight = (f64::from(i.weight) / sum) as f32;
+        }
+    }
+    sorted
+}
+
+/// Refits one row; returns it and whether it differs from the truncation.
+fn refit_row(
+    x: DVec3,
+    row: &[Influence],
+    poses: &[DMat4],
+    palette_len: usize,
+    k: usize,
+) -> (Vec<Influence>, bool) {
+    let truncated = truncate_row(row, k);
+    let mut cand: Vec<Influence> = row.iter().copied().filter(|i| i.weight > 0.0).collect();
+    if cand.len() <= k {
+        return (truncated, false);
+    }
+    cand.sort_by(|a, b| b.weight.total_cmp(&a.weight).then(a.joint.cmp(&b.joint)));
+    cand.truncate(MAX_CANDIDATES);
+    let n = cand.len();
+    let total: f64 = cand.iter().map(|i| f64::from(i.weight)).sum();
+    let w: Vec<f64> = cand.iter().map(|i| f64::from(i.weight) / total).collect();
+    // H = Σ_p D_pᵀ D_p with D_p's columns a_pi - y_p.
+    let mut h = vec![0.0f64; n * n];
+    let mut d = vec![DVec3::ZERO; n];
+    for pose in poses.chunks_exact(palette_len) {
+        let mut y = DVec3::ZERO;
+        for (i, inf) in cand.iter().enumerate() {
+            d[i] = pose[inf.joint as usize].transform_point3(x);
+            y += w[i] * d[i];
+        }
+        for di in &mut d {
+            *di -= y;
+        }
+        for i in 0..n {
+            for j in i..n {
+                h[i * n + j] += d[i].dot(d[j]);
+            }
+        }
+    }
+    for i in 0..n {
+        for j in 0..i {
+            h[i * n + j] = h[j * n + i];
+        }
+    }
+    // The truncation as a point of the simplex over the candidates.
+    let mut t = vec![0.0; n];
+    for ti in &truncated {
+        if let Some(i) = cand.iter().position(|c| c.joint == ti.joint) {
+            t[i] = f64::from(ti.weight);
+        }
+    }
+    let error = |c: &[f64]| -> f64 {
+        let mut e = 0.0;
+        for i in 0..n {
+            if c[i] == 0.0 {
+                continue;
+            }
+            for j in 0..n {
+                e += c[i] * h[i * n + j] * c[j];
+            }
+        }
+        e
+    };
+    let trace: f64 = (0..n).map(|i| h[i * n + i]).sum();
+    if trace.is_nan() || trace <= 0.0 || !trace.is_finite() {
+        return (truncated, false); // no pose separates the influences
+    }
+    let eps = 1e-9 * trace / n as f64;
+    let mut hr = h.clone();
+    for i in 0..n {
+        hr[i * n + i] += eps;
+    }
+    let f: Vec<f64> = t.iter().map(|ti| eps * ti).collect();
+    let mut allowed = vec![true; n];
+    let mut c = simplex_qp(&hr, &f, &allowed, &t, n);
+    loop {
+        let support: Vec<usize> = (0..n).filter(|&i| c[i] > 0.0).collect();
+        if support.len() <= k {
+            break;
+        }
+        let smallest = support
+            .iter()
+            .copied()
+            .min_by(|&a, &b| c[a].total_cmp(&c[b]))
+            .unwrap_or(0);
+        allowed[smallest] = false;
+        let removed = c[smallest];
+        c[smallest] = 0.0;
+        let rest = 1.0 - removed;
+        if rest > 0.0 {
+            c.iter_mut().for_each(|ci| *ci /= rest);
+        }
+        c = simplex_qp(&hr, &f, &allowed, &c, n);
+    }
+    if error(&c) > error(&t) {
+        return (truncated, false);
+    }
+    let mut out: Vec<Influence> = (0..n)
+        .filter(|&i| c[i] > 0.0)
+        .map(|i| Influence {
+            joint: cand[i].joint,
+            weight: c[i] as f32,
+        })
+        .collect();
+    out.sort_by(|a, b| b.weight.total_cmp(&a.weight).then(a.joint.cmp(&b.joint)));
+    let changed = out != truncated;
+    (out, changed)
+}
+
+/// Minimises `cᵀ H c - 2 fᵀ c` over `{c >= 0, Σ c = 1, c_i = 0 where !allowed[i]}` from the
+/// feasible point `start`, by a primal active-set method (Nocedal & Wright, "Numerical
+/// Optimization", 2nd ed., algorithm 16.3). `H` is symmetric positive definite (n x n, row
+/// major).
+fn simplex_qp(h: &[f64], f: &[f64], allowed: &[bool], start: &[f64], n: usize) -> Vec<f64> {
+    const TOL: f64 = 1e-14;
+    let mut c: Vec<f64> = (0..n)
+        .map(|i| if allowed[i] { start[i].max(0.0) } else { 0.0 })
+        .collect();
+    let sum: f64 = c.iter().sum();
+    if sum > 0.0 {
+        c.iter_mut().for_each(|ci| *ci /= sum);
+    } else if let Some(i) = (0..n).find(|&i| allowed[i]) {
+        c[i] = 1.0;
+    }
+    let mut free: Vec<bool> = (0..n).map(|i| c[i] > 0.0).collect();
+    let mut system = Vec::with_capacity((n + 1) * (n + 2));
+    for _ in 0..(4 * n + 20) {
+        let idx: Vec<usize> = (0..n).filter(|&i| free[i]).collect();
+        let Some(star) = solve_equality(h, f, &idx, n, &mut system) else {
+            break;
+        };
+        let mut full = vec![0.0; n];
+        for (slot, &i) in idx.iter().enumerate() {
+            full[i] = star.0[slot];
+        }
+        if idx.iter().all(|&i| full[i] >= 0.0) {
+            c = full;
+            // Multipliers of the variables held at zero: ν_i = 2((H c)_i - f_i + m).
+            let m = star.1;
+            let mut worst = None;
+            let mut worst_nu = -TOL;
+            for i in 0..n {
+                if free[i] || !allowed[i] {
+                    continue;
+                }
+                let hc: f64 = (0..n).map(|j| h[i * n + j] * c[j]).sum();
+                let nu = hc - f[i] + m;
+                if nu < worst_nu {
+                    worst_nu = nu;
+                    worst = Some(i);
+                }
+            }
+            match worst {
+                Some(i) => free[i] = true,
+                None => break,
+            }
+        } else {
+            // Step toward the equality solution until a weight reaches zero.
+            let mut alpha = 1.0f64;
+            let mut blocking = None;
+            for &i in &idx {
+                if full[i] < 0.0 && c[i] > full[i] {
+                    let a = c[i] / (c[i] - full[i]);
+                    if a < alpha {
+                        alpha = a;
+                        blocking = Some(i);
+                    }
+                }
+            }
+            for i in 0..n {
+                c[i] += alpha * (full[i] - c[i]);
+                if c[i] < 0.0 {
+                    c[i] = 0.0;
+                }
+            }
+            if let Some(b) = blocking {
+                c[b] = 0.0;
+                free[b] = false;
+            }
+            for i in 0..n {
+                if free[i] && c[i] <= 0.0 {
+                    free[i] = false;
+                    c[i] = 0.0;
+                }
+            }
+        }
+    }
+    let sum: f64 = c.iter().sum();
+    if sum > 0.0 {
+        c.iter_mut().for_each(|ci| *ci /= sum);
+    }
+    c
+}
+
+/// Solves `[H_FF 1; 1ᵀ 0] [c; m] = [f_F; 1]` for the free set `idx`; `None` if singular.
+fn solve_equality(
+    h: &[f64],
+    f: &[f64],
+    idx: &[usize],
+    n: usize,
+    a: &mut Vec<f64>,
+) -> Option<(Vec<f64>, f64)> {
+    let m = idx.len();
+    if m == 0 {
+        return None;
+    }
+    let size = m + 1;
+    let cols = size + 1;
+    a.clear();
+    a.resize(size * cols, 0.0);
+    for (r, &i) in idx.iter().enumerate() {
+        for (s, &j) in idx.iter().enumerate() {
+            a[r * cols + s] = h[i * n + j];
+        }
+        a[r * cols + m] = 1.0;
+        a[r * cols + size] = f[i];
+    }
+    for s in 0..m {
+        a[m * cols + s] = 1.0;
+    }
+    a[m * cols + size] = 1.0;
+    // Gaussian elimination with partial pivoting.
+    for col in 0..size {
+        let pivot = (col..size)
+            .max_by(|&x, &y| a[x * cols + col].abs().total_cmp(&a[y * cols + col].abs()))?;
+        if a[pivot * cols + col].abs() < 1e-300 {
+            return None;
+        }
+        if pivot != col {
+            for k in 0..cols {
+                a.swap(pivot * cols + k, col * cols + k);
+            }
+        }
+        let p = a[col * cols + col];
+        for row in (col + 1)..size {
+            let factor = a[row * cols + col] / p;
+            if factor != 0.0 {
+                for k in col..cols {
+                    a[row * cols + k] -= factor * a[col * cols + k];
+                }
+            }
+        }
+    }
+    let mut x = vec![0.0; size];
+    for row in (0..size).rev() {
+        let mut s = a[row * cols + size];
+        for k in (row + 1)..size {
+            s -= a[row * cols + k] * x[k];
+        }
+        x[row] = s / a[row * cols + row];
+    }
+    if x.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let mult = x[m];
+    x.truncate(m);
+    Some((x, mult))
+}
+
+/// The deviation of `influences` from `full` over the poses: per vertex and pose, the
+/// distance between the two linear blends.
+///
+/// # Errors
+/// As [`RefitJob::validate`] (for both influence sets).
+pub fn deviation(
+    positions: &[Vec3],
+    full: &Influences,
+    influences: &Influences,
+    pose_matrices: &[Mat4],
+    palette_len: usize,
+) -> Result<Deviation, EvalError> {
+    for inf in [full, influences] {
+        RefitJob {
+            positions,
+            influences: inf,
+            pose_matrices,
+            palette_len,
+            max_influences: NonZeroUsize::MIN,
+        }
+        .validate()?;
+    }
+    let poses: Vec<DMat4> = pose_matrices.iter().map(|m| m.as_dmat4()).collect();
+    let blend = |x: DVec3, row: &[Influence], pose: &[DMat4]| -> DVec3 {
+        row.iter()
+            .map(|i| f64::from(i.weight) * pose[i.joint as usize].transform_point3(x))
+            .sum()
+    };
+    let (max, sum_sq, count) = (0..positions.len())
+        .into_par_iter()
+        .with_min_len(64)
+        .map(|v| {
+            let x = positions[v].as_dvec3();
+            let (a, b) = (full.vertex(v), influences.vertex(v));
+            let mut max = 0.0f64;
+            let mut sum_sq = 0.0;
+            for pose in poses.chunks_exact(palette_len) {
+                let e = blend(x, a, pose).distance(blend(x, b, pose));
+                max = max.max(e);
+                sum_sq += e * e;
+            }
+            (max, sum_sq, poses.len() / palette_len)
+        })
+        .reduce(
+            || (0.0, 0.0, 0),
+            |a, b| (a.0.max(b.0), a.1 + b.1, a.2 + b.2),
+        );
+    Ok(Deviation {
+        max,
+        rms: if count > 0 {
+            (sum_sq / count as f64).sqrt()
+        } else {
+            0.0
+        },
+    })
+}
+
+/// A seeded range-of-motion pose set for a skeleton, for rigs without clips.
+///
+/// For every joint that has a parent: rotations of that joint alone, in its rest frame,
+/// by ±45° and ±90° about each of its three rest axes (12 poses per joint); then `random`
+/// poses in which `bent` joints (chosen at random among those with a parent) each turn by
+/// a random rotation of up to 90° about a random axis (uniform axis, angle uniform in
+/// [0, 90°]), the way an animator bends an elbow and a shoulder together. `seed` makes the
+/// random part repeatable: tests fit with one seed and measure with another.
+pub fn range_of_motion(skeleton: &Skeleton, random: usize, bent: usize, seed: u64) -> Vec<Pose> {
+    let rest = Pose::rest(skeleton);
+    let mut poses = Vec::new();
+    let angles = [45f32, -45.0, 90.0, -90.0];
+    for (j, joint) in skeleton.joints().iter().enumerate() {
+        if joint.parent.is_none() {
+            continue;
+        }
+        for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+            for angle in angles {
+                let mut pose = rest.clone();
+                rotate(
+                    &mut pose.local[j],
+                    Quat::from_axis_angle(axis, angle.to_radians()),
+                );
+                poses.push(pose);
+            }
+        }
+    }
+    let movable: Vec<usize> = (0..skeleton.len())
+        .filter(|&j| skeleton.joints()[j].parent.is_some())
+        .collect();
+    let mut rng = SplitMix64(seed);
+    for _ in 0..random {
+        let mut pose = rest.clone();
+        if movable.is_empty() {
+            poses.push(pose);
+            continue;
+        }
+        for _ in 0..bent {
+            let j = movable[(rng.next() % movable.len() as u64) as usize];
+            let axis = loop {
+                let v = Vec3::new(
+                    rng.unit() * 2.0 - 1.0,
+                    rng.unit() * 2.0 - 1.0,
+                    rng.unit() * 2.0 - 1.0,
+                );
+                let len = v.length();
+                if len > 1e-3 && len <= 1.0 {
+                    break v / len;
+                }
+            };
+            let angle = rng.unit() * 90f32.to_radians();
+            rotate(&mut pose.local[j], Quat::from_axis_angle(axis, angle));
+        }
+        poses.push(pose);
+    }
+    poses
+}
+
+fn rotate(local: &mut Transform, delta: Quat) {
+    local.rotation = (local.rotation * delta).normalize();
+}
+
+/// SplitMix64 (Steele, Lea & Flood 2014): a tiny, well-mixed generator; enough for
+/// repeatable pose sets without a dependency.
+struct SplitMix64(u64);
+
+impl SplitMix64 {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn inf(joint: u32, weight: f32) -> Influence {
+        Influence { joint, weight }
+    }
+
+    /// A chain of `n` joints along +X (one unit apart); a vertex influenced by all of them.
+    fn chain_poses(n: usize, poses: usize, seed: u64) -> Vec<Mat4> {
+        let mut rng = SplitMix64(seed);
+        let mut out = Vec::new();
+        for _ in 0..poses {
+            let mut world = Mat4::IDENTITY;
+            for j in 0..n {
+                let bind = Mat4::from_translation(Vec3::new(j as f32, 0.0, 0.0));
+                let local = if j == 0 {
+                    Mat4::IDENTITY
+                } else {
+                    let axis = Vec3::new(rng.unit(), rng.unit(), rng.unit()).normalize_or(Vec3::Z);
+                    Mat4::from_translation(Vec3::X)
+                        * Mat4::from_quat(Quat::from_axis_angle(axis, rng.unit()))
+                };
+                world *= local;
+                out.push(world * bind.inverse());
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn rows_with_k_or_fewer_influences_are_the_truncation() {
+        let infl = Influences::from_rows([vec![inf(0, 0.25), inf(1, 0.75)]]);
+        let r = RefitJob {
+            positions: &[Vec3::new(0.5, 0.1, 0.0)],
+            influences: &infl,
+            pose_matrices: &chain_poses(2, 8, 1),
+            palette_len: 2,
+            max_influences: NonZeroUsize::new(4).expect("4 > 0"),
+        }
+        .run()
+        .expect("valid");
+        assert_eq!(r.influences.vertex(0), &[inf(1, 0.75), inf(0, 0.25)]);
+        assert_eq!(r.changed, 0);
+    }
+
+    #[test]
+    fn refit_sums_to_one_keeps_k_and_beats_truncation_on_the_fit_set() {
+        let n = 8;
+        let mats = chain_poses(n, 40, 7);
+        let positions: Vec<Vec3> = (0..50)
+            .map(|i| Vec3::new(i as f32 * 0.14, 0.2 * ((i % 5) as f32 - 2.0), 0.1))
+            .collect();
+        let rows: Vec<Vec<Influence>> = positions
+            .iter()
+            .map(|p| {
+                let raw: Vec<f32> = (0..n)
+                    .map(|j| (-((p.x - j as f32).powi(2)) / 2.0).exp())
+                    .collect();
+                let s: f32 = raw.iter().sum();
+                raw.iter()
+                    .enumerate()
+                    .map(|(j, w)| inf(j as u32, w / s))
+                    .collect()
+            })
+            .collect();
+        let full = Influences::from_rows(rows.clone());
+        let job = RefitJob {
+            positions: &positions,
+            influences: &full,
+            pose_matrices: &mats,
+            palette_len: n,
+            max_influences: NonZeroUsize::new(2).expect("2 > 0"),
+        };
+        let refit = job.run().expect("valid");
+        let truncated = Influences::from_rows(rows.iter().map(|r| truncate_row(r, 2)));
+        for row in refit.influences.rows() {
+            assert!(row.len() <= 2 && !row.is_empty());
+            let s: f64 = row.iter().map(|i| f64::from(i.weight)).sum();
+            assert!((s - 1.0).abs() < 1e-6, "sum {s}");
+            assert!(row.iter().all(|i| i.weight >= 0.0));
+        }
+        let d_trunc = deviation(&positions, &full, &truncated, &mats, n).expect("valid");
+        let d_refit = deviation(&positions, &full, &refit.influences, &mats, n).expect("valid");
+        assert!(refit.changed > 0);
+        assert!(
+            d_refit.rms < 0.8 * d_trunc.rms,
+            "{d_refit:?} vs {d_trunc:?}"
+        );
+        // Bind pose: all identity -> every convex row reproduces the point.
+        let bind = vec![Mat4::IDENTITY; n];
+        let d_bind = deviation(&positions, &full, &refit.influences, &bind, n).expect("valid");
+        assert!(d_bind.max < 1e-6, "{d_bind:?}");
+    }
+
+    #[test]
+    fn simplex_qp_matches_brute_force_on_two_variables() {
+        // min (c0 - 0.8)² + (c1 - 0.8)²·4 on the simplex: c1 = 1 - c0.
+        let h = [1.0, 0.0, 0.0, 4.0];
+        let f = [0.8, 3.2];
+        let c = simplex_qp(&h, &f, &[true, true], &[0.5, 0.5], 2);
+        // d/dc0 of (c0-.8)² + 4(.2-c0)² = 0 -> c0 = (0.8 + 0.8) / 5 = 0.32
+        assert!(
+            (c[0] - 0.32).abs() < 1e-12 && (c[1] - 0.68).abs() < 1e-12,
+            "{c:?}"
+        );
+        // A bound: the unconstrained optimum is outside the simplex.
+        let c = simplex_qp(
+            &[1.0, 0.0, 0.0, 1.0],
+            &[2.0, -1.0],
+            &[true, true],
+            &[0.5, 0.5],
+            2,
+        );
+        assert_eq!(c, vec![1.0, 0.0]);
+    }
+
+    #[test]
+    fn validate_names_the_problem() {
+        let infl = Influences::from_rows([vec![inf(3, 1.0)]]);
+        let job = RefitJob {
+            positions: &[Vec3::ZERO],
+            influences: &infl,
+            pose_matrices: &[Mat4::IDENTITY; 2],
+            palette_len: 2,
+            max_influences: NonZeroUsize::new(4).expect("4 > 0"),
+        };
+        assert!(matches!(
+            job.validate(),
+            Err(EvalError::Index { index: 3, .. })
+        ));
+    }
+
+    #[test]
+    fn range_of_motion_is_seeded() {
+        let skeleton = Skeleton::new(vec![
+            rigport_model::Joint {
+                name: "a".into(),
+                parent: None,
+                rest_local: Transform::IDENTITY,
+            },
+            rigport_model::Joint {
+                name: "b".into(),
+                parent: Some(rigport_model::JointIndex(0)),
+                rest_local: Transform::IDENTITY,
+            },
+        ])
+        .expect("valid");
+        let a = range_of_motion(&skeleton, 5, 2, 1);
+        assert_eq!(a.len(), 12 + 5);
+        assert_eq!(a, range_of_motion(&skeleton, 5, 2, 1));
+        assert_ne!(a, range_of_motion(&skeleton, 5, 2, 2));
+    }
+}
