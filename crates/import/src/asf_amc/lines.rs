@@ -1,0 +1,198 @@
+//! Lines and tokens, shared by the ASF and AMC parsers: line splitting, comments, and
+//! errors with line and column.
+
+use std::path::Path;
+
+use glam::DVec3;
+use rigport_model::conventions::EulerOrder;
+
+use crate::{ImportError, Location};
+
+use super::types::Dof;
+
+/// The lines of a text with their 1-based numbers; LF, CRLF and a lone CR all end a line.
+pub(super) struct Lines<'a> {
+    rest: Option<&'a str>,
+    number: usize,
+}
+
+impl<'a> Lines<'a> {
+    pub(super) fn new(text: &'a str) -> Self {
+        Self {
+            rest: Some(text),
+            number: 0,
+        }
+    }
+}
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = (usize, &'a str);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let rest = self.rest?;
+        if rest.is_empty() && self.number > 0 {
+            // The text ends with a line break: there is no line after it.
+            self.rest = None;
+            return None;
+        }
+        let line = match rest.find(['\n', '\r']) {
+            Some(i) => {
+                let (line, tail) = rest.split_at(i);
+                let skip = if tail.starts_with("\r\n") { 2 } else { 1 };
+                self.rest = tail.get(skip..);
+                line
+            }
+            None => {
+                self.rest = None;
+                rest
+            }
+        };
+        self.number += 1;
+        Some((self.number, line))
+    }
+}
+
+/// The line without its comment and surrounding white space. A `#` starts a comment at the
+/// start of the line or after white space only (`-1.#IND` stays one, non-numeric, token).
+pub(super) fn content(raw: &str) -> &str {
+    let bytes = raw.as_bytes();
+    let end = bytes
+        .iter()
+        .enumerate()
+        .find(|&(i, &b)| {
+            b == b'#'
+                && (i == 0
+                    || bytes
+                        .get(i - 1)
+                        .is_some_and(|prev| prev.is_ascii_whitespace()))
+        })
+        .map_or(raw.len(), |(i, _)| i);
+    raw.get(..end).unwrap_or(raw).trim_ascii()
+}
+
+/// 1-based character column of `token` (a sub-slice of `raw`) in `raw`.
+pub(super) fn column(raw: &str, token: &str) -> usize {
+    let offset = (token.as_ptr() as usize).wrapping_sub(raw.as_ptr() as usize);
+    raw.get(..offset)
+        .map_or(1, |before| before.chars().count() + 1)
+}
+
+/// A token-level error at `path:line:column`.
+pub(super) fn syntax(
+    path: &Path,
+    line: usize,
+    raw: &str,
+    token: &str,
+    expected: &str,
+) -> ImportError {
+    ImportError::syntax(
+        Location::line_column(path, line, column(raw, token)),
+        expected,
+        token,
+    )
+}
+
+pub(super) fn invalid(path: &Path, line: usize, message: impl Into<String>) -> ImportError {
+    ImportError::invalid(Location::line(path, line), message)
+}
+
+/// A finite number.
+pub(super) fn number(
+    path: &Path,
+    line: usize,
+    raw: &str,
+    token: &str,
+    what: &str,
+) -> Result<f64, ImportError> {
+    match token.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(ImportError::invalid(
+            Location::line_column(path, line, column(raw, token)),
+            format!("{what} is not finite: {token:?}"),
+        )),
+        Err(_) => Err(syntax(
+            path,
+            line,
+            raw,
+            token,
+            &format!("a number ({what})"),
+        )),
+    }
+}
+
+/// Exactly three finite numbers after a keyword.
+pub(super) fn vec3(
+    path: &Path,
+    line: usize,
+    raw: &str,
+    whole: &str,
+    args: &[&str],
+    what: &str,
+) -> Result<DVec3, ImportError> {
+    let [x, y, z] = args else {
+        return Err(ImportError::syntax(
+            Location::line(path, line),
+            format!("3 numbers after `{what}`"),
+            whole,
+        ));
+    };
+    Ok(DVec3::new(
+        number(path, line, raw, x, what)?,
+        number(path, line, raw, y, what)?,
+        number(path, line, raw, z, what)?,
+    ))
+}
+
+/// A dof list: each token a [`Dof`], none repeated, `l` only when `allow_length`.
+pub(super) fn dof_list(
+    path: &Path,
+    line: usize,
+    raw: &str,
+    whole: &str,
+    args: &[&str],
+    allow_length: bool,
+) -> Result<Vec<Dof>, ImportError> {
+    let expected = if allow_length {
+        "a dof (tx ty tz rx ry rz l)"
+    } else {
+        "a root dof (TX TY TZ RX RY RZ)"
+    };
+    if args.is_empty() {
+        return Err(ImportError::syntax(
+            Location::line(path, line),
+            format!("at least one dof: {expected}"),
+            whole,
+        ));
+    }
+    let mut dofs = Vec::with_capacity(args.len());
+    for token in args {
+        let dof = Dof::parse(token)
+            .filter(|d| allow_length || *d != Dof::L)
+            .ok_or_else(|| syntax(path, line, raw, token, expected))?;
+        if dofs.contains(&dof) {
+            return Err(ImportError::invalid(
+                Location::line_column(path, line, column(raw, token)),
+                format!("dof {} is listed twice", dof.as_str()),
+            ));
+        }
+        dofs.push(dof);
+    }
+    Ok(dofs)
+}
+
+pub(super) fn euler_order(
+    path: &Path,
+    line: usize,
+    raw: &str,
+    token: &str,
+) -> Result<EulerOrder, ImportError> {
+    EulerOrder::parse(token).ok_or_else(|| {
+        syntax(
+            path,
+            line,
+            raw,
+            token,
+            "an axis order (XYZ, XZY, YXZ, YZX, ZXY or ZYX)",
+        )
+    })
+}

@@ -1,0 +1,109 @@
+//! `jointHierarchy.txt`: one parent index per joint.
+
+use std::path::Path;
+
+use rigport_model::{parents_first_order, SkeletonProblem};
+
+use crate::{ImportError, Location, Problem};
+
+/// Parses `jointHierarchy.txt`: entry `i` is joint `i`'s parent, `-1` for the root.
+///
+/// Entries are integers separated by white space and/or commas, on any number of lines;
+/// blank lines and `#` comment lines are skipped. Returns one parent per joint in file
+/// numbering (not necessarily parents-first), already checked to form one tree.
+///
+/// # Errors
+/// At the line of the offending entry: a token that is not an integer; a parent below -1
+/// or not a joint; a joint that is its own parent; a parent cycle (at the line of the
+/// cycle's smallest joint); a second root. A file without entries is [`Problem::Empty`].
+pub fn parse_hierarchy(text: &str, path: &Path) -> Result<Vec<Option<usize>>, ImportError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut parents: Vec<Option<usize>> = Vec::new();
+    let mut lines: Vec<usize> = Vec::new();
+    for (i, raw) in text.split('\n').enumerate() {
+        let line = raw.trim_ascii();
+        if line.starts_with('#') {
+            continue;
+        }
+        let at = || Location::line(path, i + 1);
+        for token in line
+            .split(|c: char| c.is_ascii_whitespace() || c == ',')
+            .filter(|t| !t.is_empty())
+        {
+            let joint = parents.len();
+            let value: i64 = token.parse().map_err(|_| {
+                ImportError::syntax(at(), "a parent index (-1 for the root)", token)
+            })?;
+            let parent = match value {
+                -1 => None,
+                p => Some(usize::try_from(p).map_err(|_| {
+                    ImportError::invalid(
+                        at(),
+                        format!("joint {joint} has parent {p}: the root's parent is -1, every other is a joint index"),
+                    )
+                })?),
+            };
+            parents.push(parent);
+            lines.push(i + 1);
+        }
+    }
+    let count = parents.len();
+    if count == 0 {
+        return Err(ImportError::new(Location::file(path), Problem::Empty));
+    }
+    if u32::try_from(count).is_err() {
+        return Err(ImportError::invalid(
+            Location::file(path),
+            format!("{count} joints is more than rigport's joint indices hold"),
+        ));
+    }
+    let line_of = |joint: usize| match lines.get(joint) {
+        Some(&line) => Location::line(path, line),
+        None => Location::file(path),
+    };
+    for (joint, parent) in parents.iter().enumerate() {
+        match *parent {
+            Some(p) if p >= count => {
+                return Err(ImportError::invalid(
+                    line_of(joint),
+                    format!(
+                        "joint {joint} has parent {p}, but there are only {count} joints (0..={})",
+                        count - 1
+                    ),
+                ))
+            }
+            Some(p) if p == joint => {
+                return Err(ImportError::invalid(
+                    line_of(joint),
+                    format!("joint {joint} is its own parent"),
+                ))
+            }
+            _ => {}
+        }
+    }
+    parents_first_order(&parents).map_err(|problems| {
+        let joint = problems.iter().find_map(|p| match p {
+            SkeletonProblem::Cycle { joints } => joints.iter().min().copied(),
+            _ => None,
+        });
+        let location = joint.map_or_else(|| Location::file(path), line_of);
+        ImportError::new(location, Problem::Skeleton(problems))
+    })?;
+    let mut roots = parents
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.is_none())
+        .map(|(j, _)| j);
+    match (roots.next(), roots.next()) {
+        (Some(_), None) => Ok(parents),
+        (Some(first), Some(second)) => Err(ImportError::invalid(
+            line_of(second),
+            format!("joint {second} is a second root (parent -1) besides joint {first}: the rig must have exactly one root"),
+        )),
+        // A finite parent array without a root has a cycle, reported above.
+        (None, _) => Err(ImportError::invalid(
+            Location::file(path),
+            "no joint has parent -1: the rig has no root",
+        )),
+    }
+}

@@ -1,0 +1,411 @@
+//! The container: GLB chunks (glTF 2.0 §4.4), the JSON document with its schema check, and
+//! the buffers (the GLB `BIN` chunk, external files, `data:` URIs).
+
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
+
+use ::gltf::Semantic;
+use rigport_model::Warning;
+
+use crate::{ImportError, Location, Problem};
+
+fn le_u32(bytes: &[u8], at: usize) -> Option<u32> {
+    let b = bytes.get(at..at.checked_add(4)?)?;
+    Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+}
+
+/// Splits a GLB into its JSON chunk and optional BIN chunk (glTF 2.0 §4.4).
+pub(super) fn split_glb<'b>(
+    bytes: &'b [u8],
+    path: &Path,
+    warnings: &mut Vec<Warning>,
+) -> Result<(&'b [u8], Option<&'b [u8]>), ImportError> {
+    let truncated = |offset: usize, msg: String| {
+        ImportError::new(Location::byte(path, offset as u64), Problem::Truncated(msg))
+    };
+    let invalid =
+        |offset: usize, msg: String| ImportError::invalid(Location::byte(path, offset as u64), msg);
+    let (Some(version), Some(length)) = (le_u32(bytes, 4), le_u32(bytes, 8)) else {
+        return Err(truncated(
+            bytes.len(),
+            format!(
+                "the GLB header needs 12 bytes, the file has {}",
+                bytes.len()
+            ),
+        ));
+    };
+    if version != 2 {
+        return Err(invalid(
+            4,
+            format!("GLB container version {version}; only version 2 is supported"),
+        ));
+    }
+    let total = length as usize;
+    if total > bytes.len() {
+        return Err(truncated(
+            8,
+            format!(
+                "the GLB header declares {total} bytes, but the file holds only {}",
+                bytes.len()
+            ),
+        ));
+    }
+    if total < bytes.len() {
+        warnings.push(Warning::Note {
+            location: Location::byte(path, total as u64).to_string(),
+            message: format!(
+                "{} bytes after the declared GLB length ignored",
+                bytes.len() - total
+            ),
+        });
+    }
+    let mut json: Option<&[u8]> = None;
+    let mut bin: Option<&[u8]> = None;
+    let mut pos = 12usize;
+    while pos < total {
+        let (Some(chunk_len), Some(kind)) = (le_u32(bytes, pos), bytes.get(pos + 4..pos + 8))
+        else {
+            return Err(truncated(
+                pos,
+                format!(
+                    "a GLB chunk header needs 8 bytes, only {} remain",
+                    total - pos
+                ),
+            ));
+        };
+        if pos + 8 > total {
+            return Err(truncated(
+                pos,
+                format!(
+                    "a GLB chunk header needs 8 bytes, only {} remain",
+                    total - pos
+                ),
+            ));
+        }
+        let start = pos + 8;
+        let end = match start.checked_add(chunk_len as usize) {
+            Some(end) if end <= total => end,
+            _ => {
+                return Err(truncated(
+                    pos,
+                    format!(
+                        "the {} chunk declares {chunk_len} bytes, but only {} remain",
+                        String::from_utf8_lossy(kind).trim_end_matches('\0'),
+                        total - start
+                    ),
+                ))
+            }
+        };
+        let data = &bytes[start..end];
+        match kind {
+            b"JSON" if json.is_none() && pos == 12 => json = Some(data),
+            b"JSON" => return Err(invalid(pos + 4, "a second JSON chunk".into())),
+            _ if json.is_none() => {
+                return Err(invalid(
+                    pos + 4,
+                    format!(
+                        "the first GLB chunk must be JSON, found {:?}",
+                        String::from_utf8_lossy(kind)
+                    ),
+                ))
+            }
+            b"BIN\0" if bin.is_none() => bin = Some(data),
+            b"BIN\0" => return Err(invalid(pos + 4, "a second BIN chunk".into())),
+            // glTF 2.0 §4.4.3.1: chunks of unknown types must be ignored.
+            _ => {}
+        }
+        pos = end;
+    }
+    match json {
+        Some(json) => Ok((json, bin)),
+        None => Err(truncated(total, "the GLB has no JSON chunk".into())),
+    }
+}
+
+/// Splits a `gltf-json` path with a value (`extensionsRequired[0] = "KHR_x"`) into the path
+/// and the value.
+fn split_path_value(gltf_path: &str) -> (&str, Option<&str>) {
+    match gltf_path.split_once(" = \"") {
+        Some((at, value)) => (at, Some(value.trim_end_matches('"'))),
+        None => (gltf_path, None),
+    }
+}
+
+/// A `gltf-json` path (`meshes[0].attributes["POSITION"]`) as a JSON pointer
+/// (`/meshes/0/attributes/POSITION`, RFC 6901 escapes).
+pub(super) fn json_pointer(gltf_path: &str) -> String {
+    let mut out = String::new();
+    let mut segment = String::new();
+    let flush = |segment: &mut String, out: &mut String| {
+        if !segment.is_empty() {
+            out.push('/');
+            out.push_str(&segment.replace('~', "~0").replace('/', "~1"));
+            segment.clear();
+        }
+    };
+    let mut chars = gltf_path.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '.' => flush(&mut segment, &mut out),
+            '[' => {
+                flush(&mut segment, &mut out);
+                if chars.peek() == Some(&'"') {
+                    chars.next();
+                    while let Some(k) = chars.next() {
+                        if k == '"' && chars.peek() == Some(&']') {
+                            chars.next();
+                            break;
+                        }
+                        segment.push(k);
+                    }
+                } else {
+                    for k in chars.by_ref() {
+                        if k == ']' {
+                            break;
+                        }
+                        segment.push(k);
+                    }
+                }
+                flush(&mut segment, &mut out);
+            }
+            c => segment.push(c),
+        }
+    }
+    flush(&mut segment, &mut out);
+    if out.is_empty() {
+        out.push('/');
+    }
+    out
+}
+
+/// Parses and validates the glTF JSON (what `gltf::Gltf::from_slice` does, plus a check
+/// its validation needs first).
+pub(super) fn parse_document(
+    json: &[u8],
+    path: &Path,
+    is_glb: bool,
+    warnings: &mut Vec<Warning>,
+) -> Result<::gltf::Document, ImportError> {
+    use ::gltf::json::validation::{Checked, Error as SchemaError, Validate};
+    let root: ::gltf::json::Root = ::gltf::json::deserialize::from_slice(json).map_err(|e| {
+        let mut message = e.to_string();
+        let suffix = format!(" at line {} column {}", e.line(), e.column());
+        if let Some(stripped) = message.strip_suffix(&suffix) {
+            message = stripped.to_string();
+        }
+        if is_glb {
+            message = format!("in the GLB JSON chunk: {message}");
+        }
+        let location = if e.line() > 0 {
+            Location::line_column(path, e.line(), e.column())
+        } else {
+            Location::file(path)
+        };
+        let problem = if e.is_eof() {
+            Problem::Truncated(message)
+        } else {
+            Problem::Invalid(message)
+        };
+        ImportError::new(location, problem)
+    })?;
+    // gltf-json 1.4's primitive validation indexes `accessors` with the POSITION index
+    // before that index is checked: check it first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim.attributes.get(&Checked::Valid(Semantic::Positions));
+            if position.is_some_and(|index| index.value() >= root.accessors.len()) {
+                return Err(ImportError::invalid(
+                    Location::json(
+                        path,
+                        format!("/meshes/{m}/primitives/{p}/attributes/POSITION"),
+                    ),
+                    "index out of range",
+                ));
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(&root, ::gltf::json::Path::new, &mut |at, error| {
+        let at = at();
+        // glTF 2.0 §3.6.2.1: an accessor without bufferView (and without sparse) is all
+        // zeros; gltf-json 1.4 reports it as missing, rigport reads it as zeros.
+        let zero_filled = error == SchemaError::Missing
+            && at.as_str().starts_with("accessors[")
+            && at.as_str().ends_with("].bufferView");
+        if !zero_filled {
+            errors.push((at, error));
+        }
+    });
+    // A required extension the gltf crate does not know blocks the import only if it
+    // changes geometry, skins or animation; material and texture ones do not concern a rig.
+    let mut kept = Vec::new();
+    for (at, error) in errors {
+        let (at_path, value) = split_path_value(at.as_str());
+        let material_only = [
+            "KHR_materials_",
+            "KHR_texture_",
+            "EXT_texture_",
+            "MSFT_texture_",
+        ]
+        .iter()
+        .any(|prefix| value.is_some_and(|v| v.starts_with(prefix)));
+        if error == SchemaError::Unsupported && material_only {
+            warnings.push(Warning::Note {
+                location: Location::json(path, json_pointer(at_path)).to_string(),
+                message: format!(
+                    "required extension {} only affects materials; ignored",
+                    value.unwrap_or_default()
+                ),
+            });
+        } else {
+            kept.push((at, error));
+        }
+    }
+    if let Some((first_path, first)) = kept.first() {
+        let (at_path, value) = split_path_value(first_path.as_str());
+        let what = match first {
+            SchemaError::IndexOutOfBounds => "index out of range".to_string(),
+            SchemaError::Invalid => "invalid value".to_string(),
+            SchemaError::Missing => "required value missing".to_string(),
+            SchemaError::Oversize => "size exceeds this system's limits".to_string(),
+            SchemaError::Unsupported => format!(
+                "required extension {} is not supported",
+                value.unwrap_or_default()
+            ),
+        };
+        let more = match kept.len() {
+            1 => String::new(),
+            n => format!(" (and {} more glTF schema problems)", n - 1),
+        };
+        return Err(ImportError::invalid(
+            Location::json(path, json_pointer(at_path)),
+            format!("{what}{more}"),
+        ));
+    }
+    Ok(::gltf::Document::from_json_without_validation(root))
+}
+
+/// Decodes standard base64 (RFC 4648 §4), padding optional; `None` on any other byte.
+pub(super) fn decode_base64(text: &str) -> Option<Vec<u8>> {
+    fn value(c: u8) -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return None,
+        } as u32)
+    }
+    let bytes = text.trim_end_matches('=').as_bytes();
+    let mut out = Vec::with_capacity(bytes.len() / 4 * 3 + 3);
+    for chunk in bytes.chunks(4) {
+        let mut acc = 0u32;
+        for (k, &c) in chunk.iter().enumerate() {
+            acc |= value(c)? << (18 - 6 * k);
+        }
+        let produced = match chunk.len() {
+            4 => 3,
+            3 => 2,
+            2 => 1,
+            _ => return None,
+        };
+        out.extend_from_slice(&acc.to_be_bytes()[1..1 + produced]);
+    }
+    Some(out)
+}
+
+/// Percent-decodes a URI path (RFC 3986 §2.1); `None` if the result is not UTF-8.
+pub(super) fn percent_decode(uri: &str) -> Option<String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = bytes
+            .get(i + 1..i + 3)
+            .and_then(|h| std::str::from_utf8(h).ok())
+            .and_then(|h| u8::from_str_radix(h, 16).ok());
+        match (bytes[i], hex) {
+            (b'%', Some(b)) => {
+                out.push(b);
+                i += 3;
+            }
+            (c, _) => {
+                out.push(c);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+fn read_uri(uri: &str, path: &Path, at: &str) -> Result<Vec<u8>, ImportError> {
+    let err = |msg: String| ImportError::invalid(Location::json(path, at), msg);
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let Some((meta, payload)) = rest.split_once(',') else {
+            return Err(err("malformed data URI: no ','".into()));
+        };
+        if !meta.ends_with(";base64") {
+            return Err(err(format!("data URI {meta:?} is not base64-encoded")));
+        }
+        return decode_base64(payload).ok_or_else(|| err("data URI holds invalid base64".into()));
+    }
+    let file_part = uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"));
+    let relative = match file_part {
+        Some(p) => p,
+        None => {
+            let scheme_end = uri.find(':');
+            let first_slash = uri.find('/');
+            if let Some(colon) = scheme_end {
+                if first_slash.is_none_or(|s| colon < s) {
+                    return Err(err(format!(
+                        "buffer URI {uri:?}: only data: URIs and files are supported"
+                    )));
+                }
+            }
+            uri
+        }
+    };
+    let decoded = percent_decode(relative)
+        .ok_or_else(|| err(format!("buffer URI {uri:?} is not UTF-8 once decoded")))?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let file: PathBuf = base.join(decoded);
+    std::fs::read(&file)
+        .map_err(|e| err(format!("cannot read buffer file {}: {e}", file.display())))
+}
+
+pub(super) fn load_buffers<'b>(
+    doc: &::gltf::Document,
+    mut blob: Option<&'b [u8]>,
+    path: &Path,
+) -> Result<Vec<Cow<'b, [u8]>>, ImportError> {
+    let mut out = Vec::new();
+    for buffer in doc.buffers() {
+        let at = format!("/buffers/{}", buffer.index());
+        let data: Cow<'b, [u8]> = match buffer.source() {
+            ::gltf::buffer::Source::Bin => Cow::Borrowed(blob.take().ok_or_else(|| {
+                ImportError::invalid(
+                    Location::json(path, &at),
+                    "has no uri, so it must be the GLB BIN chunk, but there is none",
+                )
+            })?),
+            ::gltf::buffer::Source::Uri(uri) => {
+                Cow::Owned(read_uri(uri, path, &format!("{at}/uri"))?)
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(ImportError::new(
+                Location::json(path, &at),
+                Problem::Truncated(format!(
+                    "byteLength is {} but the data holds only {} bytes",
+                    buffer.length(),
+                    data.len()
+                )),
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
