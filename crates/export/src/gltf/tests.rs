@@ -1359,3 +1359,30 @@ fn exported_samples_still_validate() {
         assert_khronos_valid(&glb(&asset, 4).glb);
     }
 }
+
+#[cfg(unix)]
+#[test]
+fn symlinked_gltf_is_followed_and_its_bin_goes_beside_the_target() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let real_dir = dir.path().join("real");
+    std::fs::create_dir(&real_dir).expect("mkdir");
+    std::fs::write(real_dir.join("model.gltf"), b"old").expect("write");
+    let link = dir.path().join("link.gltf");
+    std::os::unix::fs::symlink("real/model.gltf", &link).expect("symlink");
+    write_gltf(&sample::rig(), &link, &GltfOptions::default()).expect("write");
+    assert!(std::fs::symlink_metadata(&link).expect("meta").is_symlink());
+    assert_eq!(dir_names(dir.path()), ["link.gltf", "real"]);
+    assert_eq!(dir_names(&real_dir), ["model.bin", "model.gltf"]);
+    let json: Value = serde_json::from_slice(&std::fs::read(&link).expect("read")).expect("json");
+    assert_eq!(json["buffers"][0]["uri"], "model.bin");
+    // A directory where the .bin goes is refused before anything is written.
+    std::fs::create_dir(dir.path().join("x.bin")).expect("mkdir");
+    let err = write_gltf(
+        &sample::rig(),
+        &dir.path().join("x.gltf"),
+        &GltfOptions::default(),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("x.bin"), "{err}");
+    assert_eq!(dir_names(dir.path()), ["link.gltf", "real", "x.bin"]);
+}
