@@ -18,6 +18,12 @@
 //! SIGTERM). A process killed outright (SIGKILL, power loss) cannot clean up: the first
 //! write into a folder then removes the temporary files of that naming whose process is no
 //! longer running (Linux only, where `/proc/<pid>` tells; elsewhere nothing is swept).
+//! The sweep trusts the process id: a folder shared over the network with another machine
+//! writing into it at the same moment could lose that machine's temporary file.
+//!
+//! For tests of that cleanup, the environment variable `RIGPORT_TEST_RENAME_DELAY_MS`
+//! makes every rename wait that many milliseconds (at most 60 s) once its temporary file is
+//! written, so that a test can interrupt a write while the file exists.
 
 use std::ffi::OsString;
 use std::fs::{self, OpenOptions};
@@ -226,6 +232,21 @@ fn sweep_stale(dir: &Path) {
     }
 }
 
+/// Sleeps for `RIGPORT_TEST_RENAME_DELAY_MS` (read once; see the module docs).
+fn test_rename_delay() {
+    static DELAY: std::sync::OnceLock<Option<std::time::Duration>> = std::sync::OnceLock::new();
+    let delay = DELAY.get_or_init(|| {
+        let ms: u64 = std::env::var("RIGPORT_TEST_RENAME_DELAY_MS")
+            .ok()?
+            .parse()
+            .ok()?;
+        Some(std::time::Duration::from_millis(ms.min(60_000)))
+    });
+    if let Some(delay) = delay {
+        std::thread::sleep(*delay);
+    }
+}
+
 /// A temporary file that is deleted on drop unless [`TempFile::persist`] renamed it.
 pub(crate) struct TempFile {
     path: PathBuf,
@@ -307,6 +328,7 @@ impl TempFile {
     /// # Errors
     /// The rename's I/O error; the temporary file is then removed.
     pub(crate) fn persist(mut self, target: &Path) -> io::Result<()> {
+        test_rename_delay();
         fs::rename(&self.path, target)?;
         self.armed = false;
         Ok(())

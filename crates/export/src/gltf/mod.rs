@@ -218,13 +218,8 @@ pub fn prepare_gltf(
             (Files::Glb(out.glb), out.warnings)
         }
         Some("gltf") => {
-            // A symlinked `.gltf` is followed, so its `.bin` goes beside the file that is
-            // replaced, named after it: the buffer URI stays relative to the real `.gltf`.
-            let real = crate::atomic::check_output(path).map_err(|source| ExportError::Io {
-                path: path.to_path_buf(),
-                source,
-            })?;
-            let bin_path = real.with_extension("bin");
+            check_not_symlink(path)?;
+            let bin_path = path.with_extension("bin");
             let bin_name = bin_path
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
@@ -262,8 +257,10 @@ impl PreparedGltf {
     }
 
     /// Writes the files atomically: each goes to a temporary file in the same directory,
-    /// then is renamed over its target (symbolic links are followed and their targets
-    /// replaced; only regular files are replaced, see [`crate::write_atomic`]). For `.gltf`
+    /// then is renamed over its target (only regular files are replaced; a `.glb` that is
+    /// a symbolic link is followed and its target replaced, see [`crate::write_atomic`]; a
+    /// `.gltf` that is one is refused, as by [`prepare_gltf`], and a `.bin` that is one is
+    /// followed). For `.gltf`
     /// both temporary files are written first, then the `.bin` is renamed, then the
     /// `.gltf`, so a reader that finds the new `.gltf` finds its buffer, and a `.gltf`
     /// never names a missing `.bin`. No `.bin` is written when the asset has no binary data.
@@ -287,6 +284,7 @@ impl PreparedGltf {
                 bin,
                 bin_path,
             } => {
+                check_not_symlink(path)?;
                 let target = crate::atomic::check_output(path).map_err(io_err(path))?;
                 let bin_target = if bin.is_empty() {
                     None
@@ -319,6 +317,24 @@ impl PreparedGltf {
             }
         }
     }
+}
+
+/// Refuses a `.gltf` output that is a symbolic link. Its buffer URI is relative, and
+/// readers resolve it against the folder of the path they were given: a `.bin` beside the
+/// link's target is missed by readers that open the link, one beside the link by readers
+/// that open the target. `.glb` and `.usda` outputs follow links ([`crate::write_atomic`]).
+fn check_not_symlink(path: &Path) -> Result<(), ExportError> {
+    let is_link = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
+    if is_link {
+        return Err(ExportError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "it is a symbolic link, and a .gltf finds its .bin relative to its own folder; write to the link's target or to a .glb",
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The one buffer entry.
