@@ -164,11 +164,13 @@ pub(crate) fn format_of(path: &std::path::Path) -> Result<Format> {
         "png" => Format::Png,
         "gif" => Format::Gif,
         "apng" => Format::Apng,
-        _ => return Err(UsageError(format!(
+        _ => {
+            return Err(UsageError(format!(
             "{}: unknown picture format; expected .png (contact sheet), .gif or .apng (animation)",
             path.display()
         ))
-        .into()),
+            .into())
+        }
     })
 }
 

@@ -966,6 +966,13 @@ pub fn parse_weights(
         } else {
             1.0
         };
+        if !scale.is_finite() {
+            // A sum below 1 / f64::MAX (a lone `1e-320`) cannot be renormalized.
+            return Err(ImportError::invalid(
+                Location::line(path, first_line),
+                format!("the weights of vertex {v} sum to {sum:e}, too small to renormalize"),
+            ));
+        }
         for &(_, joint, w, _) in row {
             let weight = (w * scale) as f32;
             // A weight below f32's range has no effect, as a written 0 has none.
@@ -1704,6 +1711,10 @@ mod tests {
 
     #[test]
     fn weight_errors_name_the_line() {
+        assert_eq!(
+            err(weights("2 2\n0 0 1\n1 1 1e-320\n", 2, 2)),
+            "w.txt:3: the weights of vertex 1 sum to 1e-320, too small to renormalize"
+        );
         assert_eq!(
             err(weights("5\n2\n0 0 1\n", 4, 2)),
             "w.txt:1: the header declares 5 rows, but the mesh has (OBJ `v` lines) 4"
