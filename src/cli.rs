@@ -85,7 +85,9 @@ pub enum Command {
 pub struct InputArgs {
     /// Input files or folders: a .glb/.gltf; an .obj with Pinocchio skeleton and attachment
     /// .out files (told apart by name or content); a USC CSCI 520 skin.config; or a folder
-    /// holding one of these sets.
+    /// holding one of these sets. Required unless --mesh, --skeleton or --attachment
+    /// names the files.
+    #[arg(required_unless_present_any = ["mesh", "skeleton", "attachment"])]
     pub inputs: Vec<PathBuf>,
     /// The OBJ mesh of a Pinocchio rig.
     #[arg(long, value_name = "M.obj")]

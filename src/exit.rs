@@ -2,6 +2,9 @@
 
 /// An input could not be read or is invalid (the message names file and line).
 pub const BAD_INPUT: u8 = 1;
+/// A usage error: clap's (unknown flag, missing argument) and rigport's own (an output
+/// extension rigport does not write, an output that is one of the inputs).
+pub const USAGE: u8 = 2;
 /// An output could not be written.
 pub const OUTPUT: u8 = 3;
 /// Warnings were reported and `--deny-warnings` was given.
@@ -12,9 +15,13 @@ pub const HELP: &str = "\
 Exit codes:
   0  success
   1  an input could not be read or is invalid (the message names file and line)
-  2  usage error (unknown flag, missing argument)
-  3  an output could not be written (nothing partial is left behind)
-  4  warnings were reported and --deny-warnings was given";
+  2  usage error (unknown flag, missing argument or input, an output extension rigport
+     does not write, an output that is one of the inputs)
+  3  an output could not be written (nothing partial is left behind); only regular files
+     are replaced (a directory, fifo or device is refused); a symbolic link is followed
+     and its target replaced
+  4  warnings were reported and --deny-warnings was given
+  130, 143  interrupted by SIGINT, SIGTERM (temporary files removed)";
 
 /// Marks an error as an output failure.
 #[derive(Debug, thiserror::Error)]
@@ -23,6 +30,11 @@ pub struct OutputError {
     /// The output path.
     pub path: String,
 }
+
+/// A usage error rigport finds after parsing (exit code 2): the message says what to change.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
 
 /// Marks warnings turned into an error by `--deny-warnings`.
 #[derive(Debug, thiserror::Error)]
@@ -39,6 +51,8 @@ pub fn code_for(err: &anyhow::Error) -> u8 {
         DENIED_WARNINGS
     } else if err.downcast_ref::<OutputError>().is_some() {
         OUTPUT
+    } else if err.downcast_ref::<UsageError>().is_some() {
+        USAGE
     } else {
         BAD_INPUT
     }

@@ -13,6 +13,7 @@ mod keys;
 mod npz;
 mod output;
 mod pose;
+mod signals;
 
 use std::process::ExitCode;
 
@@ -21,6 +22,9 @@ use clap::Parser;
 fn main() -> ExitCode {
     raise_malloc_mmap_threshold();
     let cli = cli::Cli::parse();
+    if !matches!(cli.command, cli::Command::Inspect(_)) {
+        signals::remove_temp_files_on_interrupt();
+    }
     match commands::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {

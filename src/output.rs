@@ -1,15 +1,16 @@
 //! Writing an asset: the format by the output's extension, warnings reported before
 //! anything is written, one summary line after.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
-use rigport_export::{GltfOptions, UsdOptions, UsdSkinning};
+use rigport_export::{ExportError, GltfOptions, UsdOptions, UsdSkinning};
 use rigport_model::{Asset, Warning};
 
-use crate::cli::{OutputArgs, Skinning};
+use crate::cli::{InputArgs, OutputArgs, Skinning};
 use crate::commands::Context;
-use crate::exit::OutputError;
+use crate::exit::{OutputError, UsageError};
+use crate::input::{self, Plan};
 
 /// The output formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,25 +24,157 @@ pub enum Format {
 /// The format an output path asks for.
 ///
 /// # Errors
-/// An extension rigport does not write.
+/// An extension rigport does not write ([`UsageError`], exit code 2).
 pub fn format_of(path: &Path) -> Result<Format> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    Ok(match ext.as_str() {
+    Ok(match extension(path).as_str() {
         "glb" | "gltf" => Format::Gltf,
         "usda" => Format::Usda,
-        "usd" | "usdc" | "usdz" => bail!(
+        "usd" | "usdc" | "usdz" => return Err(UsageError(format!(
             "{}: rigport writes USD as text; use the .usda extension (usdcat converts it to .usdc/.usdz)",
             path.display()
-        ),
-        _ => bail!(
-            "{}: unknown output type; expected .glb, .gltf or .usda",
-            path.display()
-        ),
+        ))
+        .into()),
+        _ => {
+            return Err(UsageError(format!(
+                "{}: unknown output type; expected .glb, .gltf or .usda",
+                path.display()
+            ))
+            .into())
+        }
     })
+}
+
+/// The lower-case extension of `path` ("" when none).
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// Checks that `path` ends in `.npz`, the one format `eval` writes.
+///
+/// # Errors
+/// Any other extension ([`UsageError`], exit code 2).
+pub fn require_npz(path: &Path) -> Result<()> {
+    if extension(path) != "npz" {
+        return Err(UsageError(format!(
+            "{}: eval writes a numpy .npz archive; use the .npz extension",
+            path.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// The files an input specification reads: those of its resolved plans (a folder stands
+/// for the files picked from it), or the paths as given when they do not resolve (the
+/// command then reports why).
+pub fn input_files(args: &InputArgs) -> Vec<PathBuf> {
+    let Ok(plans) = input::plans(args) else {
+        let mut files = args.inputs.clone();
+        files.extend(args.mesh.iter().cloned());
+        files.extend(args.skeleton.iter().cloned());
+        files.extend(args.attachment.iter().cloned());
+        files.extend(args.motion.iter().cloned());
+        return files;
+    };
+    let mut files = Vec::new();
+    for plan in plans {
+        match plan {
+            Plan::Gltf(p) | Plan::Obj(p) | Plan::Csci520(p) | Plan::Bvh(p) | Plan::Usda(p) => {
+                files.push(p);
+            }
+            Plan::Pinocchio {
+                mesh,
+                skeleton,
+                attachment,
+            } => files.extend([mesh, skeleton, attachment]),
+            Plan::AsfAmc { asf, motions, .. } => {
+                files.push(asf);
+                files.extend(motions);
+            }
+        }
+    }
+    files
+}
+
+/// Checks the outputs of a command before any work is done: each (and the `.bin` beside a
+/// `.gltf`) must be a regular file or absent, symbolic links followed, and a `.gltf` must
+/// not be a symbolic link (see `rigport_export::PreparedGltf::write`) (exit code 3 else),
+/// and none may be one of `inputs`, compared by file identity (device and inode on Unix),
+/// so a link or a second path to an input counts (exit code 2).
+///
+/// # Errors
+/// As above.
+pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
+    for &output in outputs {
+        let mut files = vec![output.to_path_buf()];
+        rigport_export::check_output(output).with_context(|| OutputError {
+            path: output.display().to_string(),
+        })?;
+        if extension(output) == "gltf" {
+            if std::fs::symlink_metadata(output).is_ok_and(|m| m.file_type().is_symlink()) {
+                return Err(anyhow::anyhow!(
+                    "it is a symbolic link, and a .gltf finds its .bin relative to its own folder; write to the link's target or to a .glb"
+                )
+                .context(OutputError {
+                    path: output.display().to_string(),
+                }));
+            }
+            let bin = output.with_extension("bin");
+            rigport_export::check_output(&bin).with_context(|| OutputError {
+                path: bin.display().to_string(),
+            })?;
+            files.push(bin);
+        }
+        for file in &files {
+            if let Some(input) = inputs.iter().find(|i| same_file(file, i)) {
+                let also = if input == file {
+                    String::new()
+                } else {
+                    format!(" ({})", input.display())
+                };
+                return Err(UsageError(format!(
+                    "{}: this output is one of the inputs{also}; write to another file",
+                    file.display()
+                ))
+                .into());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether two paths name the same existing file (after symbolic links).
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt as _;
+        match (std::fs::metadata(a), std::fs::metadata(b)) {
+            (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        }
+    }
+}
+
+/// An export's write failure as an output error (exit code 3) that names the file once.
+pub fn write_failure(err: ExportError, path: &Path) -> anyhow::Error {
+    match err {
+        ExportError::Io { path, source } => anyhow::Error::new(source).context(OutputError {
+            path: path.display().to_string(),
+        }),
+        other => anyhow::Error::new(other).context(OutputError {
+            path: path.display().to_string(),
+        }),
+    }
 }
 
 /// Applies `--reduce-tolerance` to every clip, adding a note per clip.
@@ -88,9 +221,6 @@ pub fn write_asset(
 ) -> Result<()> {
     let path = &args.output;
     let format = format_of(path)?;
-    let output_error = || OutputError {
-        path: path.display().to_string(),
-    };
     match format {
         Format::Gltf => {
             if args.skinning == Skinning::Dqs {
@@ -106,7 +236,7 @@ pub fn write_asset(
                 .with_context(|| format!("cannot export {:?}", asset.name))?;
             warnings.extend(prepared.warnings().iter().cloned());
             ctx.report(&warnings)?;
-            prepared.write().with_context(output_error)?;
+            prepared.write().map_err(|e| write_failure(e, path))?;
         }
         Format::Usda => {
             let opts = UsdOptions {
@@ -122,7 +252,7 @@ pub fn write_asset(
                 .with_context(|| format!("cannot export {:?}", asset.name))?;
             warnings.extend(prepared.warnings().iter().cloned());
             ctx.report(&warnings)?;
-            prepared.write().with_context(output_error)?;
+            prepared.write().map_err(|e| write_failure(e, path))?;
         }
     }
     if !ctx.quiet {

@@ -11,11 +11,14 @@ pub mod render;
 mod retime;
 mod sequence;
 
+use std::path::{Path, PathBuf};
+
 use anyhow::Result;
 use rigport_model::Warning;
 
-use crate::cli::{Cli, Command};
-use crate::exit::DeniedWarnings;
+use crate::cli::{Cli, Command, InputArgs};
+use crate::exit::{DeniedWarnings, UsageError};
+use crate::output;
 
 /// Settings every command shares.
 pub struct Context {
@@ -68,6 +71,7 @@ pub fn run(cli: Cli) -> Result<()> {
         quiet: cli.quiet,
         deny_warnings: cli.deny_warnings,
     };
+    check_outputs(&cli.command)?;
     match cli.command {
         Command::Convert(args) => convert::run(&ctx, &args),
         Command::Inspect(args) => inspect::run(&ctx, &args),
@@ -80,4 +84,47 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bake(args) => bake::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
     }
+}
+
+/// Checks every command's output before any work (see [`output::check_outputs`]): a
+/// special file, an input given as output, or (for `bake`) a format the command does not
+/// write fail at once, not after a long computation.
+fn check_outputs(command: &Command) -> Result<()> {
+    let with_files = |input: &InputArgs, files: &[&PathBuf]| {
+        let mut all = output::input_files(input);
+        all.extend(files.iter().map(|f| f.to_path_buf()));
+        all
+    };
+    let (out, inputs): (&Path, Vec<PathBuf>) = match command {
+        Command::Inspect(_) | Command::Demo(_) => return Ok(()),
+        Command::Convert(a) => (&a.output.output, with_files(&a.input, &[])),
+        Command::Animate(a) => (&a.output.output, with_files(&a.input, &[&a.keys])),
+        Command::Retime(a) => (&a.output.output, with_files(&a.input, &[])),
+        Command::Sequence(a) => (&a.output.output, with_files(&a.input, &[])),
+        Command::Ik(a) => (&a.output.output, with_files(&a.input, &[&a.handles])),
+        Command::Bake(a) => {
+            if output::format_of(&a.output)? != output::Format::Gltf {
+                return Err(UsageError(format!(
+                    "{}: bake writes glTF (.glb/.gltf); a .usda declares DQS directly (`rigport convert --skinning dqs`)",
+                    a.output.display()
+                ))
+                .into());
+            }
+            (&a.output, with_files(&a.input, &[]))
+        }
+        Command::Eval(a) => {
+            output::require_npz(&a.output)?;
+            let pose: Vec<&PathBuf> = a.pose.iter().collect();
+            (&a.output, with_files(&a.input, &pose))
+        }
+        Command::Render(a) => {
+            render::format_of(&a.output)?;
+            let handles: Vec<&PathBuf> = a.handles.iter().collect();
+            (&a.output, with_files(&a.input, &handles))
+        }
+    };
+    if !matches!(command, Command::Eval(_) | Command::Render(_)) {
+        output::format_of(out)?;
+    }
+    output::check_outputs(&[out], &inputs)
 }

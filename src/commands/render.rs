@@ -7,7 +7,7 @@ use anyhow::{bail, Context as _, Result};
 use rigport_render::{Markers, Projection, RenderOptions, SkinningChoice, View};
 
 use super::Context;
-use crate::exit::OutputError;
+use crate::exit::{OutputError, UsageError};
 use crate::{handles, input};
 
 /// The GIF frame rate when `--fps` is not given.
@@ -149,29 +149,34 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 /// The kind of picture, by the output's extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Format {
+pub(crate) enum Format {
     Png,
     Gif,
     Apng,
 }
 
-/// Runs `render`.
-pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
-    let ext = args
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let format = match ext.as_str() {
+/// The picture format `path`'s extension asks for.
+///
+/// # Errors
+/// Any other extension ([`UsageError`], exit code 2).
+pub(crate) fn format_of(path: &std::path::Path) -> Result<Format> {
+    Ok(match crate::output::extension(path).as_str() {
         "png" => Format::Png,
         "gif" => Format::Gif,
         "apng" => Format::Apng,
-        _ => bail!(
+        _ => {
+            return Err(UsageError(format!(
             "{}: unknown picture format; expected .png (contact sheet), .gif or .apng (animation)",
-            args.output.display()
-        ),
-    };
+            path.display()
+        ))
+            .into())
+        }
+    })
+}
+
+/// Runs `render`.
+pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
+    let format = format_of(&args.output)?;
     let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
     ctx.report(&imported.warnings)?;
     let asset = &imported.asset;

@@ -42,7 +42,7 @@ mod weights;
 #[cfg(test)]
 mod sample;
 
-pub use atomic::write_atomic;
+pub use atomic::{check_output, remove_temp_files, write_atomic, NotRegularFile};
 pub use error::{ExportError, Problem};
 pub use gltf::{
     prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, PreparedGltf,

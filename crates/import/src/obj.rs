@@ -33,6 +33,10 @@ use rigport_model::{Asset, Mesh, Warning};
 
 use crate::{read_file, ImportError, Imported, Location, Problem};
 
+/// The problem of an OBJ without faces (a point cloud): rigport refuses it for every
+/// command and output format alike.
+pub const NO_FACES: &str = "no faces: rigport needs triangles to skin";
+
 /// Marks a missing texture-coordinate or normal index in a face corner.
 const NONE: u32 = u32::MAX;
 
@@ -74,8 +78,8 @@ pub fn import(path: &Path) -> Result<Imported, ImportError> {
 /// reaching before the first element, a face with fewer than 3 corners, and (checked once
 /// the whole file is read, at the face's line) an index past the last `v`/`vt`/`vn`. Bytes
 /// that are not UTF-8 read as U+FFFD, so in a data line they fail as a bad number or index.
-/// A file of blank and comment lines only is [`Problem::Empty`]; one without `v` lines is
-/// an error at the file.
+/// A file of blank and comment lines only is [`Problem::Empty`]; one without `v` lines or
+/// without `f` lines is an error at the file (`cube.obj: no faces: ...`, see [`NO_FACES`]).
 pub fn parse(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<Warning>), ImportError> {
     let raw = Raw::read(bytes, path)?;
     raw.into_mesh(path)
@@ -305,6 +309,11 @@ impl Raw {
                 Location::file(path),
                 "no vertices: the file has no `v` lines",
             ));
+        }
+        // One decision for every output: a mesh without triangles has nothing to skin or
+        // draw (glTF cannot even hold it), so it is refused here, where the file is known.
+        if self.faces.is_empty() {
+            return Err(ImportError::invalid(Location::file(path), NO_FACES));
         }
         let location = path.display().to_string();
         let mut warnings = Vec::new();
@@ -679,6 +688,10 @@ mod tests {
         assert_eq!(
             err("o x\ng y\n"),
             "t.obj: no vertices: the file has no `v` lines"
+        );
+        assert_eq!(
+            err("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n"),
+            "t.obj: no faces: rigport needs triangles to skin"
         );
         assert_eq!(
             err("v 0 0 0\nv 0 x 0\n"),

@@ -218,6 +218,7 @@ pub fn prepare_gltf(
             (Files::Glb(out.glb), out.warnings)
         }
         Some("gltf") => {
+            check_not_symlink(path)?;
             let bin_path = path.with_extension("bin");
             let bin_name = bin_path
                 .file_name()
@@ -256,15 +257,20 @@ impl PreparedGltf {
     }
 
     /// Writes the files atomically: each goes to a temporary file in the same directory,
-    /// then is renamed over its target. For `.gltf` both temporary files are written first,
-    /// then the `.bin` is renamed, then the `.gltf`, so a reader that finds the new `.gltf`
-    /// finds its buffer. No `.bin` is written when the asset has no binary data.
+    /// then is renamed over its target (only regular files are replaced; a `.glb` that is
+    /// a symbolic link is followed and its target replaced, see [`crate::write_atomic`]; a
+    /// `.gltf` that is one is refused, as by [`prepare_gltf`], and a `.bin` that is one is
+    /// followed). For `.gltf`
+    /// both temporary files are written first, then the `.bin` is renamed, then the
+    /// `.gltf`, so a reader that finds the new `.gltf` finds its buffer, and a `.gltf`
+    /// never names a missing `.bin`. No `.bin` is written when the asset has no binary data.
     ///
     /// # Errors
     /// [`ExportError::Io`] naming the file that could not be written. No output or
-    /// temporary file is left then, except in one case: if the final `.gltf` rename fails
-    /// after the `.bin` rename succeeded, the new `.bin` is removed (best effort) and any
-    /// previous `.bin` is lost.
+    /// temporary file is left then. If the final `.gltf` rename fails after the `.bin`
+    /// rename succeeded, the previous `.bin` is put back (kept meanwhile as a hard link;
+    /// where the file system cannot link, the new `.bin` stays when a `.gltf` was there,
+    /// so that `.gltf` still finds a buffer, and is removed otherwise).
     pub fn write(&self) -> Result<(), ExportError> {
         let io_err = |path: &Path| {
             let path = path.to_path_buf();
@@ -278,19 +284,32 @@ impl PreparedGltf {
                 bin,
                 bin_path,
             } => {
-                let json_tmp = TempFile::create_beside(path, json).map_err(io_err(path))?;
-                let bin_tmp = if bin.is_empty() {
+                check_not_symlink(path)?;
+                let target = crate::atomic::check_output(path).map_err(io_err(path))?;
+                let bin_target = if bin.is_empty() {
                     None
                 } else {
-                    Some(TempFile::create_beside(bin_path, bin).map_err(io_err(bin_path))?)
+                    Some(crate::atomic::check_output(bin_path).map_err(io_err(bin_path))?)
                 };
-                let wrote_bin = bin_tmp.is_some();
-                if let Some(tmp) = bin_tmp {
-                    tmp.persist(bin_path).map_err(io_err(bin_path))?;
-                }
-                if let Err(e) = json_tmp.persist(path) {
-                    if wrote_bin {
-                        let _ = std::fs::remove_file(bin_path);
+                let json_tmp = TempFile::create_beside(&target, json).map_err(io_err(path))?;
+                let Some(bin_target) = bin_target else {
+                    return json_tmp.persist(&target).map_err(io_err(path));
+                };
+                let bin_tmp =
+                    TempFile::create_beside(&bin_target, bin).map_err(io_err(bin_path))?;
+                let backup = TempFile::backup_of(&bin_target);
+                let had_gltf = target.is_file();
+                bin_tmp.persist(&bin_target).map_err(io_err(bin_path))?;
+                if let Err(e) = json_tmp.persist(&target) {
+                    // Best effort: the error to report is the rename's.
+                    match backup {
+                        Some(old) => {
+                            let _ = old.persist(&bin_target);
+                        }
+                        None if !had_gltf => {
+                            let _ = std::fs::remove_file(&bin_target);
+                        }
+                        None => {}
                     }
                     return Err(io_err(path)(e));
                 }
@@ -298,6 +317,24 @@ impl PreparedGltf {
             }
         }
     }
+}
+
+/// Refuses a `.gltf` output that is a symbolic link. Its buffer URI is relative, and
+/// readers resolve it against the folder of the path they were given: a `.bin` beside the
+/// link's target is missed by readers that open the link, one beside the link by readers
+/// that open the target. `.glb` and `.usda` outputs follow links ([`crate::write_atomic`]).
+fn check_not_symlink(path: &Path) -> Result<(), ExportError> {
+    let is_link = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
+    if is_link {
+        return Err(ExportError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "it is a symbolic link, and a .gltf finds its .bin relative to its own folder; write to the link's target or to a .glb",
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The one buffer entry.

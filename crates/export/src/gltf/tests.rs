@@ -1359,3 +1359,29 @@ fn exported_samples_still_validate() {
         assert_khronos_valid(&glb(&asset, 4).glb);
     }
 }
+
+#[cfg(unix)]
+#[test]
+fn symlinked_gltf_is_refused_and_a_bin_directory_too() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("model.gltf"), b"old").expect("write");
+    let link = dir.path().join("link.gltf");
+    std::os::unix::fs::symlink("model.gltf", &link).expect("symlink");
+    let err = write_gltf(&sample::rig(), &link, &GltfOptions::default()).unwrap_err();
+    assert!(matches!(err, ExportError::Io { .. }), "{err:?}");
+    assert_eq!(dir_names(dir.path()), ["link.gltf", "model.gltf"]);
+    assert_eq!(
+        std::fs::read(dir.path().join("model.gltf")).expect("read"),
+        b"old"
+    );
+    // A directory where the .bin goes is refused before anything is written.
+    std::fs::create_dir(dir.path().join("x.bin")).expect("mkdir");
+    let err = write_gltf(
+        &sample::rig(),
+        &dir.path().join("x.gltf"),
+        &GltfOptions::default(),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("x.bin"), "{err}");
+    assert_eq!(dir_names(dir.path()), ["link.gltf", "model.gltf", "x.bin"]);
+}

@@ -470,6 +470,10 @@ fn weights_repairs_are_reported() {
 #[test]
 fn weight_errors_name_the_line() {
     assert_eq!(
+        err(weights("2 2\n0 0 1\n1 1 1e-320\n", 2, 2)),
+        "w.txt:3: the weights of vertex 1 sum to 1e-320, too small to renormalize"
+    );
+    assert_eq!(
         err(weights("5\n2\n0 0 1\n", 4, 2)),
         "w.txt:1: the header declares 5 rows, but the mesh has (OBJ `v` lines) 4"
     );

@@ -187,6 +187,13 @@ pub fn parse_weights(
         } else {
             1.0
         };
+        if !scale.is_finite() {
+            // A sum below 1 / f64::MAX (a lone `1e-320`) cannot be renormalized.
+            return Err(ImportError::invalid(
+                Location::line(path, first_line),
+                format!("the weights of vertex {v} sum to {sum:e}, too small to renormalize"),
+            ));
+        }
         for &(_, joint, w, _) in row {
             let weight = (w * scale) as f32;
             // A weight below f32's range has no effect, as a written 0 has none.

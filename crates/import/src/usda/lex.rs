@@ -8,7 +8,8 @@
 //! and `nan`; single-, double- and triple-quoted strings with C escapes; asset paths
 //! `@...@` and `@@@...@@@`; prim and property paths `<...>`; and the punctuation
 //! `( ) [ ] { } = , ; : .`. New lines are insignificant (the parser accepts a statement
-//! separator wherever `Sdf` requires a new line or `;`).
+//! separator wherever `Sdf` requires a new line or `;`). A line ends at LF, CRLF or a lone
+//! CR (classic Mac OS files), for comments, strings and the line numbers of messages alike.
 
 use std::path::Path;
 
@@ -56,6 +57,15 @@ pub(crate) struct Lexer<'a> {
     path: &'a Path,
 }
 
+/// The line ends in `bytes`: LF, CRLF (once) and lone CR.
+fn line_ends(bytes: &[u8]) -> usize {
+    bytes
+        .iter()
+        .enumerate()
+        .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n')))
+        .count()
+}
+
 fn is_ident_start(b: u8) -> bool {
     b.is_ascii_alphabetic() || b == b'_'
 }
@@ -93,8 +103,8 @@ impl<'a> Lexer<'a> {
     pub fn location(&self, at: usize) -> Location {
         let at = at.min(self.text.len());
         let before = self.text.get(..at).unwrap_or_default();
-        let line = 1 + before.bytes().filter(|&b| b == b'\n').count();
-        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        let line = 1 + line_ends(before.as_bytes());
+        let line_start = before.rfind(['\n', '\r']).map_or(0, |i| i + 1);
         let column = 1 + before.get(line_start..).unwrap_or_default().chars().count();
         Location::line_column(self.path, line, column)
     }
@@ -106,7 +116,10 @@ impl<'a> Lexer<'a> {
         }
         let text = self.text.get(token.start..token.end).unwrap_or_default();
         // Long tokens (a triple-quoted doc string) are cut at their first line.
-        text.lines().next().unwrap_or_default().to_string()
+        text.split(['\n', '\r'])
+            .next()
+            .unwrap_or_default()
+            .to_string()
     }
 
     /// A syntax error at `token`.
@@ -140,6 +153,15 @@ impl<'a> Lexer<'a> {
         }
     }
 
+    /// 1 if byte `i` ends a line (LF, or a CR not followed by LF), else 0.
+    fn line_end_at(&self, i: usize) -> usize {
+        match self.bytes.get(i) {
+            Some(b'\n') => 1,
+            Some(b'\r') => usize::from(self.bytes.get(i + 1) != Some(&b'\n')),
+            _ => 0,
+        }
+    }
+
     fn error_at(&self, at: usize, expected: &str, found: &str) -> ImportError {
         ImportError::syntax(self.location(at), expected, found)
     }
@@ -150,11 +172,11 @@ impl<'a> Lexer<'a> {
                 return Ok(());
             };
             match b {
-                b'\n' => {
-                    self.line += 1;
+                b'\n' | b'\r' => {
+                    self.line += self.line_end_at(self.pos);
                     self.pos += 1;
                 }
-                b' ' | b'\t' | b'\r' | 0x0c => self.pos += 1,
+                b' ' | b'\t' | 0x0c => self.pos += 1,
                 b'#' => self.skip_line(),
                 b'/' if self.bytes.get(self.pos + 1) == Some(&b'/') => self.skip_line(),
                 b'/' if self.bytes.get(self.pos + 1) == Some(&b'*') => {
@@ -163,10 +185,7 @@ impl<'a> Lexer<'a> {
                         return Err(self.error_at(start, "the end of a /* comment */", "/*"));
                     };
                     let end = self.pos + 2 + len + 2;
-                    self.line += self.bytes[self.pos..end]
-                        .iter()
-                        .filter(|&&c| c == b'\n')
-                        .count();
+                    self.line += line_ends(&self.bytes[self.pos..end]);
                     self.pos = end;
                 }
                 _ => return Ok(()),
@@ -176,7 +195,7 @@ impl<'a> Lexer<'a> {
 
     fn skip_line(&mut self) {
         while let Some(&b) = self.bytes.get(self.pos) {
-            if b == b'\n' {
+            if b == b'\n' || b == b'\r' {
                 return;
             }
             self.pos += 1;
@@ -339,7 +358,7 @@ impl<'a> Lexer<'a> {
                     break;
                 }
             }
-            if b == b'\n' {
+            if b == b'\n' || b == b'\r' {
                 if !triple {
                     return Err(self.error_at(
                         start,
@@ -347,7 +366,7 @@ impl<'a> Lexer<'a> {
                         "a new line",
                     ));
                 }
-                self.line += 1;
+                self.line += self.line_end_at(i);
             }
             if b == b'\\' {
                 let Some(&e) = self.bytes.get(i + 1) else {
@@ -424,7 +443,7 @@ impl<'a> Lexer<'a> {
             return Err(self.error_at(start, "an asset path ending in @", "end of file"));
         };
         let value = &body[..len];
-        if value.contains('\n') {
+        if value.contains(['\n', '\r']) {
             return Err(self.error_at(
                 start,
                 "an asset path ending in @ on its line",
@@ -505,5 +524,32 @@ mod tests {
         let mut lx = Lexer::new("é $", Path::new("t.usda"));
         let e = lx.next_token().unwrap_err().to_string();
         assert_eq!(e, "t.usda:1:1: expected a token, found \"é\"");
+    }
+
+    #[test]
+    fn lone_cr_and_crlf_end_lines() {
+        let lf = "#usda 1.0\n# comment\ndef X \"a\" {\n  /* a\n b */ float y = 1\n}\n\"open";
+        for text in [
+            lf.to_string(),
+            lf.replace('\n', "\r"),
+            lf.replace('\n', "\r\n"),
+        ] {
+            let mut lx = Lexer::new(&text, Path::new("t.usda"));
+            let mut toks = Vec::new();
+            let e = loop {
+                match lx.next_token() {
+                    Ok(t) => toks.push((t.tok, t.line)),
+                    Err(e) => break e.to_string(),
+                }
+            };
+            assert_eq!(toks[0], (Tok::Ident("def"), 3), "{text:?}");
+            assert_eq!(toks[3], (Tok::Punct('{'), 3), "{text:?}");
+            assert_eq!(toks[4], (Tok::Ident("float"), 5), "{text:?}");
+            assert_eq!(toks.len(), 9, "{text:?}: {toks:?}");
+            assert!(
+                e.starts_with("t.usda:7:1: expected the end of a string"),
+                "{e}"
+            );
+        }
     }
 }
