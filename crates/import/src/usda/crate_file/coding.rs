@@ -27,7 +27,9 @@ pub(super) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, Coding
 /// Decompresses a `TfFastCompression` buffer of at most `max_len` bytes; returns what was
 /// written.
 pub(super) fn decompress_prefix(input: &[u8], max_len: usize) -> Result<Vec<u8>, CodingError> {
-    let out_len = max_len;
+    // An LZ4 block expands at most about 255 times (a match of 255-length runs per byte):
+    // no corrupt size makes this allocate more than the input can fill.
+    let out_len = max_len.min(input.len().saturating_mul(256).saturating_add(64));
     let mut out = vec![0_u8; out_len];
     let Some((&first, mut rest)) = input.split_first() else {
         return if out_len == 0 {

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use super::super::import;
+use super::super::{import, import_slice};
 use super::*;
 
 fn corpus(rel: &str) -> Option<PathBuf> {
@@ -361,5 +361,196 @@ fn corpus_crate_files_equal_their_text_export() {
             warning_texts(&b.warnings, &usdc),
             "{stem}"
         );
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The committed fixture, and corrupt files: errors with byte offsets, never a panic.
+// ---------------------------------------------------------------------------------------
+
+const ALL_TYPES_USDA: &str = include_str!("../../../../../fixtures/usdc/all_types.usda");
+const ALL_TYPES_USDC: &[u8] = include_bytes!("../../../../../fixtures/usdc/all_types.usdc");
+const ALL_TYPES_USDZ: &[u8] = include_bytes!("../../../../../fixtures/usdc/all_types.usdz");
+
+#[test]
+fn committed_fixture_imports_like_its_text() {
+    let text = import_slice(ALL_TYPES_USDA.as_bytes(), Path::new("all_types.usda")).unwrap();
+    for (bytes, name) in [
+        (ALL_TYPES_USDC, "all_types.usdc"),
+        (ALL_TYPES_USDZ, "all_types.usdz"),
+        // A `.usd` file may hold either encoding: the bytes decide.
+        (ALL_TYPES_USDC, "all_types.usd"),
+    ] {
+        let bin = import_slice(bytes, Path::new(name)).unwrap_or_else(|e| panic!("{e}"));
+        assert!(bin.asset == text.asset, "{name}");
+        assert_eq!(bin.warnings.len(), text.warnings.len(), "{name}");
+    }
+    let a = &text.asset;
+    assert_eq!(a.skeleton.len(), 5);
+    assert_eq!(a.meshes[0].source_vertex_count(), 38);
+    let clips: Vec<&str> = a.clips.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(clips, ["Walk", "Still", "Run"]);
+}
+
+#[test]
+fn layer_of_the_committed_fixture() {
+    let layer = read(ALL_TYPES_USDC, Path::new("all_types.usdc")).unwrap();
+    let rig = &layer.root.children[0];
+    assert_eq!(rig.name, "Rig");
+    assert_eq!(rig.specifier, Specifier::Def);
+    let sets: Vec<&str> = rig
+        .body
+        .variant_sets
+        .iter()
+        .map(|s| s.name.as_str())
+        .collect();
+    assert_eq!(sets, ["clip", "look"]);
+    let api = rig.meta.iter().find(|m| m.key == "apiSchemas").unwrap();
+    assert_eq!(api.op, ListOp::Prepend);
+    assert_eq!(
+        api.value,
+        Value::List(vec![Value::Str("SkelBindingAPI".into())])
+    );
+    let body = rig.body.children.iter().find(|p| p.name == "Body").unwrap();
+    let prop = |name: &str| body.body.props.iter().find(|p| p.name == name).unwrap();
+    let PropKind::Attr {
+        default: Some(Value::List(q)),
+        type_name,
+        ..
+    } = &prop("primvars:quats").kind
+    else {
+        panic!("quats");
+    };
+    assert_eq!(type_name, "quatf[]");
+    // (w, x, y, z) as the text writes it; the file holds the float nearest 0.7071068.
+    let c = f64::from("0.7071068".parse::<f32>().unwrap());
+    assert_eq!(
+        q[1],
+        Value::Tuple(vec![
+            Value::Number(c),
+            Value::Number(c),
+            Value::Number(0.0),
+            Value::Number(0.0)
+        ])
+    );
+    let PropKind::Attr {
+        default: Some(Value::List(u)),
+        ..
+    } = &prop("primvars:uints").kind
+    else {
+        panic!("uints");
+    };
+    assert_eq!(u[3], Value::Number(4e9));
+    let PropKind::Attr {
+        default: Some(Value::None),
+        ..
+    } = &prop("blocked").kind
+    else {
+        panic!("blocked");
+    };
+}
+
+fn read_err(bytes: &[u8]) -> String {
+    match read(bytes, Path::new("x.usdc")) {
+        Ok(_) => panic!("read a corrupt file"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn corrupt_headers_and_offsets_name_the_byte() {
+    assert!(read_err(b"PXR-USDC").contains("x.usdc: at byte 0: truncated"));
+    let mut old = ALL_TYPES_USDC.to_vec();
+    old[9] = 3;
+    assert!(read_err(&old).contains("at byte 8: crate version 0.3.0 is not supported"));
+    // The table of contents past the end.
+    let mut toc = ALL_TYPES_USDC.to_vec();
+    toc[16..24].copy_from_slice(&(1_u64 << 40).to_le_bytes());
+    let e = read_err(&toc);
+    assert!(
+        e.contains(&format!("at byte {}: truncated", 1_u64 << 40)),
+        "{e}"
+    );
+    // Every section start moved past the end.
+    let at = u64::from_le_bytes(ALL_TYPES_USDC[16..24].try_into().unwrap()) as usize;
+    let mut sections = ALL_TYPES_USDC.to_vec();
+    let n = u64::from_le_bytes(sections[at..at + 8].try_into().unwrap()) as usize;
+    for k in 0..n {
+        let start = at + 8 + k * 32 + 16;
+        sections[start..start + 8]
+            .copy_from_slice(&(ALL_TYPES_USDC.len() as u64 + 5).to_le_bytes());
+    }
+    let e = read_err(&sections);
+    assert!(
+        e.contains(&format!("at byte {}", ALL_TYPES_USDC.len() + 5)),
+        "{e}"
+    );
+}
+
+#[test]
+fn every_truncation_is_an_error() {
+    for len in 0..ALL_TYPES_USDC.len() {
+        let e = read_err(&ALL_TYPES_USDC[..len]);
+        assert!(e.starts_with("x.usdc: at byte "), "{len}: {e}");
+    }
+    for len in (0..ALL_TYPES_USDZ.len()).step_by(7) {
+        assert!(import_slice(&ALL_TYPES_USDZ[..len], Path::new("x.usdz")).is_err());
+    }
+}
+
+#[test]
+fn usdz_errors() {
+    let e = import_slice(b"PK\x03\x04garbage", Path::new("x.usdz")).unwrap_err();
+    assert!(
+        e.to_string().starts_with("x.usdz: not a readable .usdz"),
+        "{e}"
+    );
+    // A changed root layer fails the member's checksum, at the member's data.
+    let mut z = ALL_TYPES_USDZ.to_vec();
+    let at = z.windows(8).position(|w| w == MAGIC).unwrap();
+    z[at + 16..at + 24].copy_from_slice(&(1_u64 << 40).to_le_bytes());
+    let e = import_slice(&z, Path::new("x.usdz"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(&format!(
+            "x.usdz: at byte {at}: cannot read \"all_types.usdc\""
+        )),
+        "{e}"
+    );
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2048))]
+    #[test]
+    fn never_panics_on_mutated_crate_files(
+        which in 0_usize..2,
+        edits in proptest::collection::vec(
+            (proptest::num::usize::ANY, proptest::num::u8::ANY, 0_u8..4),
+            1..12,
+        ),
+        cut in proptest::num::usize::ANY,
+    ) {
+        let mut bytes = [ALL_TYPES_USDC, ALL_TYPES_USDZ][which].to_vec();
+        for (at, byte, op) in edits {
+            let i = at % bytes.len();
+            match op {
+                0 => bytes[i] = byte,
+                1 => bytes[i] ^= 1 << (byte % 8),
+                // Small and large values in 8-byte words: counts and offsets.
+                2 => {
+                    let j = i - i % 8;
+                    if j + 8 <= bytes.len() {
+                        let v = if byte % 2 == 0 { u64::from(byte) } else { u64::MAX - u64::from(byte) };
+                        bytes[j..j + 8].copy_from_slice(&v.to_le_bytes());
+                    }
+                }
+                _ => bytes[i] = bytes[i].wrapping_add(1),
+            }
+        }
+        if cut % 4 == 0 {
+            bytes.truncate(cut / 4 % (bytes.len() + 1));
+        }
+        let _ = import_slice(&bytes, Path::new("m.usdc"));
     }
 }
