@@ -31,10 +31,11 @@ impl Location {
         }
     }
 
-    /// A 1-based line of the file.
+    /// A 1-based line of the file; line 0 (data from a binary file, which has no lines)
+    /// names the file only.
     pub fn line(path: &Path, line: usize) -> Self {
         Self {
-            line: Some(line),
+            line: (line > 0).then_some(line),
             ..Self::file(path)
         }
     }

@@ -64,11 +64,13 @@
 //! values, joints not parents-first, animation arrays of the wrong size, attributes of the
 //! wrong type.
 
+mod crate_file;
 mod lex;
 mod parse;
 mod stage;
 #[cfg(test)]
 mod tests;
+mod usdz;
 mod values;
 
 use std::collections::{BTreeSet, HashMap};
@@ -86,7 +88,7 @@ use self::stage::{Prim, Prop, Stage};
 use self::values::{
     is_half_type, matrices, matrix, number, numbers, round_to_half, token, tokens, tuples,
 };
-use crate::{read_file, utf8, ImportError, Imported, Location, Problem};
+use crate::{read_file, ImportError, Imported, Location, Problem};
 
 /// USD's fallback `metersPerUnit` when a stage does not author it (centimetres,
 /// `UsdGeomLinearUnits` / `UsdGeomGetStageMetersPerUnit`).
@@ -123,8 +125,8 @@ pub fn import(path: &Path) -> Result<Imported, ImportError> {
 /// # Errors
 /// As [`import`], less the file system.
 pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> {
-    let text = utf8(bytes, path)?;
-    let layer = parse::parse(text, path)?;
+    // `.usda` text, a `.usdc` crate file or a `.usdz` package, by their first bytes.
+    let layer = usdz::read_layer(bytes, path)?;
     let mut importer = Importer {
         path,
         layer: &layer,

@@ -24,6 +24,7 @@
 use std::path::Path;
 
 use super::lex::{Lexer, Tok, Token};
+use super::values::narrow_to_type;
 use crate::{ImportError, Location, Problem};
 
 /// Deepest nesting of prims, variants and values accepted. Real layers nest prims a few
@@ -563,6 +564,14 @@ impl<'a> Parser<'a> {
             other_field = Some(other);
         }
         let meta = self.optional_metadata()?;
+        // USD holds the value in the declared type: narrow `float` and `half` numbers now,
+        // so a text layer gives the numbers the binary encoding of it holds.
+        if let Some(v) = default.as_mut() {
+            narrow_to_type(v, &type_name);
+        }
+        for (_, v) in samples.iter_mut().flatten() {
+            narrow_to_type(v, &type_name);
+        }
         Ok(PropSpec {
             name: name.to_string(),
             kind: PropKind::Attr {

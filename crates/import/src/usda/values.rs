@@ -102,6 +102,43 @@ pub(crate) fn is_half_type(type_name: &str) -> bool {
                 .is_some_and(|c| c.is_ascii_digit()))
 }
 
+/// Whether a value type stores IEEE single floats (`float`, `float3[]`, `point3f`,
+/// `normal3f[]`, `quatf`, `texCoord2f`, ...).
+pub(crate) fn is_float_type(type_name: &str) -> bool {
+    let base = type_name.trim_end_matches("[]");
+    base.starts_with("float")
+        || base == "quatf"
+        || (base.ends_with('f')
+            && base
+                .chars()
+                .rev()
+                .nth(1)
+                .is_some_and(|c| c.is_ascii_digit()))
+}
+
+/// A parsed value narrowed to the precision its attribute type holds: numbers of `half`
+/// types rounded to binary16 and of `float` types to binary32, as USD stores them when it
+/// reads a layer (so text and binary layers give the same numbers). Other types are kept.
+pub(crate) fn narrow_to_type(value: &mut Value, type_name: &str) {
+    let round: fn(f64) -> f64 = if is_half_type(type_name) {
+        |x| f64::from(round_to_half(x as f32))
+    } else if is_float_type(type_name) {
+        |x| f64::from(x as f32)
+    } else {
+        return;
+    };
+    fn walk(v: &mut Value, round: fn(f64) -> f64) {
+        match v {
+            Value::Number(x) => *x = round(*x),
+            Value::Tuple(items) | Value::List(items) => {
+                items.iter_mut().for_each(|i| walk(i, round));
+            }
+            _ => {}
+        }
+    }
+    walk(value, round);
+}
+
 /// `x` rounded to the nearest IEEE 754 binary16 value (ties to even), as a `half`
 /// attribute holds it; magnitudes beyond the largest half round to infinity.
 pub(crate) fn round_to_half(x: f32) -> f32 {
@@ -149,5 +186,19 @@ mod tests {
         assert_eq!(round_to_half(tiny + 2f32.powi(-27)), tiny);
         assert!(is_half_type("half3[]") && is_half_type("quath") && is_half_type("texCoord2h[]"));
         assert!(!is_half_type("float3[]") && !is_half_type("matrix4d[]") && !is_half_type("token"));
+        assert!(is_float_type("float") && is_float_type("point3f[]") && is_float_type("quatf"));
+        assert!(!is_float_type("half3[]") && !is_float_type("double3") && !is_float_type("token"));
+        let mut v = Value::List(vec![Value::Tuple(vec![
+            Value::Number(0.1),
+            Value::Number(1.1),
+        ])]);
+        narrow_to_type(&mut v, "float2[]");
+        assert_eq!(
+            v,
+            Value::List(vec![Value::Tuple(vec![
+                Value::Number(f64::from(0.1_f32)),
+                Value::Number(f64::from(1.1_f32))
+            ])])
+        );
     }
 }
