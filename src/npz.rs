@@ -34,12 +34,15 @@ impl NpzWriter {
     pub fn finish(self) -> std::io::Result<Vec<u8>> {
         let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
         let opts = zip::write::SimpleFileOptions::default()
-            .compression_method(zip::CompressionMethod::Stored)
-            .large_file(false);
+            .compression_method(zip::CompressionMethod::Stored);
         for (name, shape, data) in &self.arrays {
-            zip.start_file(format!("{name}.npy"), opts)
+            let bytes = npy(shape, data);
+            // Zip64 only for an array of 4 GiB or more (numpy reads both); smaller ones keep
+            // the plain header, so their bytes do not change.
+            let large = u32::try_from(bytes.len()).is_err();
+            zip.start_file(format!("{name}.npy"), opts.large_file(large))
                 .map_err(std::io::Error::other)?;
-            zip.write_all(&npy(shape, data))?;
+            zip.write_all(&bytes)?;
         }
         Ok(zip.finish().map_err(std::io::Error::other)?.into_inner())
     }
