@@ -33,7 +33,7 @@ every point-based skinned prim (geomBindTransform applied), their influences (re
 skeleton's joint order), and the skinning transforms at every time code, and writes them in
 the dump layout with `positions` taken from the baked baseline (BAKED.usda). OUT ending in
 .npz gets an .npz, else a directory of .npy files. Checking that output compares usd-core
-with Pixar's own baseline; a Rust test (crates/eval/src/dqs.rs) skins the same arrays with
+with Pixar's own baseline; a Rust test (crates/eval/src/skinning/dqs.rs) skins the same arrays with
 rigport.
 
 Exit status: 0 within tolerance, 1 over tolerance, 2 bad input or usage.

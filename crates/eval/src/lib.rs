@@ -8,7 +8,6 @@
 
 pub mod bake;
 pub mod bone_mesh;
-pub mod dqs;
 mod error;
 pub mod fk;
 pub mod ik;
@@ -19,7 +18,6 @@ pub mod retime;
 pub mod rig;
 pub mod sample;
 pub mod sequence;
-mod simd;
 pub mod skinning;
 
 pub use dqs::{DqsJob, DqsPalette};
@@ -27,6 +25,7 @@ pub use error::EvalError;
 pub use fk::LocalToModelJob;
 pub use pose::Pose;
 pub use rig::{Rig, RigOutput};
+pub use skinning::dqs;
 pub use skinning::{
     par_skin_frames, skin_frames, skinning_matrices, LbsJob, PackedInfluences, SkinFramesJob,
     SkinningMethod,

@@ -15,7 +15,7 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::dqs::{Frame, Hemisphere};
+use super::common::{Frame, Hemisphere};
 
 #[cfg(test)]
 thread_local! {
@@ -84,7 +84,7 @@ mod x86 {
     use glam::{Mat4, Vec3};
     use pulp::cast;
 
-    use crate::dqs::{Frame, Hemisphere, JointDq, MIN_REAL_LENGTH};
+    use crate::skinning::common::{Frame, Hemisphere, JointDq, MIN_REAL_LENGTH};
     pub(super) use pulp::x86::V3;
     use std::arch::x86_64::{__m128, __m256};
 

@@ -61,7 +61,11 @@
 use glam::{DMat3, DQuat, DVec3, Mat3, Mat4, Quat, Vec3, Vec3A, Vec4};
 use rigport_model::{Influence, Influences};
 
-use crate::skinning::{check_lengths, check_palette, for_vertex_chunks};
+use super::common::{
+    check_lengths, check_palette, for_vertex_chunks, Frame, Hemisphere, JointDq, Sym3,
+    MIN_REAL_LENGTH,
+};
+use super::simd;
 use crate::EvalError;
 
 /// Joint matrices whose upper 3x3 has `|det| < SINGULAR_DET` are singular (the `eps`
@@ -70,10 +74,6 @@ const SINGULAR_DET: f64 = 1e-10;
 
 /// UsdSkel's `hasJointScale` tolerance: `GfIsClose(jointScale, identity, 1e-6)`.
 const SCALE_TOLERANCE: f64 = 1e-6;
-
-/// A blended dual quaternion whose real part is shorter than this becomes the identity
-/// (`GfDualQuatd::Normalize`'s default `eps`, `GF_MIN_VECTOR_LENGTH`).
-pub(crate) const MIN_REAL_LENGTH: f32 = 1e-10;
 
 /// The per-vertex hemisphere test reads a precomputed sign table (palette x palette signs
 /// per frame) when the palette has at most this many joints, else it takes dot products.
@@ -219,79 +219,6 @@ fn polar_orthogonal(a: DMat3) -> Option<DMat3> {
         }
     }
     x.is_finite().then_some(x)
-}
-
-/// A symmetric 3x3 matrix as two SIMD vectors: the diagonal `(xx, yy, zz, 0)` and the
-/// off-diagonal `(xy, xz, yz, 0)`. The scale/shear part `S = Rᵀ A` of a polar
-/// decomposition is symmetric (it is `±(AᵀA)^½`), so this halves the per-influence blend
-/// of the scale matrices (rounding the `f64` matrix's tiny asymmetry away).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
-pub(crate) struct Sym3 {
-    pub(crate) diag: Vec4,
-    pub(crate) off: Vec4,
-}
-
-impl Sym3 {
-    const ZERO: Self = Self {
-        diag: Vec4::ZERO,
-        off: Vec4::ZERO,
-    };
-    const IDENTITY: Self = Self {
-        diag: Vec4::new(1.0, 1.0, 1.0, 0.0),
-        off: Vec4::ZERO,
-    };
-
-    fn from_dmat3(m: &DMat3) -> Self {
-        let avg = |a: f64, b: f64| (0.5 * (a + b)) as f32;
-        Self {
-            diag: Vec4::new(m.x_axis.x as f32, m.y_axis.y as f32, m.z_axis.z as f32, 0.0),
-            off: Vec4::new(
-                avg(m.y_axis.x, m.x_axis.y),
-                avg(m.z_axis.x, m.x_axis.z),
-                avg(m.z_axis.y, m.y_axis.z),
-                0.0,
-            ),
-        }
-    }
-
-    #[inline(always)]
-    fn add_scaled(&mut self, other: &Self, w: Vec4) {
-        self.diag += other.diag * w;
-        self.off += other.off * w;
-    }
-
-    #[inline(always)]
-    fn mul_vec3a(&self, p: Vec3A) -> Vec3A {
-        use glam::Vec4Swizzles;
-        let p = p.extend(0.0);
-        let o = self.off;
-        let r = self.diag * p + o.xxyw() * p.yxxw() + o.yzzw() * p.zzyw();
-        Vec3A::from(r.truncate())
-    }
-}
-
-/// One joint's data for the per-vertex DQS loop (`f32`, SIMD-friendly; 64 bytes, one
-/// cache line).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
-pub(crate) struct JointDq {
-    /// Rotation quaternion (xyzw); zero for a singular joint.
-    pub(crate) real: Vec4,
-    /// Dual part `½ (t, 0) real`; zero for a singular joint.
-    pub(crate) dual: Vec4,
-    /// Scale/shear `S` (identity for a singular joint).
-    pub(crate) scale: Sym3,
-}
-
-impl Default for JointDq {
-    fn default() -> Self {
-        Self {
-            real: Vec4::ZERO,
-            dual: Vec4::ZERO,
-            scale: Sym3::IDENTITY,
-        }
-    }
 }
 
 /// Per-frame joint data for dual quaternion skinning, computed from the skinning matrices
@@ -462,26 +389,6 @@ fn sign_of(q: Vec4, pivot: Vec4) -> f32 {
     } else {
         1.0
     }
-}
-
-/// One frame of a [`DqsPalette`].
-#[derive(Clone, Copy)]
-pub(crate) struct Frame<'a> {
-    pub(crate) dq: &'a [JointDq],
-    normal_scale: &'a [Sym3],
-    /// Does any joint have scale or shear (then points are scaled by the blended
-    /// scale/shear before the rigid part)?
-    pub(crate) has_scale: bool,
-    aligned: bool,
-    signs: Option<&'a [f32]>,
-}
-
-/// How the per-vertex loop finds the hemisphere sign of joint `j` relative to the pivot.
-pub(crate) trait Hemisphere: Copy {
-    /// Called once per vertex.
-    fn for_pivot(self, dq: &[JointDq], pivot: usize) -> Self;
-    /// The sign of joint `j`.
-    fn sign(self, dq: &JointDq, j: usize) -> f32;
 }
 
 /// Reads the precomputed sign table.
@@ -764,7 +671,7 @@ fn skin_fixed_with<const W: usize, const SCALE: bool, H: Hemisphere>(
 ) {
     // With AVX2 + FMA, blocks of eight vertices go through the SIMD kernel; the rest (or
     // everything, on other CPUs) through the portable loop below.
-    let done = crate::simd::dqs_fixed::<W, SCALE, H>(frame, h, joints, weights, rest, out);
+    let done = simd::dqs_fixed::<W, SCALE, H>(frame, h, joints, weights, rest, out);
     let (joints, weights) = (&joints[done * W..], &weights[done * W..]);
     let (rest, out) = (&rest[done..], &mut out[done..]);
     // Blocks of four vertices share the normalization and transform (`apply4`). The
@@ -819,7 +726,7 @@ pub(crate) fn skin_sparse(
 ) {
     // With AVX2 + FMA, blocks of eight vertices go through the SIMD kernel; the rest (or
     // everything, on other CPUs) through the portable loop below.
-    use crate::simd::dqs_sparse as simd;
+    use super::simd::dqs_sparse as simd;
     let done = match (frame.aligned, frame.signs) {
         (true, _) => simd(frame, Aligned, offsets, base, joints, weights, rest, out),
         (false, Some(signs)) => {
@@ -1699,7 +1606,7 @@ mod tests {
                 )
             })
             .collect();
-        let n = 3 * crate::skinning::GRAIN + 17;
+        let n = 3 * crate::skinning::common::GRAIN + 17;
         let infl = Influences::from_rows((0..n).map(|v| {
             [
                 Influence {
