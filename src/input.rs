@@ -148,12 +148,8 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
             "obj" => objs.push(input.clone()),
             "out" => outs.push(input.clone()),
             "bvh" => plans.push(Plan::Bvh(input.clone())),
-            "usda" => plans.push(Plan::Usda(input.clone())),
-            "usd" | "usdc" | "usdz" => bail!(
-                "{}: rigport reads USD text (.usda); convert with `usdcat {} -o file.usda`",
-                input.display(),
-                input.display()
-            ),
+            // Text, crate (binary) or package: the importer tells them by their bytes.
+            "usda" | "usd" | "usdc" | "usdz" => plans.push(Plan::Usda(input.clone())),
             "asf" => plans.push(Plan::AsfAmc {
                 asf: input.clone(),
                 motions: Vec::new(),
@@ -258,7 +254,7 @@ pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
 }
 
 /// What positional inputs may be.
-const EXPECTED: &str = ".glb, .gltf, .usda, a CSCI 520 skin.config, .obj with Pinocchio .out files, .bvh, or .asf with .amc files";
+const EXPECTED: &str = ".glb, .gltf, .usda/.usdc/.usdz/.usd, a CSCI 520 skin.config, .obj with Pinocchio .out files, .bvh, or .asf with .amc files";
 
 /// The AMC frame rate from `--fps`/`--amc-fps`, checked.
 fn amc_fps(args: &InputArgs) -> Result<f32> {

@@ -6,6 +6,7 @@
 //! with exit code 1, the prim path on stderr and no output file.
 
 use std::collections::BTreeMap;
+use std::path::Path;
 
 use crate::common::*;
 
@@ -318,4 +319,63 @@ fn malformed_files_fail_with_the_prim_path_and_no_output() {
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert_eq!(result.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("cut.usda:4:1: expected"), "{stderr}");
+}
+
+/// Issue 22: `.usdc`, `.usdz` and `.usd` are read natively. The committed fixture's
+/// crate file and package convert to the same `.glb` bytes as its text; the corpus's
+/// binary files convert to valid glTF.
+#[test]
+fn crate_files_and_packages_convert_like_their_text() {
+    let fixtures = repo().join("fixtures/usdc");
+    let dir = scratch();
+    let convert = |input: &Path, name: &str| -> Vec<u8> {
+        let out = dir.path().join(name);
+        rigport_ok(&[
+            "convert",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_valid(&out);
+        std::fs::read(out).unwrap()
+    };
+    let text = convert(&fixtures.join("all_types.usda"), "text.glb");
+    assert_eq!(convert(&fixtures.join("all_types.usdc"), "crate.glb"), text);
+    assert_eq!(
+        convert(&fixtures.join("all_types.usdz"), "package.glb"),
+        text
+    );
+    // `.usd` may be either encoding: the bytes decide.
+    let usd = dir.path().join("all_types.usd");
+    std::fs::copy(fixtures.join("all_types.usdc"), &usd).unwrap();
+    assert_eq!(convert(&usd, "usd.glb"), text);
+
+    for rel in [
+        "tinyusdz_tests__lighttransport/tests_usdc_usdskel-001.usdc",
+        "tinyusdz_tests__lighttransport/tests_usdc_skeleton-purpose-001.usdc",
+        "tinyusdz_tests__lighttransport/models_blendshape.usdc",
+        "usdz_test_assets__usd-wg/BoxAnimated.usdz",
+        "usdz_test_assets__usd-wg/AnimatedCube.usdz",
+    ] {
+        let Some(input) = corpus(&format!("{USD}/{rel}")) else {
+            continue;
+        };
+        assert!(!convert(&input, "corpus.glb").is_empty(), "{rel}");
+    }
+
+    // A corrupt crate file: exit code 1, the byte offset on stderr, no output.
+    let bad = dir.path().join("bad.usdc");
+    let bytes = std::fs::read(fixtures.join("all_types.usdc")).unwrap();
+    std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
+    let out_path = dir.path().join("bad.glb");
+    let out = rigport(&[
+        "convert",
+        bad.to_str().unwrap(),
+        "-o",
+        out_path.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("bad.usdc: at byte "), "{stderr}");
+    assert!(!out_path.exists());
 }

@@ -8,8 +8,11 @@
 //! twice keeps its last statement (as `Sdf` reads a layer; a [`Warning::Note`] says so).
 //! References, payloads, inherits, specializes and sublayers are **not** resolved: each
 //! prim carrying one gets a [`Warning::Incomplete`], and it is an error when the skeleton,
-//! a bound mesh or the bound animation is missing data that may live behind one. Only
-//! `.usda` is read; `.usdc`/`.usdz` need a binary reader (the CLI says how to convert).
+//! a bound mesh or the bound animation is missing data that may live behind one. The
+//! same layer is read from the binary crate format (`.usdc`, own reader in `crate_file/`)
+//! and from a package's root layer (`.usdz`); the bytes, not the name, pick the reader.
+//! Values of `float` and `half` attributes are narrowed to those types when read, as USD
+//! holds them, so a `.usda` and its `.usdc` give equal assets.
 //!
 //! # The asset rigport builds (UsdSkel, `pxr/usd/usdSkel` docs)
 //! | USD | model |
