@@ -12,7 +12,6 @@ mod input;
 mod keys;
 mod npz;
 mod output;
-mod pose;
 
 use std::process::ExitCode;
 

@@ -10,8 +10,8 @@ use rigport_model::Asset;
 use super::Context;
 use crate::cli::{EvalArgs, Skinning};
 use crate::exit::OutputError;
+use crate::input;
 use crate::npz::{Data, NpzWriter};
-use crate::{input, pose};
 
 /// Row-major 4x4 (numpy's C order) of a column-vector matrix, so `M[j] @ p` works in numpy.
 fn push_row_major(out: &mut Vec<f32>, m: &Mat4) {
@@ -222,7 +222,11 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
                 );
             }
             let pose = match &args.pose {
-                Some(path) => pose::load(path, &asset.skeleton)?,
+                Some(path) => {
+                    let mut pose = Pose::rest(&asset.skeleton);
+                    pose.apply(&rigport_import::json::pose::read(path, &asset.skeleton)?);
+                    pose
+                }
                 None => Pose::rest(&asset.skeleton),
             };
             rig.evaluate_with(&pose, method, &mut posed)?;

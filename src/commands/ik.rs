@@ -148,7 +148,7 @@ pub fn solve(
     ctx.step("solving", || -> Result<()> {
         for &t in &times {
             for (h, track) in tracks.iter().enumerate() {
-                targets[h].target = track.target_at(t, rest_points[h]);
+                targets[h].target = handles::target_at(track, t, rest_points[h]);
                 targets[h].weight = track.weight;
             }
             IkSolveJob {

@@ -12,6 +12,7 @@ pub mod dqs;
 mod error;
 pub mod fk;
 pub mod ik;
+pub mod keyed;
 pub mod pose;
 pub mod reduce;
 pub mod retime;

@@ -12,6 +12,7 @@ pub mod csci520;
 pub mod demo;
 mod error;
 pub mod gltf;
+pub mod json;
 mod number;
 pub mod obj;
 pub mod pinocchio;
