@@ -7,7 +7,6 @@
 mod cli;
 mod commands;
 mod exit;
-mod handles;
 mod input;
 mod keys;
 mod npz;

@@ -159,6 +159,13 @@ pub trait Markers: Sync {
     fn markers_at(&self, time: f32, out: &mut Vec<Vec3>);
 }
 
+/// IK handle targets over time, as `rigport ik` solves for them.
+impl Markers for rigport_eval::ik::clip::HandleTargets {
+    fn markers_at(&self, time: f32, out: &mut Vec<Vec3>) {
+        self.targets_at(time, out);
+    }
+}
+
 impl<F: Fn(f32, &mut Vec<Vec3>) + Sync> Markers for F {
     fn markers_at(&self, time: f32, out: &mut Vec<Vec3>) {
         self(time, out);
