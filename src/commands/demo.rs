@@ -3,13 +3,13 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result};
+use rigport_eval::bake::pipeline::{bake_dqs, DqsBakeOptions};
 use rigport_eval::ik::clip::{solve_clip, ClipSolveOptions, HandleTargets};
 use rigport_export::{GltfOptions, UsdOptions};
 use rigport_import::{demo, pinocchio};
 use rigport_model::Asset;
 use rigport_render::{FrameTime, RenderOptions, SkinningChoice, View};
 
-use super::bake::{bake_dqs, DqsBakeOptions};
 use super::Context;
 use crate::cli::{DemoArgs, InputArgs};
 use crate::exit::OutputError;
@@ -223,20 +223,23 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     let mut twist_asset = imported.asset.clone();
     twist_asset.clips.retain(|c| c.name == "twist");
     let dqs_influences: u8 = 4;
-    let bake_lines = bake_dqs(
-        ctx,
-        "demo",
-        &mut twist_asset,
-        &DqsBakeOptions {
-            clip: Some("twist"),
-            fps: Some(30.0),
-            threshold: None,
-            correctives: None,
-            max_influences: dqs_influences,
-        },
-        &mut warnings,
-    )
-    .context("cannot bake the demo's twist clip (a rigport bug)")?;
+    let bake_reports = ctx
+        .step("baking DQS correctives", || {
+            bake_dqs(
+                &mut twist_asset,
+                &DqsBakeOptions {
+                    clip: Some("twist"),
+                    fps: Some(30.0),
+                    ..DqsBakeOptions::default()
+                },
+                |skeleton, skin| {
+                    rigport_export::gltf_influences(skeleton, skin, usize::from(dqs_influences))
+                },
+                "demo",
+                &mut warnings,
+            )
+        })
+        .context("cannot bake the demo's twist clip (a rigport bug)")?;
     let prepared_dqs = rigport_export::prepare_gltf(
         &twist_asset,
         &out_dqs,
@@ -303,8 +306,10 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
             "  wrote {} (clip \"twist\", DQS baked into corrective morph targets)",
             out_dqs.display()
         );
-        for line in &bake_lines {
-            println!("    {line}");
+        for report in &bake_reports {
+            for line in report.to_string().lines() {
+                println!("    {line}");
+            }
         }
         for (path, what) in &pictures {
             println!("  wrote {} ({what})", path.display());

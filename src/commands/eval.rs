@@ -1,13 +1,13 @@
 //! `rigport eval`: pose a rig and dump the skinned result as `.npz`.
 
 use anyhow::{Context as _, Result};
-use rigport_eval::sample::{sample_times, CompiledClip, SampleJob};
+use rigport_eval::sample::{CompiledClip, FrameGrid, SampleJob};
 use rigport_eval::skinning::SkinningMethod;
 use rigport_eval::{Pose, Rig, RigOutput};
 use rigport_model::glam::Mat4;
 use rigport_model::Asset;
 
-use super::Context;
+use super::{clip_names, Context};
 use crate::cli::{EvalArgs, Skinning};
 use crate::exit::OutputError;
 use crate::input;
@@ -241,7 +241,7 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
                     if !(fps.is_finite() && fps > 0.0) {
                         anyhow::bail!("--fps {fps}: expected a positive frame rate");
                     }
-                    sample_times(compiled.start(), compiled.end(), fps)
+                    FrameGrid::new(compiled.start(), compiled.end(), fps)?.into_times()
                 }
             };
             let rest = Pose::rest(&asset.skeleton);
@@ -278,17 +278,4 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// The clip names of an asset, for messages.
-pub fn clip_names(asset: &Asset) -> String {
-    if asset.clips.is_empty() {
-        return "none".into();
-    }
-    asset
-        .clips
-        .iter()
-        .map(|c| format!("{:?}", c.name))
-        .collect::<Vec<_>>()
-        .join(", ")
 }

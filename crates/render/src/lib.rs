@@ -237,6 +237,9 @@ pub enum RenderError {
         /// Height in pixels.
         height: u32,
     },
+    /// The frame grid would hold more than `rigport_eval::sample::MAX_FRAMES` frames.
+    #[error(transparent)]
+    Frames(EvalError),
     /// The rig cannot be evaluated.
     #[error("the rig cannot be evaluated")]
     Eval(#[from] EvalError),
@@ -278,7 +281,8 @@ pub fn find_clip<'a>(
 /// key times when `fps` is `None`; `[0]` without a clip (the rest pose).
 ///
 /// # Errors
-/// [`RenderError::Fps`] for a non-positive or non-finite `fps`, [`RenderError::Sample`]
+/// [`RenderError::Fps`] for a non-positive or non-finite `fps`, [`RenderError::Frames`] for
+/// one that needs too many frames, [`RenderError::Sample`]
 /// if the clip does not fit the skeleton.
 pub fn clip_times(
     asset: &Asset,
@@ -296,7 +300,9 @@ pub fn clip_times(
     let compiled = CompiledClip::new(clip, &asset.skeleton)?;
     Ok(match fps {
         None => compiled.key_times(),
-        Some(fps) => rigport_eval::sample::sample_times(compiled.start(), compiled.end(), fps),
+        Some(fps) => rigport_eval::sample::FrameGrid::new(compiled.start(), compiled.end(), fps)
+            .map_err(RenderError::Frames)?
+            .into_times(),
     })
 }
 

@@ -8,7 +8,8 @@ use super::{
     IkEffector, IkError, IkHandle, IkMethod, IkProblem, IkReport, IkScratch, IkSettings,
     IkSolveJob, Lambda,
 };
-use crate::sample::{bake, ChannelMask, SampleError};
+use crate::sample::{bake, ChannelMask, FrameGrid, SampleError};
+use crate::EvalError;
 use crate::Pose;
 
 /// How [`solve_clip`] solves.
@@ -94,6 +95,9 @@ pub enum ClipSolveError {
     /// The tolerance is not finite and positive.
     #[error("tolerance {0}: expected a distance > 0")]
     Tolerance(f32),
+    /// The frame grid would be too large ([`crate::sample::MAX_FRAMES`]).
+    #[error(transparent)]
+    Frames(EvalError),
     /// A setting is out of range.
     #[error("invalid IK settings")]
     Settings(#[source] IkError),
@@ -186,12 +190,14 @@ impl HandleTargets {
     }
 }
 
-/// Solves `handles` on `skeleton` frame by frame (warm start from the previous frame) at
-/// `options.fps` from 0 to the last handle key, and bakes the poses into a clip `name`.
+/// Solves `handles` on `skeleton` frame by frame (warm start from the previous frame) on
+/// the [`FrameGrid`] at `options.fps` from 0 to the last handle key (included), and bakes
+/// the poses into a clip `name`.
 /// `label` names the handles' source in warnings.
 ///
 /// # Errors
-/// A bad frame rate or tolerance, settings out of range, handles that do not fit the
+/// A bad frame rate (or one needing more than [`crate::sample::MAX_FRAMES`] frames) or
+/// tolerance, settings out of range, handles that do not fit the
 /// skeleton, a failed frame, poses that cannot be baked.
 ///
 /// ```
@@ -274,10 +280,10 @@ pub fn solve_clip(
         .iter()
         .filter_map(|t| t.times.last().copied())
         .fold(0.0f32, f32::max);
-    let frame_count = (end * fps).round() as usize + 1;
-    let times: Vec<f32> = (0..frame_count)
-        .map(|k| (k as f32 / fps).min(end))
-        .collect();
+    let times = FrameGrid::new(0.0, end, fps)
+        .map_err(ClipSolveError::Frames)?
+        .into_times();
+    let frame_count = times.len();
     let mut pose = Pose::rest(skeleton);
     let mut scratch = IkScratch::new(&problem);
     let mut report = IkReport::new(&problem);
