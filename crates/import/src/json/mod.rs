@@ -138,3 +138,154 @@ pub(crate) fn from_value<T: serde::de::DeserializeOwned>(
 pub(crate) fn token(name: &str) -> String {
     name.replace('~', "~0").replace('/', "~1")
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use rigport_model::{Joint, JointIndex, Skeleton, Transform};
+
+    /// `root` -> `arm` -> `hand`.
+    fn skeleton() -> Skeleton {
+        let joint = |name: &str, parent: Option<u32>| Joint {
+            name: name.into(),
+            parent: parent.map(JointIndex),
+            rest_local: Transform::IDENTITY,
+        };
+        Skeleton::new(vec![
+            joint("root", None),
+            joint("arm", Some(0)),
+            joint("hand", Some(1)),
+        ])
+        .expect("a chain")
+    }
+
+    /// Writes `text` to a scratch file named `name` and returns the parser's message.
+    fn message(name: &str, text: &str, parse: fn(&Path, &Skeleton) -> Option<String>) -> String {
+        let dir = std::env::temp_dir().join(format!("rigport-json-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("scratch folder");
+        let path = dir.join(name);
+        std::fs::write(&path, text).expect("scratch file");
+        let m = parse(&path, &skeleton()).unwrap_or_default();
+        let _ = std::fs::remove_dir_all(&dir);
+        m
+    }
+
+    fn pose(path: &Path, s: &Skeleton) -> Option<String> {
+        super::pose::read(path, s).err().map(|e| e.to_string())
+    }
+    fn keys(path: &Path, s: &Skeleton) -> Option<String> {
+        super::keys::read(path, s).err().map(|e| e.to_string())
+    }
+    fn handles(path: &Path, s: &Skeleton) -> Option<String> {
+        super::handles::read(path, s).err().map(|e| e.to_string())
+    }
+
+    #[test]
+    fn pose_errors_name_the_json_path() {
+        for (text, expected) in [
+            (r#"{"nope": {"quat": [0,0,0,1]}}"#, r#"p.json: at /nope: the rig has no joint named "nope""#),
+            (r#"{"arm": {"quat": [0,0,0,0]}}"#, "p.json: at /arm/quat: quaternion [0.0, 0.0, 0.0, 0.0] is zero or not finite"),
+            (r#"{"arm": {"quat": [0,0,0,1], "order": "xyz"}}"#, "p.json: at /arm/order: \"order\" goes with \"euler_deg\", not \"quat\""),
+            (r#"{"arm": {"euler_deg": [0,0,1], "order": "abc"}}"#, "p.json: at /arm/order: unknown order \"abc\"; expected one of xyz, yzx, zxy, xzy, yxz, zyx"),
+            (r#"{"arm": {}}"#, "p.json: at /arm: give exactly one of \"quat\" [x,y,z,w] or \"euler_deg\" [x,y,z]"),
+            (r#"{"a/b": {"quat": [0,0,0,1]}}"#, r#"p.json: at /a~1b: the rig has no joint named "a/b""#),
+        ] {
+            assert!(message("p.json", text, pose).ends_with(expected), "{text}: {}", message("p.json", text, pose));
+        }
+        assert!(message("p.json", "{\"arm\":\n {", pose).contains("p.json:2:"));
+        assert!(message("p.json", r#"{"arm": {"euler": [0,0,1]}}"#, pose)
+            .contains("p.json: at /arm: unknown field `euler`"));
+    }
+
+    #[test]
+    fn keys_errors_name_the_json_path() {
+        for (text, expected) in [
+            (r#"{"keys": []}"#, "k.json: at /keys: no keys"),
+            (
+                r#"{"fps": 0, "keys": [{"time": 0}]}"#,
+                "k.json: at /fps: 0 is not a positive frame rate",
+            ),
+            (
+                r#"{"keys": [{"frame": 1}]}"#,
+                "k.json: at /keys/0: \"frame\" needs \"fps\" at the top level",
+            ),
+            (
+                r#"{"keys": [{"time": 0, "frame": 1}]}"#,
+                "k.json: at /keys/0: give exactly one of \"time\" (seconds) or \"frame\"",
+            ),
+            (
+                r#"{"keys": [{"time": -1}]}"#,
+                "k.json: at /keys/0: time -1 must be a finite number of seconds >= 0",
+            ),
+            (
+                r#"{"keys": [{"time": 1}, {"time": 1}]}"#,
+                "k.json: at /keys: keys 0 and 1 are both at 1 s",
+            ),
+            (
+                r#"{"keys": [{"time": 0}, {"time": 1, "pose": {"hand": {"euler_deg": [0, 0, 1e39]}}}]}"#,
+                "k.json: at /keys/1/pose/hand/euler_deg: [0.0, 0.0, inf] is not finite",
+            ),
+        ] {
+            assert!(
+                message("k.json", text, keys).ends_with(expected),
+                "{text}: {}",
+                message("k.json", text, keys)
+            );
+        }
+    }
+
+    #[test]
+    fn handles_errors_name_the_json_path() {
+        let key = r#"{"time": 0, "position": [0, 0, 0]}"#;
+        for (text, expected) in [
+            (
+                r#"{"handles": []}"#.to_string(),
+                "h.json: at /handles: no handles",
+            ),
+            (
+                format!(r#"{{"handles": [{{"joint": "nope", "keys": [{key}]}}]}}"#),
+                "h.json: at /handles/0/joint: the rig has no joint named \"nope\"",
+            ),
+            (
+                format!(
+                    r#"{{"handles": [{{"joint": "hand", "keys": [{key}]}}, {{"joint": "hand", "keys": [{key}]}}]}}"#
+                ),
+                "h.json: at /handles/1/joint: \"hand\" has a handle already",
+            ),
+            (
+                r#"{"handles": [{"joint": "hand", "keys": []}]}"#.to_string(),
+                "h.json: at /handles/0/keys: no keys",
+            ),
+            (
+                format!(r#"{{"handles": [{{"joint": "hand", "weight": 0, "keys": [{key}]}}]}}"#),
+                "h.json: at /handles/0/weight: 0 must be > 0",
+            ),
+            (
+                format!(r#"{{"handles": [{{"joint": "hand", "keys": [{key}, {key}]}}]}}"#),
+                "h.json: at /handles/0/keys/1/time: 0 s does not come after the previous key",
+            ),
+        ] {
+            assert!(
+                message("h.json", &text, handles).ends_with(expected),
+                "{text}: {}",
+                message("h.json", &text, handles)
+            );
+        }
+    }
+
+    #[test]
+    fn valid_files_parse() {
+        let dir = std::env::temp_dir().join(format!("rigport-json-{}-ok", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("scratch folder");
+        let path = dir.join("k.json");
+        std::fs::write(&path, r#"{"fps": 10, "keys": [{"frame": 5, "pose": {"arm": {"euler_deg": [0, 0, 90]}}}, {"frame": 0, "translation": [0, 1, 0]}]}"#).expect("write");
+        let k = super::keys::read(&path, &skeleton()).expect("valid keys");
+        assert_eq!(
+            k.keys.iter().map(|k| (k.time, k.index)).collect::<Vec<_>>(),
+            [(0.0, 1), (0.5, 0)]
+        );
+        assert_eq!(k.keys[1].rotations[0].joint, JointIndex(1));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
