@@ -7,12 +7,10 @@
 mod cli;
 mod commands;
 mod exit;
-mod handles;
 mod input;
 mod keys;
 mod npz;
 mod output;
-mod pose;
 mod signals;
 
 use std::process::ExitCode;

@@ -3,16 +3,16 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result};
+use rigport_eval::bake::pipeline::{bake_dqs, DqsBakeOptions};
+use rigport_eval::ik::clip::{solve_clip, ClipSolveOptions, HandleTargets};
 use rigport_export::{GltfOptions, UsdOptions};
 use rigport_import::{demo, pinocchio};
 use rigport_model::Asset;
 use rigport_render::{FrameTime, RenderOptions, SkinningChoice, View};
 
-use super::bake::{bake_dqs, DqsBakeOptions};
 use super::Context;
 use crate::cli::{DemoArgs, InputArgs};
 use crate::exit::OutputError;
-use crate::handles::{self, Targets};
 use crate::{input, keys};
 
 /// The demo's IK handles: the left fingertip reaches forward and up (offsets from its rest
@@ -184,31 +184,23 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     // offset puts the effector at the finger's tip) reaches forward and up, then back.
     let reach_path = args.output.join("reach.handles.json");
     write(&reach_path, REACH_HANDLES.as_bytes())?;
-    let (mut reach, _, reach_warnings) = super::ik::solve(
-        ctx,
-        &imported.asset.skeleton,
-        &reach_path,
-        &super::ik::IkOptions {
-            method: rigport_eval::ik::IkMethod::Dls {
-                lambda: rigport_eval::ik::Lambda::Adaptive,
-            },
-            fps: None,
-            tolerance: None,
-            max_iterations: 100,
-            substep: None,
-            free_root: false,
-        },
-    )
-    .context("the built-in demo reach is invalid (a rigport bug)")?;
-    reach.name = "reach".into();
-    imported.warnings.extend(reach_warnings);
+    let reach_handles = rigport_import::json::handles::read(&reach_path, &imported.asset.skeleton)
+        .context("the built-in demo reach is invalid (a rigport bug)")?;
+    let solved = ctx
+        .step("solving", || {
+            solve_clip(
+                &imported.asset.skeleton,
+                &reach_handles,
+                &ClipSolveOptions::default(),
+                "reach",
+                &reach_path.display().to_string(),
+            )
+        })
+        .context("the built-in demo reach is invalid (a rigport bug)")?;
+    let reach = solved.clip;
+    imported.warnings.extend(solved.warnings);
     // The targets the reach was solved for, drawn as markers on its picture.
-    let reach_targets = Targets::new(
-        &imported.asset.skeleton,
-        handles::load(&reach_path, &imported.asset.skeleton)
-            .context("the built-in demo reach is invalid (a rigport bug)")?
-            .tracks,
-    );
+    let reach_targets = HandleTargets::new(&imported.asset.skeleton, reach_handles.tracks);
     imported.asset.clips.push(reach);
     // The twist clip, keyed like wave (the LBS-vs-DQS comparison of issue 5).
     let twist_path = args.output.join("twist.keys.json");
@@ -231,20 +223,23 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     let mut twist_asset = imported.asset.clone();
     twist_asset.clips.retain(|c| c.name == "twist");
     let dqs_influences: u8 = 4;
-    let bake_lines = bake_dqs(
-        ctx,
-        "demo",
-        &mut twist_asset,
-        &DqsBakeOptions {
-            clip: Some("twist"),
-            fps: Some(30.0),
-            threshold: None,
-            correctives: None,
-            max_influences: dqs_influences,
-        },
-        &mut warnings,
-    )
-    .context("cannot bake the demo's twist clip (a rigport bug)")?;
+    let bake_reports = ctx
+        .step("baking DQS correctives", || {
+            bake_dqs(
+                &mut twist_asset,
+                &DqsBakeOptions {
+                    clip: Some("twist"),
+                    fps: Some(30.0),
+                    ..DqsBakeOptions::default()
+                },
+                |skeleton, skin| {
+                    rigport_export::gltf_influences(skeleton, skin, usize::from(dqs_influences))
+                },
+                "demo",
+                &mut warnings,
+            )
+        })
+        .context("cannot bake the demo's twist clip (a rigport bug)")?;
     let prepared_dqs = rigport_export::prepare_gltf(
         &twist_asset,
         &out_dqs,
@@ -311,8 +306,10 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
             "  wrote {} (clip \"twist\", DQS baked into corrective morph targets)",
             out_dqs.display()
         );
-        for line in &bake_lines {
-            println!("    {line}");
+        for report in &bake_reports {
+            for line in report.to_string().lines() {
+                println!("    {line}");
+            }
         }
         for (path, what) in &pictures {
             println!("  wrote {} ({what})", path.display());
@@ -338,7 +335,7 @@ fn write(path: &Path, bytes: &[u8]) -> Result<()> {
 /// Rendering (a rigport bug for the built-in rig) or writing fails.
 fn demo_pictures(
     asset: &Asset,
-    reach_targets: &Targets,
+    reach_targets: &HandleTargets,
     dir: &Path,
 ) -> Result<Vec<(PathBuf, String)>> {
     let sheet = RenderOptions {

@@ -1,17 +1,17 @@
 //! `rigport eval`: pose a rig and dump the skinned result as `.npz`.
 
 use anyhow::{Context as _, Result};
-use rigport_eval::sample::{sample_times, CompiledClip, SampleJob};
+use rigport_eval::sample::{CompiledClip, FrameGrid, SampleJob};
 use rigport_eval::skinning::SkinningMethod;
 use rigport_eval::{Pose, Rig, RigOutput};
 use rigport_model::glam::Mat4;
 use rigport_model::Asset;
 
-use super::Context;
+use super::{clip_names, Context};
 use crate::cli::{EvalArgs, Skinning};
 use crate::exit::OutputError;
+use crate::input;
 use crate::npz::{Data, NpzWriter};
-use crate::{input, pose};
 
 /// Row-major 4x4 (numpy's C order) of a column-vector matrix, so `M[j] @ p` works in numpy.
 fn push_row_major(out: &mut Vec<f32>, m: &Mat4) {
@@ -222,7 +222,11 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
                 );
             }
             let pose = match &args.pose {
-                Some(path) => pose::load(path, &asset.skeleton)?,
+                Some(path) => {
+                    let mut pose = Pose::rest(&asset.skeleton);
+                    pose.apply(&rigport_import::json::pose::read(path, &asset.skeleton)?);
+                    pose
+                }
                 None => Pose::rest(&asset.skeleton),
             };
             rig.evaluate_with(&pose, method, &mut posed)?;
@@ -237,7 +241,7 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
                     if !(fps.is_finite() && fps > 0.0) {
                         anyhow::bail!("--fps {fps}: expected a positive frame rate");
                     }
-                    sample_times(compiled.start(), compiled.end(), fps)
+                    FrameGrid::new(compiled.start(), compiled.end(), fps)?.into_times()
                 }
             };
             let rest = Pose::rest(&asset.skeleton);
@@ -274,17 +278,4 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// The clip names of an asset, for messages.
-pub fn clip_names(asset: &Asset) -> String {
-    if asset.clips.is_empty() {
-        return "none".into();
-    }
-    asset
-        .clips
-        .iter()
-        .map(|c| format!("{:?}", c.name))
-        .collect::<Vec<_>>()
-        .join(", ")
 }

@@ -14,7 +14,7 @@ mod sequence;
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use rigport_model::Warning;
+use rigport_model::{Asset, Warning};
 
 use crate::cli::{Cli, Command, InputArgs};
 use crate::exit::{DeniedWarnings, UsageError};
@@ -63,6 +63,19 @@ impl Context {
         bar.finish_and_clear();
         out
     }
+}
+
+/// The clip names of an asset, for messages.
+pub fn clip_names(asset: &Asset) -> String {
+    if asset.clips.is_empty() {
+        return "none".into();
+    }
+    asset
+        .clips
+        .iter()
+        .map(|c| format!("{:?}", c.name))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Runs the parsed command line.

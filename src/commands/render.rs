@@ -4,11 +4,12 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context as _, Result};
+use rigport_eval::ik::clip::HandleTargets;
 use rigport_render::{Markers, Projection, RenderOptions, SkinningChoice, View};
 
 use super::Context;
 use crate::exit::{OutputError, UsageError};
-use crate::{handles, input};
+use crate::input;
 
 /// The GIF frame rate when `--fps` is not given.
 const DEFAULT_GIF_FPS: f32 = 25.0;
@@ -204,8 +205,8 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
     // Read before rendering, so a bad file fails fast and writes nothing.
     let targets = match &args.handles {
         Some(path) => {
-            let file = handles::load(path, &asset.skeleton)?;
-            Some(handles::Targets::new(&asset.skeleton, file.tracks))
+            let file = rigport_import::json::handles::read(path, &asset.skeleton)?;
+            Some(HandleTargets::new(&asset.skeleton, file.tracks))
         }
         None => None,
     };

@@ -5,8 +5,7 @@ use rigport_eval::retime::{retime, Retime, WarpCurve};
 use rigport_eval::sequence::trim;
 use rigport_model::{Clip, Warning};
 
-use super::eval::clip_names;
-use super::Context;
+use super::{clip_names, Context};
 use crate::cli::RetimeArgs;
 use crate::{input, output};
 

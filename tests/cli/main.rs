@@ -13,6 +13,7 @@ mod bad_input;
 mod common;
 mod csci520;
 mod demo;
+mod frame_limit;
 mod gltf_read;
 mod gltf_samples;
 mod ik;

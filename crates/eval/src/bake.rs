@@ -8,6 +8,8 @@
 //! computes these displacements for a block of frames; [`compress_correctives`] replaces
 //! the one-target-per-frame set by a few shared targets with per-frame weights.
 
+pub mod pipeline;
+
 use glam::{DMat3, DMat4, DVec3, Mat4, Vec3};
 use rigport_model::Influences;
 

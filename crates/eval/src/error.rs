@@ -22,4 +22,22 @@ pub enum EvalError {
     /// A pose names a joint the skeleton does not have.
     #[error("no joint named {0:?}")]
     UnknownJoint(String),
+    /// A frame rate that is not a positive finite number (or a grid with a non-finite end).
+    #[error("frame rate {fps}: expected a positive number of frames per second")]
+    FrameRate {
+        /// The rate, frames per second.
+        fps: f32,
+    },
+    /// A frame grid would hold more than its limit ([`crate::sample::MAX_FRAMES`]).
+    #[error("frame rate {fps} fps over {duration} s needs {frames} frames; the limit is {limit}")]
+    TooManyFrames {
+        /// The rate, frames per second.
+        fps: f32,
+        /// The span, seconds.
+        duration: f32,
+        /// Frames it would need.
+        frames: u64,
+        /// The limit.
+        limit: usize,
+    },
 }

@@ -11,6 +11,7 @@ pub mod bone_mesh;
 mod error;
 pub mod fk;
 pub mod ik;
+pub mod keyed;
 pub mod pose;
 pub mod reduce;
 pub mod refit;

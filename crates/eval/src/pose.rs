@@ -1,7 +1,7 @@
 //! Poses: a local transform per joint, built from the rest pose and per-joint changes.
 
 use glam::{Mat4, Quat};
-use rigport_model::{Skeleton, Transform};
+use rigport_model::{RestRotation, Skeleton, Transform};
 
 use crate::{EvalError, LocalToModelJob};
 
@@ -37,6 +37,16 @@ impl Pose {
         let local = &mut self.local[index.get()];
         local.rotation = (local.rotation * delta).normalize();
         Ok(())
+    }
+
+    /// Applies rotations in their joints' rest frames, as [`Pose::rotate_named`] does
+    /// (joints outside the pose are skipped: rotations resolved against another skeleton).
+    pub fn apply(&mut self, rotations: &[RestRotation]) {
+        for r in rotations {
+            if let Some(local) = self.local.get_mut(r.joint.get()) {
+                local.rotation = (local.rotation * r.rotation).normalize();
+            }
+        }
     }
 
     /// Model-space matrices of this pose (allocates the output; use [`LocalToModelJob`] with

@@ -14,6 +14,10 @@
 //!
 //! [`bake`] goes the other way: per-frame poses into a clip with `LINEAR` tracks.
 
+mod grid;
+
+pub use grid::{FrameGrid, MAX_FRAMES};
+
 use glam::{Quat, Vec3};
 use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget, Transform};
 
@@ -948,20 +952,6 @@ pub(crate) fn resample_weight_tracks(
             })
         })
         .collect()
-}
-
-/// Sample times on a fixed-rate grid: `start, start + 1/fps, ...` before `end`, then `end`
-/// itself (included even when off the grid), in seconds. `fps` must be finite and `> 0`.
-pub fn sample_times(start: f32, end: f32, fps: f32) -> Vec<f32> {
-    let mut times = Vec::new();
-    let mut k = 0u32;
-    // Bounded: at most (end - start) * fps steps (plus one for rounding).
-    while start + k as f32 / fps < end - 1e-6 / fps {
-        times.push(start + k as f32 / fps);
-        k += 1;
-    }
-    times.push(end);
-    times
 }
 
 #[cfg(test)]

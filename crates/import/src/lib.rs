@@ -10,13 +10,16 @@ pub mod asf_amc;
 pub mod bvh;
 pub mod csci520;
 pub mod demo;
+pub mod detect;
 mod error;
 pub mod gltf;
+pub mod json;
 mod number;
 pub mod obj;
 pub mod pinocchio;
 pub mod usda;
 
+pub use detect::detect;
 pub use error::{ImportError, Location, Problem};
 
 use rigport_model::{Asset, Warning};

@@ -8,7 +8,9 @@
 mod asset;
 mod clip;
 pub mod conventions;
+mod handle;
 mod index;
+mod keyed;
 mod mesh;
 mod skeleton;
 mod skin;
@@ -17,7 +19,9 @@ mod warning;
 
 pub use asset::{Asset, AssetError};
 pub use clip::{Clip, Interpolation, Track, TrackTarget};
+pub use handle::{HandleSet, HandleTrack};
 pub use index::{JointIndex, MeshIndex};
+pub use keyed::{PoseKey, PoseKeys, RestRotation};
 pub use mesh::{Mesh, MorphTarget};
 pub use skeleton::{parents_first_order, Joint, Skeleton, SkeletonProblem};
 pub use skin::{Influence, Influences, SkinBinding};

@@ -159,6 +159,13 @@ pub trait Markers: Sync {
     fn markers_at(&self, time: f32, out: &mut Vec<Vec3>);
 }
 
+/// IK handle targets over time, as `rigport ik` solves for them.
+impl Markers for rigport_eval::ik::clip::HandleTargets {
+    fn markers_at(&self, time: f32, out: &mut Vec<Vec3>) {
+        self.targets_at(time, out);
+    }
+}
+
 impl<F: Fn(f32, &mut Vec<Vec3>) + Sync> Markers for F {
     fn markers_at(&self, time: f32, out: &mut Vec<Vec3>) {
         self(time, out);
@@ -230,6 +237,9 @@ pub enum RenderError {
         /// Height in pixels.
         height: u32,
     },
+    /// The frame grid would hold more than `rigport_eval::sample::MAX_FRAMES` frames.
+    #[error(transparent)]
+    Frames(EvalError),
     /// The rig cannot be evaluated.
     #[error("the rig cannot be evaluated")]
     Eval(#[from] EvalError),
@@ -271,7 +281,8 @@ pub fn find_clip<'a>(
 /// key times when `fps` is `None`; `[0]` without a clip (the rest pose).
 ///
 /// # Errors
-/// [`RenderError::Fps`] for a non-positive or non-finite `fps`, [`RenderError::Sample`]
+/// [`RenderError::Fps`] for a non-positive or non-finite `fps`, [`RenderError::Frames`] for
+/// one that needs too many frames, [`RenderError::Sample`]
 /// if the clip does not fit the skeleton.
 pub fn clip_times(
     asset: &Asset,
@@ -289,7 +300,9 @@ pub fn clip_times(
     let compiled = CompiledClip::new(clip, &asset.skeleton)?;
     Ok(match fps {
         None => compiled.key_times(),
-        Some(fps) => rigport_eval::sample::sample_times(compiled.start(), compiled.end(), fps),
+        Some(fps) => rigport_eval::sample::FrameGrid::new(compiled.start(), compiled.end(), fps)
+            .map_err(RenderError::Frames)?
+            .into_times(),
     })
 }
 

@@ -63,6 +63,7 @@
 //! start, and it is never NaN for finite input. The solver is deterministic: no randomness,
 //! no hashing, fixed visiting orders.
 
+pub mod clip;
 mod linalg;
 mod solver;
 #[cfg(test)]

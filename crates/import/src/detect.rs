@@ -1,0 +1,523 @@
+//! Format detection: what each input path is (by extension, and by content where the
+//! extension does not tell), and how a set of paths groups into assets, the way the
+//! `rigport` CLI reads its positional inputs.
+//!
+//! ```
+//! use rigport_import::detect::{detect, open, Inputs, Kind};
+//!
+//! let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+//! let bvh = fixtures.join("bvh/end_sites.bvh");
+//! assert_eq!(detect(&bvh)?, Kind::Bvh);
+//! let assets = open(&Inputs::new(vec![bvh]))?;
+//! assert_eq!(assets.len(), 1);
+//! assert_eq!(assets[0].1.asset.clips.len(), 1);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use crate::{asf_amc, bvh, csci520, gltf, obj, pinocchio, usda, ImportError, Imported};
+
+/// What positional inputs may be.
+pub const EXPECTED: &str = ".glb, .gltf, .usda/.usdc/.usdz/.usd, a CSCI 520 skin.config, .obj with Pinocchio .out files, .bvh, or .asf with .amc files";
+
+/// What one input path is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A folder, searched for one asset ([`plan`]).
+    Folder,
+    /// `.glb` or `.gltf`.
+    Gltf,
+    /// A USC CSCI 520 `skin.config` (`.config`).
+    Csci520,
+    /// An OBJ mesh (a Pinocchio rig's mesh when `.out` files come with it).
+    Obj,
+    /// A Pinocchio `skeleton.out` (by name, else by content: `index x y z parent` rows).
+    PinocchioSkeleton,
+    /// A Pinocchio `attachment.out` (by name, else by content: rows of weights).
+    PinocchioAttachment,
+    /// A `.out` file whose first 16 lines are blank: neither kind can be told.
+    PinocchioUnknown,
+    /// A BVH file (skeleton and one clip).
+    Bvh,
+    /// USD text with UsdSkel.
+    Usda,
+    /// An Acclaim skeleton.
+    Asf,
+    /// An Acclaim motion.
+    Amc,
+}
+
+/// One asset to import.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Source {
+    /// A glTF file.
+    Gltf(PathBuf),
+    /// A Pinocchio rig.
+    Pinocchio {
+        /// The OBJ.
+        mesh: PathBuf,
+        /// `skeleton.out`.
+        skeleton: PathBuf,
+        /// `attachment.out`.
+        attachment: PathBuf,
+    },
+    /// A bare OBJ mesh (no rig).
+    Obj(PathBuf),
+    /// A USC CSCI 520 rig: its `skin.config`.
+    Csci520(PathBuf),
+    /// An Acclaim skeleton with its motions.
+    AsfAmc {
+        /// The `.asf`.
+        asf: PathBuf,
+        /// The `.amc` files, one clip each, in the order given.
+        motions: Vec<PathBuf>,
+        /// Frame rate of the motions (AMC files do not state one).
+        fps: f32,
+    },
+    /// A BVH file (skeleton and one clip).
+    Bvh(PathBuf),
+    /// A USD text file with UsdSkel.
+    Usda(PathBuf),
+}
+
+impl Source {
+    /// A short label for messages: the main file.
+    pub fn label(&self) -> String {
+        match self {
+            Source::Gltf(p)
+            | Source::Obj(p)
+            | Source::Csci520(p)
+            | Source::Bvh(p)
+            | Source::Usda(p) => p.display().to_string(),
+            Source::Pinocchio { mesh, .. } => mesh.display().to_string(),
+            Source::AsfAmc { asf, .. } => asf.display().to_string(),
+        }
+    }
+
+    /// Imports the asset with its format's importer.
+    ///
+    /// # Errors
+    /// As the importer.
+    pub fn import(&self) -> Result<Imported, ImportError> {
+        Ok(match self {
+            Source::Gltf(p) => gltf::import(p)?,
+            Source::Obj(p) => obj::import(p)?,
+            Source::Csci520(p) => csci520::import(p)?.imported,
+            Source::Bvh(p) => bvh::import(p)?,
+            Source::Usda(p) => usda::import(p)?,
+            Source::AsfAmc { asf, motions, fps } => asf_amc::import(asf, motions, *fps)?,
+            Source::Pinocchio {
+                mesh,
+                skeleton,
+                attachment,
+            } => pinocchio::import(mesh, skeleton, attachment)?,
+        })
+    }
+}
+
+/// A set of input paths, as the CLI takes them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Inputs {
+    /// Files and folders, in order.
+    pub paths: Vec<PathBuf>,
+    /// The Pinocchio mesh, named explicitly (`--mesh`).
+    pub mesh: Option<PathBuf>,
+    /// The Pinocchio skeleton, named explicitly (`--skeleton`).
+    pub skeleton: Option<PathBuf>,
+    /// The Pinocchio attachment, named explicitly (`--attachment`).
+    pub attachment: Option<PathBuf>,
+    /// More AMC motions for the one `.asf` (`--motion`).
+    pub motions: Vec<PathBuf>,
+    /// The AMC frame rate (`--amc-fps`; default [`asf_amc::DEFAULT_FPS`]).
+    pub amc_fps: Option<f32>,
+}
+
+impl Inputs {
+    /// Just these paths.
+    pub fn new(paths: Vec<PathBuf>) -> Self {
+        Self {
+            paths,
+            ..Self::default()
+        }
+    }
+}
+
+/// Why a set of inputs does not make assets. The messages name the CLI flags that set the
+/// corresponding [`Inputs`] fields.
+#[derive(Debug, thiserror::Error)]
+pub enum DetectError {
+    /// A file or folder could not be read.
+    #[error("{path}: cannot read{}", if *.folder { " folder" } else { "" })]
+    Io {
+        /// The path.
+        path: String,
+        /// Whether it is a folder.
+        folder: bool,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file without an extension.
+    #[error("{0}: no file extension; expected {EXPECTED}")]
+    NoExtension(String),
+    /// An extension no importer reads.
+    #[error("{path}: unsupported input type .{extension}; expected {EXPECTED}")]
+    Unsupported {
+        /// The file.
+        path: String,
+        /// Its extension, lower case.
+        extension: String,
+    },
+    /// AMC motions without exactly one `.asf`.
+    #[error("{0}: AMC motions need exactly one .asf skeleton among the inputs")]
+    AmcWithoutAsf(String),
+    /// An AMC frame rate without an `.asf`.
+    #[error("--fps sets the frame rate of AMC motions and needs an .asf input; to resample a clip use `rigport retime --fps`")]
+    FpsWithoutAsf,
+    /// A bad AMC frame rate.
+    #[error("--fps {0}: the AMC frame rate must be a positive number")]
+    BadAmcFps(f32),
+    /// Two OBJ files.
+    #[error("{0}: only one .obj per Pinocchio rig")]
+    SecondObj(String),
+    /// A `.out` file that does not exist.
+    #[error("{0}: no such file")]
+    Missing(String),
+    /// A second skeleton or attachment.
+    #[error("{path}: a second {kind} file was given")]
+    SecondOut {
+        /// The file.
+        path: String,
+        /// `skeleton` or `attachment`.
+        kind: &'static str,
+    },
+    /// More `.out` files than a rig has.
+    #[error("{0}: more .out files than a Pinocchio rig has")]
+    TooManyOuts(String),
+    /// An incomplete Pinocchio rig.
+    #[error("a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}", .0.join(", "))]
+    IncompletePinocchio(Vec<&'static str>),
+    /// A folder without one recognizable asset.
+    #[error("{path}: expected one .obj with one skeleton and one attachment .out file (or one .glb/.gltf); found {objs} .obj, {skeletons} skeleton, {attachments} attachment, {gltfs} glTF files")]
+    Folder {
+        /// The folder.
+        path: String,
+        /// OBJ files found.
+        objs: usize,
+        /// Skeleton `.out` files found.
+        skeletons: usize,
+        /// Attachment (or unknown) `.out` files found.
+        attachments: usize,
+        /// glTF files found.
+        gltfs: usize,
+    },
+    /// No input.
+    #[error("no input given (see --help)")]
+    NoInput,
+}
+
+/// A path's extension, lower case (`""` without one).
+fn extension(p: &Path) -> String {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// What `path` is: a folder, or a file by its extension; a Pinocchio `.out` by its name
+/// (`skeleton*`, `attachment*`), else by its content.
+///
+/// # Errors
+/// An unreadable `.out` file, a binary USD file, no or an unknown extension.
+pub fn detect(path: &Path) -> Result<Kind, DetectError> {
+    if path.is_dir() {
+        return Ok(Kind::Folder);
+    }
+    let shown = || path.display().to_string();
+    Ok(match extension(path).as_str() {
+        "glb" | "gltf" => Kind::Gltf,
+        "config" => Kind::Csci520,
+        "obj" => Kind::Obj,
+        "out" => out_kind(path)?,
+        "bvh" => Kind::Bvh,
+        // Text, crate (binary) or package: the USD importer tells them by their bytes.
+        "usda" | "usd" | "usdc" | "usdz" => Kind::Usda,
+        "asf" => Kind::Asf,
+        "amc" => Kind::Amc,
+        "" => return Err(DetectError::NoExtension(shown())),
+        other => {
+            return Err(DetectError::Unsupported {
+                path: shown(),
+                extension: other.to_string(),
+            })
+        }
+    })
+}
+
+/// Tells a Pinocchio `.out` file's kind by its name, else by its content.
+fn out_kind(path: &Path) -> Result<Kind, DetectError> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if name.contains("skel") {
+        return Ok(Kind::PinocchioSkeleton);
+    }
+    if name.contains("attach") {
+        return Ok(Kind::PinocchioAttachment);
+    }
+    looks_like_skeleton(path)
+}
+
+/// Whether a `.out` file looks like a Pinocchio skeleton (`index x y z parent` with integer
+/// first and last fields) rather than an attachment (rows of weights), from its first
+/// non-blank line among the first 16.
+fn looks_like_skeleton(path: &Path) -> Result<Kind, DetectError> {
+    use std::io::{BufRead, BufReader};
+    let io = |source| DetectError::Io {
+        path: path.display().to_string(),
+        folder: false,
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    for line in BufReader::new(file).lines().take(16) {
+        let line = line.map_err(io)?;
+        let fields: Vec<&str> = line.split_ascii_whitespace().collect();
+        if fields.is_empty() {
+            continue;
+        }
+        let skeleton = fields.len() == 5
+            && fields[0].parse::<i64>().is_ok()
+            && fields[4].parse::<i64>().is_ok();
+        return Ok(if skeleton {
+            Kind::PinocchioSkeleton
+        } else {
+            Kind::PinocchioAttachment
+        });
+    }
+    Ok(Kind::PinocchioUnknown)
+}
+
+/// Groups the inputs into one [`Source`] per asset.
+///
+/// `.glb`/`.gltf`, `.usda`, `.bvh` and `skin.config` files are assets of their own; an
+/// `.obj` with two `.out` files is a Pinocchio rig (skeleton and attachment told apart by
+/// name or content); an `.asf` takes the `.amc` motions; a folder is searched for one
+/// asset. [`Inputs::mesh`] and friends name a Pinocchio set explicitly.
+///
+/// # Errors
+/// See [`DetectError`].
+pub fn plan(inputs: &Inputs) -> Result<Vec<Source>, DetectError> {
+    let fps = inputs.amc_fps.unwrap_or(asf_amc::DEFAULT_FPS);
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(DetectError::BadAmcFps(fps));
+    }
+    let mut sources = Vec::new();
+    let mut objs = Vec::new();
+    let mut outs = Vec::new();
+    let mut amcs = Vec::new();
+    for input in &inputs.paths {
+        if input.is_dir() {
+            sources.push(plan_folder(input, fps)?);
+            continue;
+        }
+        // `.out` files are told apart below, after checking they exist.
+        if extension(input) == "out" {
+            outs.push(input.clone());
+            continue;
+        }
+        match detect(input)? {
+            Kind::Gltf => sources.push(Source::Gltf(input.clone())),
+            Kind::Csci520 => sources.push(Source::Csci520(input.clone())),
+            Kind::Obj => objs.push(input.clone()),
+            Kind::Bvh => sources.push(Source::Bvh(input.clone())),
+            Kind::Usda => sources.push(Source::Usda(input.clone())),
+            Kind::Asf => sources.push(Source::AsfAmc {
+                asf: input.clone(),
+                motions: Vec::new(),
+                fps,
+            }),
+            Kind::Amc => amcs.push(input.clone()),
+            Kind::Folder
+            | Kind::PinocchioSkeleton
+            | Kind::PinocchioAttachment
+            | Kind::PinocchioUnknown => outs.push(input.clone()),
+        }
+    }
+    amcs.extend(inputs.motions.iter().cloned());
+    if let Some(first) = amcs.first() {
+        let first = first.display().to_string();
+        let mut asfs = sources.iter_mut().filter_map(|p| match p {
+            Source::AsfAmc { motions, .. } => Some(motions),
+            _ => None,
+        });
+        match (asfs.next(), asfs.next()) {
+            (Some(motions), None) => motions.extend(amcs),
+            _ => return Err(DetectError::AmcWithoutAsf(first)),
+        }
+    } else if inputs.amc_fps.is_some()
+        && !sources.iter().any(|p| matches!(p, Source::AsfAmc { .. }))
+    {
+        return Err(DetectError::FpsWithoutAsf);
+    }
+    let mut mesh = inputs.mesh.clone();
+    let mut skeleton = inputs.skeleton.clone();
+    let mut attachment = inputs.attachment.clone();
+    if mesh.is_none() && !objs.is_empty() {
+        mesh = Some(objs.remove(0));
+    }
+    if let Some(extra) = objs.first() {
+        return Err(DetectError::SecondObj(extra.display().to_string()));
+    }
+    let mut unknown = Vec::new();
+    for out in outs {
+        if !out.exists() {
+            return Err(DetectError::Missing(out.display().to_string()));
+        }
+        let (slot, kind) = match out_kind(&out)? {
+            Kind::PinocchioSkeleton => (&mut skeleton, "skeleton"),
+            Kind::PinocchioAttachment => (&mut attachment, "attachment"),
+            _ => {
+                unknown.push(out);
+                continue;
+            }
+        };
+        if slot.is_some() {
+            return Err(DetectError::SecondOut {
+                path: out.display().to_string(),
+                kind,
+            });
+        }
+        *slot = Some(out);
+    }
+    // Files that tell nothing (empty, say) fill the free slot, so the importer can say
+    // what is wrong with them.
+    for out in unknown {
+        if skeleton.is_none() {
+            skeleton = Some(out);
+        } else if attachment.is_none() {
+            attachment = Some(out);
+        } else {
+            return Err(DetectError::TooManyOuts(out.display().to_string()));
+        }
+    }
+    match (mesh, skeleton, attachment) {
+        (Some(mesh), Some(skeleton), Some(attachment)) => sources.push(Source::Pinocchio {
+            mesh,
+            skeleton,
+            attachment,
+        }),
+        (Some(mesh), None, None) => sources.push(Source::Obj(mesh)),
+        (None, None, None) => {}
+        (mesh, skeleton, attachment) => {
+            let missing = [
+                ("--mesh", mesh.is_none()),
+                ("--skeleton", skeleton.is_none()),
+                ("--attachment", attachment.is_none()),
+            ]
+            .iter()
+            .filter(|(_, m)| *m)
+            .map(|(n, _)| *n)
+            .collect();
+            return Err(DetectError::IncompletePinocchio(missing));
+        }
+    }
+    if sources.is_empty() {
+        return Err(DetectError::NoInput);
+    }
+    Ok(sources)
+}
+
+/// The one asset of a folder: its `skin.config`, its one `.asf` (with every `.amc`), its
+/// one `.bvh`, its Pinocchio set, or its one glTF file.
+fn plan_folder(dir: &Path, fps: f32) -> Result<Source, DetectError> {
+    let config = dir.join("skin.config");
+    if config.is_file() {
+        return Ok(Source::Csci520(config));
+    }
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|source| DetectError::Io {
+            path: dir.display().to_string(),
+            folder: true,
+            source,
+        })?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .collect();
+    entries.sort();
+    let asfs: Vec<&PathBuf> = entries.iter().filter(|p| extension(p) == "asf").collect();
+    let bvhs: Vec<&PathBuf> = entries.iter().filter(|p| extension(p) == "bvh").collect();
+    if let [asf] = asfs.as_slice() {
+        let motions = entries
+            .iter()
+            .filter(|p| extension(p) == "amc")
+            .cloned()
+            .collect();
+        return Ok(Source::AsfAmc {
+            asf: asf.to_path_buf(),
+            motions,
+            fps,
+        });
+    }
+    if let ([bvh], []) = (bvhs.as_slice(), asfs.as_slice()) {
+        return Ok(Source::Bvh(bvh.to_path_buf()));
+    }
+    let gltfs: Vec<&PathBuf> = entries
+        .iter()
+        .filter(|p| matches!(extension(p).as_str(), "glb" | "gltf"))
+        .collect();
+    let objs: Vec<&PathBuf> = entries.iter().filter(|p| extension(p) == "obj").collect();
+    let mut skeletons = Vec::new();
+    let mut attachments = Vec::new();
+    for p in entries.iter().filter(|p| extension(p) == "out") {
+        match out_kind(p)? {
+            Kind::PinocchioSkeleton => skeletons.push(p),
+            _ => attachments.push(p),
+        }
+    }
+    match (
+        objs.as_slice(),
+        skeletons.as_slice(),
+        attachments.as_slice(),
+    ) {
+        ([mesh], [skeleton], [attachment]) => Ok(Source::Pinocchio {
+            mesh: mesh.to_path_buf(),
+            skeleton: skeleton.to_path_buf(),
+            attachment: attachment.to_path_buf(),
+        }),
+        _ if gltfs.len() == 1 && objs.is_empty() => Ok(Source::Gltf(gltfs[0].clone())),
+        _ => Err(DetectError::Folder {
+            path: dir.display().to_string(),
+            objs: objs.len(),
+            skeletons: skeletons.len(),
+            attachments: attachments.len(),
+            gltfs: gltfs.len(),
+        }),
+    }
+}
+
+/// Why [`open`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum OpenError {
+    /// The inputs do not group into assets.
+    #[error(transparent)]
+    Detect(#[from] DetectError),
+    /// An asset could not be imported.
+    #[error(transparent)]
+    Import(#[from] ImportError),
+}
+
+/// Opens a set of inputs the way the CLI does: [`plan`], then each [`Source::import`].
+///
+/// # Errors
+/// As [`plan`], then the first importer error.
+pub fn open(inputs: &Inputs) -> Result<Vec<(Source, Imported)>, OpenError> {
+    plan(inputs)?
+        .into_iter()
+        .map(|source| {
+            let imported = source.import()?;
+            Ok((source, imported))
+        })
+        .collect()
+}
