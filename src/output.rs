@@ -8,7 +8,7 @@ use rigport_export::{ExportError, GltfOptions, UsdOptions, UsdSkinning};
 use rigport_model::{Asset, Warning};
 
 use crate::cli::{InputArgs, OutputArgs, Skinning};
-use crate::commands::Context;
+use crate::context::Context;
 use crate::exit::{OutputError, UsageError};
 use crate::input::{self, Plan};
 

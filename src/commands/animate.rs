@@ -3,8 +3,8 @@
 use anyhow::Result;
 use rigport_model::Warning;
 
-use super::Context;
 use crate::cli::AnimateArgs;
+use crate::context::Context;
 use crate::{input, keys, output};
 
 /// Runs `animate`.

@@ -2,53 +2,14 @@
 //! per-frame corrective morph targets in bind space (FORMATS.md, "glTF 2.0 skins and
 //! animation"; the eval side is `rigport_eval::bake`).
 
-use std::path::PathBuf;
-
 use anyhow::{bail, Result};
 use rigport_eval::bake::pipeline::{bake_dqs, DqsBakeOptions};
 use rigport_model::Warning;
 
-use super::Context;
-use crate::cli::{InputArgs, OutputArgs, Skinning};
+use crate::cli::{BakeArgs, OutputArgs, Skinning};
+use crate::context::Context;
 use crate::input;
 use crate::output::{self, Format};
-
-/// `rigport bake` arguments.
-#[derive(Debug, clap::Args)]
-#[command(
-    after_help = "For every sampled frame and skinned vertex, with M the vertex's blended \
-    LBS matrix (of the influences the glTF holds), the frame's target holds \
-    M^-1 * p_dqs - p_rest, so a viewer's LBS of the morphed vertex lands on the DQS result. \
-    Morph weights are animated (LINEAR, one key per frame) so that exactly frame k's target \
-    is active at its time."
-)]
-pub struct BakeArgs {
-    /// The rig, with at least one clip.
-    #[command(flatten)]
-    pub input: InputArgs,
-    /// Output file: .glb or .gltf (+ .bin).
-    #[arg(long, short, value_name = "OUT")]
-    pub output: PathBuf,
-    /// The skinning to bake. `lbs` needs no correction and writes the plain file.
-    #[arg(long, value_enum)]
-    pub skinning: Skinning,
-    /// The clip to bake (default: the first).
-    #[arg(long, value_name = "NAME")]
-    pub clip: Option<String>,
-    /// Sample the clip at F frames per second (default: at its own key times).
-    #[arg(long, value_name = "F")]
-    pub fps: Option<f32>,
-    /// Corrections no longer than D (bind-space units) are left out of the sparse targets
-    /// (default: 1e-6 of the bounding-box diagonal of the skinned meshes).
-    #[arg(long, value_name = "D")]
-    pub threshold: Option<f32>,
-    /// Compress the per-frame targets to K shared targets (PCA) with per-frame weights.
-    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
-    pub correctives: Option<u32>,
-    /// Influences kept per vertex in the glTF (1 to 8), and used for the DQS being baked.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=8))]
-    pub max_influences: u8,
-}
 
 /// Runs `bake`.
 pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {

@@ -2,8 +2,8 @@
 
 use anyhow::Result;
 
-use super::Context;
 use crate::cli::ConvertArgs;
+use crate::context::Context;
 use crate::{input, output};
 
 /// Runs `convert`.

@@ -10,8 +10,8 @@ use rigport_import::{demo, pinocchio};
 use rigport_model::Asset;
 use rigport_render::{FrameTime, RenderOptions, SkinningChoice, View};
 
-use super::Context;
 use crate::cli::{DemoArgs, InputArgs};
+use crate::context::Context;
 use crate::exit::OutputError;
 use crate::{input, keys};
 

@@ -7,8 +7,8 @@ use rigport_eval::{Pose, Rig, RigOutput};
 use rigport_model::glam::Mat4;
 use rigport_model::Asset;
 
-use super::{clip_names, Context};
 use crate::cli::{EvalArgs, Skinning};
+use crate::context::{clip_names, Context};
 use crate::exit::OutputError;
 use crate::input;
 use crate::npz::{Data, NpzWriter};

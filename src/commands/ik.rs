@@ -7,8 +7,8 @@ use rigport_eval::ik::clip::{solve_clip, ClipSolveOptions};
 use rigport_eval::ik::{IkMethod, Lambda};
 use serde::Serialize;
 
-use super::Context;
 use crate::cli::IkArgs;
+use crate::context::Context;
 use crate::{input, output};
 
 /// Per-handle residual summary.

@@ -6,8 +6,8 @@ use anyhow::Result;
 use rigport_model::{Asset, TrackTarget};
 use serde::Serialize;
 
-use super::Context;
 use crate::cli::InspectArgs;
+use crate::context::Context;
 use crate::input;
 
 #[derive(Serialize)]

@@ -1,4 +1,5 @@
-//! One module per subcommand; `run` dispatches.
+//! One module per subcommand; `run` checks the outputs and dispatches. Command modules use
+//! [`crate::context`], never this module or each other.
 
 mod animate;
 pub mod bake;
@@ -14,69 +15,11 @@ mod sequence;
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use rigport_model::{Asset, Warning};
 
 use crate::cli::{Cli, Command, InputArgs};
-use crate::exit::{DeniedWarnings, UsageError};
+use crate::context::Context;
+use crate::exit::UsageError;
 use crate::output;
-
-/// Settings every command shares.
-pub struct Context {
-    /// Print nothing but errors and warnings.
-    pub quiet: bool,
-    /// Fail on warnings.
-    pub deny_warnings: bool,
-}
-
-impl Context {
-    /// Prints warnings (and notes) to stderr; with `--deny-warnings`, fails if there is any
-    /// warning. Notes ([`Warning::Note`]: facts, nothing lost or repaired) never fail.
-    pub fn report(&self, warnings: &[Warning]) -> Result<()> {
-        let mut count = 0;
-        for w in warnings {
-            if matches!(w, Warning::Note { .. }) {
-                if !self.quiet {
-                    eprintln!("note: {w}");
-                }
-            } else {
-                count += 1;
-                eprintln!("warning: {w}");
-            }
-        }
-        if self.deny_warnings && count > 0 {
-            return Err(DeniedWarnings { count }.into());
-        }
-        Ok(())
-    }
-
-    /// Runs `f` under a spinner on stderr (shown only on a terminal, never with --quiet).
-    pub fn step<T>(&self, message: &str, f: impl FnOnce() -> T) -> T {
-        use std::io::IsTerminal;
-        // No spinner thread at all unless someone can see it.
-        if self.quiet || !std::io::stderr().is_terminal() {
-            return f();
-        }
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.set_message(message.to_string());
-        bar.enable_steady_tick(std::time::Duration::from_millis(100));
-        let out = f();
-        bar.finish_and_clear();
-        out
-    }
-}
-
-/// The clip names of an asset, for messages.
-pub fn clip_names(asset: &Asset) -> String {
-    if asset.clips.is_empty() {
-        return "none".into();
-    }
-    asset
-        .clips
-        .iter()
-        .map(|c| format!("{:?}", c.name))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
 
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> Result<()> {

@@ -5,8 +5,8 @@ use rigport_eval::retime::{retime, Retime, WarpCurve};
 use rigport_eval::sequence::trim;
 use rigport_model::{Clip, Warning};
 
-use super::{clip_names, Context};
 use crate::cli::RetimeArgs;
+use crate::context::{clip_names, Context};
 use crate::{input, output};
 
 /// Parses `START..END` seconds.

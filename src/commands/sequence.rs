@@ -4,8 +4,8 @@ use anyhow::{bail, Context as _, Result};
 use rigport_eval::sequence::{concatenate, make_loop};
 use rigport_model::{Clip, Skeleton, Track, TrackTarget, Warning};
 
-use super::Context;
 use crate::cli::SequenceArgs;
+use crate::context::Context;
 use crate::{input, output};
 
 /// Moves `clip` from skeleton `from` onto `to` by joint name. Tracks of joints `to` lacks
