@@ -1,0 +1,530 @@
+//! The container level of a crate file: the bootstrap header, the table of contents and
+//! the structural sections (tokens, strings, fields, field sets, paths, specs), with the
+//! checked primitive reads and the decoding budget that value decoding builds on.
+//!
+//! This module knows nothing of values: [`super::value`] decodes value representations
+//! with the reads defined here, and the parent module walks the specs into a layer.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use super::coding::{self, Width};
+use crate::{ImportError, Location, Problem};
+
+/// The 8 bytes every crate file starts with.
+pub(crate) const MAGIC: &[u8; 8] = b"PXR-USDC";
+
+/// Size of the bootstrap header (ident, version, TOC offset, 8 reserved words).
+const BOOTSTRAP_LEN: usize = 88;
+
+/// Deepest nesting of values inside values (dictionaries in dictionaries, `VtValue`s).
+pub(super) const MAX_VALUE_DEPTH: usize = 64;
+
+/// The field index that ends a field set (`FieldIndex()` is `~0`).
+const FIELD_SET_END: u32 = u32::MAX;
+
+/// How many elements (scalars, indices, bytes of tokens) the reader decodes at most for a
+/// file of `len` bytes: 16 Mi plus 256 per byte. Honest files stay far below (a point
+/// takes 12 bytes for 3 elements; integer compression reaches about 4 elements per byte
+/// before LZ4), while a small corrupt file cannot claim gigabytes.
+pub(super) fn element_budget(len: usize) -> u64 {
+    (16 << 20) + 256 * len as u64
+}
+
+/// A spec: where it is and what it holds.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Spec {
+    path: u32,
+    field_set: u32,
+    pub(super) kind: u32,
+}
+
+/// The structural sections of an open crate file.
+pub(super) struct CrateFile<'a> {
+    pub(super) data: &'a [u8],
+    path: &'a Path,
+    version: (u8, u8, u8),
+    tokens: Vec<String>,
+    strings: Vec<u32>,
+    /// (token index of the name, value representation).
+    fields: Vec<(u32, u64)>,
+    field_sets: Vec<u32>,
+    paths: Vec<Option<String>>,
+    specs: Vec<Spec>,
+    by_path: HashMap<String, usize>,
+    budget: std::cell::Cell<u64>,
+}
+
+/// A position in the file for sequential reads.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Cursor {
+    pub(super) pos: u64,
+}
+
+impl<'a> CrateFile<'a> {
+    /// Reads the bootstrap, the table of contents and every structural section.
+    pub(super) fn open(data: &'a [u8], path: &'a Path) -> Result<Self, ImportError> {
+        let mut file = CrateFile {
+            data,
+            path,
+            version: (0, 0, 0),
+            tokens: Vec::new(),
+            strings: Vec::new(),
+            fields: Vec::new(),
+            field_sets: Vec::new(),
+            paths: Vec::new(),
+            specs: Vec::new(),
+            by_path: HashMap::new(),
+            budget: std::cell::Cell::new(element_budget(data.len())),
+        };
+        if data.len() < BOOTSTRAP_LEN {
+            return Err(file.truncated(0, BOOTSTRAP_LEN as u64, "the 88-byte header"));
+        }
+        if !data.starts_with(MAGIC) {
+            return Err(file.invalid(0, "not a USD crate file (no PXR-USDC header)"));
+        }
+        let v = data.get(8..11).unwrap_or_default();
+        file.version = (
+            v.first().copied().unwrap_or(0),
+            v.get(1).copied().unwrap_or(0),
+            v.get(2).copied().unwrap_or(0),
+        );
+        let (major, minor, patch) = file.version;
+        if major != 0 || minor < 4 {
+            return Err(file.invalid(
+                8,
+                format!(
+                    "crate version {major}.{minor}.{patch} is not supported (rigport reads \
+                     0.4.0 and later; re-save the file with a current USD)"
+                ),
+            ));
+        }
+        let toc = file.u64(&mut Cursor { pos: 16 })?;
+        let sections = file.sections(toc)?;
+        let find = |name: &str| sections.iter().find(|(n, _)| n == name).map(|&(_, s)| s);
+        if let Some(start) = find("TOKENS") {
+            file.read_tokens(start)?;
+        }
+        if let Some(start) = find("STRINGS") {
+            file.read_strings(start)?;
+        }
+        if let Some(start) = find("FIELDS") {
+            file.read_fields(start)?;
+        }
+        if let Some(start) = find("FIELDSETS") {
+            file.read_field_sets(start)?;
+        }
+        if let Some(start) = find("PATHS") {
+            file.read_paths(start)?;
+        }
+        if let Some(start) = find("SPECS") {
+            file.read_specs(start)?;
+        }
+        for (i, spec) in file.specs.iter().enumerate() {
+            if let Some(Some(p)) = file.paths.get(spec.path as usize) {
+                file.by_path.entry(p.clone()).or_insert(i);
+            }
+        }
+        Ok(file)
+    }
+
+    // -------------------------------------------------------------------------------
+    // Errors and primitive reads
+    // -------------------------------------------------------------------------------
+
+    pub(super) fn invalid(&self, at: u64, message: impl Into<String>) -> ImportError {
+        ImportError::invalid(Location::byte(self.path, at), message)
+    }
+
+    pub(super) fn truncated(&self, at: u64, need: u64, what: &str) -> ImportError {
+        ImportError::new(
+            Location::byte(self.path, at),
+            Problem::Truncated(format!(
+                "{what} needs {need} bytes here, the file has {} in all",
+                self.data.len()
+            )),
+        )
+    }
+
+    /// Takes `n` elements from the decoding budget.
+    pub(super) fn spend(&self, at: u64, n: u64) -> Result<(), ImportError> {
+        let left = self.budget.get();
+        if n > left {
+            return Err(self.invalid(
+                at,
+                format!(
+                    "the file claims more data than it can hold ({n} more elements; at most \
+                     {} are decoded for a file of {} bytes)",
+                    element_budget(self.data.len()),
+                    self.data.len()
+                ),
+            ));
+        }
+        self.budget.set(left - n);
+        Ok(())
+    }
+
+    /// `n` bytes at the cursor, which moves past them.
+    fn bytes(&self, c: &mut Cursor, n: u64, what: &str) -> Result<&'a [u8], ImportError> {
+        let start = usize::try_from(c.pos).ok();
+        let end = start
+            .zip(usize::try_from(n).ok())
+            .and_then(|(s, n)| s.checked_add(n));
+        match start.zip(end).and_then(|(s, e)| self.data.get(s..e)) {
+            Some(b) => {
+                c.pos += n;
+                Ok(b)
+            }
+            None => Err(self.truncated(c.pos, n, what)),
+        }
+    }
+
+    fn array<const N: usize>(&self, c: &mut Cursor) -> Result<[u8; N], ImportError> {
+        let b = self.bytes(c, N as u64, "a value")?;
+        b.try_into()
+            .map_err(|_| self.truncated(c.pos, N as u64, "a value"))
+    }
+
+    pub(super) fn u8(&self, c: &mut Cursor) -> Result<u8, ImportError> {
+        Ok(self.array::<1>(c)?[0])
+    }
+    pub(super) fn u16(&self, c: &mut Cursor) -> Result<u16, ImportError> {
+        Ok(u16::from_le_bytes(self.array(c)?))
+    }
+    pub(super) fn u32(&self, c: &mut Cursor) -> Result<u32, ImportError> {
+        Ok(u32::from_le_bytes(self.array(c)?))
+    }
+    pub(super) fn i32(&self, c: &mut Cursor) -> Result<i32, ImportError> {
+        Ok(i32::from_le_bytes(self.array(c)?))
+    }
+    pub(super) fn u64(&self, c: &mut Cursor) -> Result<u64, ImportError> {
+        Ok(u64::from_le_bytes(self.array(c)?))
+    }
+    pub(super) fn i64(&self, c: &mut Cursor) -> Result<i64, ImportError> {
+        Ok(i64::from_le_bytes(self.array(c)?))
+    }
+    pub(super) fn f32(&self, c: &mut Cursor) -> Result<f32, ImportError> {
+        Ok(f32::from_le_bytes(self.array(c)?))
+    }
+    pub(super) fn f64(&self, c: &mut Cursor) -> Result<f64, ImportError> {
+        Ok(f64::from_le_bytes(self.array(c)?))
+    }
+
+    /// A count read at the cursor, checked against the budget.
+    pub(super) fn count(&self, c: &mut Cursor, wide: bool) -> Result<usize, ImportError> {
+        let at = c.pos;
+        let n = if wide {
+            self.u64(c)?
+        } else {
+            u64::from(self.u32(c)?)
+        };
+        self.spend(at, n)?;
+        usize::try_from(n).map_err(|_| self.invalid(at, format!("count {n} is too large")))
+    }
+
+    pub(super) fn version_at_least(&self, minor: u8) -> bool {
+        self.version.1 >= minor
+    }
+
+    pub(super) fn token(&self, at: u64, index: u32) -> Result<&str, ImportError> {
+        self.tokens
+            .get(index as usize)
+            .map(String::as_str)
+            .ok_or_else(|| {
+                self.invalid(
+                    at,
+                    format!(
+                        "token index {index} out of range ({} tokens)",
+                        self.tokens.len()
+                    ),
+                )
+            })
+    }
+
+    pub(super) fn string(&self, at: u64, index: u32) -> Result<&str, ImportError> {
+        let token = self.strings.get(index as usize).ok_or_else(|| {
+            self.invalid(
+                at,
+                format!(
+                    "string index {index} out of range ({} strings)",
+                    self.strings.len()
+                ),
+            )
+        })?;
+        self.token(at, *token)
+    }
+
+    pub(super) fn path_at(&self, at: u64, index: u32) -> Result<&str, ImportError> {
+        match self.paths.get(index as usize) {
+            Some(Some(p)) => Ok(p),
+            _ => Err(self.invalid(
+                at,
+                format!(
+                    "path index {index} out of range or unset ({} paths)",
+                    self.paths.len()
+                ),
+            )),
+        }
+    }
+
+    /// Reads `count` compressed integers (`_CompressedIntsReader`): a `u64` compressed
+    /// size, then the LZ4-compressed coded integers.
+    pub(super) fn compressed_ints(
+        &self,
+        c: &mut Cursor,
+        count: usize,
+        width: Width,
+    ) -> Result<Vec<i64>, ImportError> {
+        let at = c.pos;
+        let size = self.u64(c)?;
+        let bytes = self.bytes(c, size, "compressed integers")?;
+        let encoded = coding::encoded_size(count, width)
+            .ok_or_else(|| self.invalid(at, format!("{count} integers is too many")))?;
+        self.spend(at, encoded as u64 / 4)?;
+        // The encoder writes at most `encoded` bytes; the stream may decode to fewer.
+        let raw = decompress_up_to(bytes, encoded).map_err(|e| self.invalid(at, e.0))?;
+        coding::decode_ints(&raw, count, width).map_err(|e| self.invalid(at, e.0))
+    }
+
+    // -------------------------------------------------------------------------------
+    // Structural sections
+    // -------------------------------------------------------------------------------
+
+    fn sections(&self, toc: u64) -> Result<Vec<(String, u64)>, ImportError> {
+        let mut c = Cursor { pos: toc };
+        let n = self.u64(&mut c)?;
+        if n > 64 {
+            return Err(self.invalid(toc, format!("{n} sections in the table of contents")));
+        }
+        let mut out = Vec::new();
+        for _ in 0..n {
+            let name = self.bytes(&mut c, 16, "a section name")?;
+            let end = name.iter().position(|&b| b == 0).unwrap_or(16);
+            let name = String::from_utf8_lossy(name.get(..end).unwrap_or_default()).into_owned();
+            let start = self.u64(&mut c)?;
+            let _size = self.u64(&mut c)?;
+            out.push((name, start));
+        }
+        Ok(out)
+    }
+
+    fn read_tokens(&mut self, start: u64) -> Result<(), ImportError> {
+        let mut c = Cursor { pos: start };
+        let count = self.count(&mut c, true)?;
+        let raw_len = self.count(&mut c, true)?;
+        let size = self.u64(&mut c)?;
+        let at = c.pos;
+        let packed = self.bytes(&mut c, size, "the tokens")?;
+        let chars = coding::decompress(packed, raw_len).map_err(|e| self.invalid(at, e.0))?;
+        let mut tokens: Vec<String> = chars
+            .split(|&b| b == 0)
+            .take(count)
+            .map(|t| String::from_utf8_lossy(t).into_owned())
+            .collect();
+        if tokens.len() < count {
+            return Err(self.invalid(
+                at,
+                format!(
+                    "the tokens section holds {} tokens, {count} claimed",
+                    tokens.len()
+                ),
+            ));
+        }
+        tokens.shrink_to_fit();
+        self.tokens = tokens;
+        Ok(())
+    }
+
+    fn read_strings(&mut self, start: u64) -> Result<(), ImportError> {
+        let mut c = Cursor { pos: start };
+        let count = self.count(&mut c, true)?;
+        let mut strings = Vec::with_capacity(count.min(self.data.len() / 4));
+        for _ in 0..count {
+            strings.push(self.u32(&mut c)?);
+        }
+        self.strings = strings;
+        Ok(())
+    }
+
+    fn read_fields(&mut self, start: u64) -> Result<(), ImportError> {
+        let mut c = Cursor { pos: start };
+        let count = self.count(&mut c, true)?;
+        let names = self.compressed_ints(&mut c, count, Width::W32)?;
+        let size = self.u64(&mut c)?;
+        let at = c.pos;
+        let packed = self.bytes(&mut c, size, "the field values")?;
+        let raw_len = count
+            .checked_mul(8)
+            .ok_or_else(|| self.invalid(at, "too many fields"))?;
+        let raw = coding::decompress(packed, raw_len).map_err(|e| self.invalid(at, e.0))?;
+        self.fields = names
+            .iter()
+            .zip(raw.chunks_exact(8))
+            .map(|(&name, rep)| {
+                let mut word = [0_u8; 8];
+                word.copy_from_slice(rep);
+                (name as u32, u64::from_le_bytes(word))
+            })
+            .collect();
+        Ok(())
+    }
+
+    fn read_field_sets(&mut self, start: u64) -> Result<(), ImportError> {
+        let mut c = Cursor { pos: start };
+        let count = self.count(&mut c, true)?;
+        let sets = self.compressed_ints(&mut c, count, Width::W32)?;
+        self.field_sets = sets.into_iter().map(|i| i as u32).collect();
+        Ok(())
+    }
+
+    fn read_paths(&mut self, start: u64) -> Result<(), ImportError> {
+        let mut c = Cursor { pos: start };
+        let count = self.count(&mut c, true)?;
+        let at = c.pos;
+        let encoded = self.count(&mut c, true)?;
+        let indices = self.compressed_ints(&mut c, encoded, Width::W32)?;
+        let elements = self.compressed_ints(&mut c, encoded, Width::W32)?;
+        let jumps = self.compressed_ints(&mut c, encoded, Width::W32)?;
+        let mut paths: Vec<Option<String>> = vec![None; count];
+        // The tree is stored depth first; a node with both a child and a sibling stores
+        // the sibling's distance. Walk it with an explicit stack, visiting each encoded
+        // path once at most (a corrupt jump table cannot make the walk longer).
+        let mut stack: Vec<(usize, Option<String>)> = vec![(0, None)];
+        let mut steps = 0_usize;
+        while let Some((mut cur, mut parent)) = stack.pop() {
+            loop {
+                let this = cur;
+                cur += 1;
+                steps += 1;
+                if steps > encoded {
+                    return Err(self.invalid(at, "the path tree's jumps revisit paths"));
+                }
+                let (Some(&index), Some(&element), Some(&jump)) =
+                    (indices.get(this), elements.get(this), jumps.get(this))
+                else {
+                    return Err(self.invalid(
+                        at,
+                        format!("the path tree refers to entry {this} of {encoded}"),
+                    ));
+                };
+                let path = match &parent {
+                    None => "/".to_string(),
+                    Some(parent) => {
+                        let token = self.token(at, element.unsigned_abs() as u32)?;
+                        append_path(parent, token, element < 0)
+                    }
+                };
+                let slot = usize::try_from(index)
+                    .ok()
+                    .and_then(|i| paths.get_mut(i))
+                    .ok_or_else(|| {
+                        self.invalid(at, format!("path index {index} out of range ({count})"))
+                    })?;
+                *slot = Some(path.clone());
+                let has_child = jump > 0 || jump == -1;
+                let has_sibling = jump >= 0;
+                if has_child {
+                    if has_sibling {
+                        let sibling = usize::try_from(this as i64 + jump)
+                            .map_err(|_| self.invalid(at, "a negative path jump"))?;
+                        stack.push((sibling, parent.clone()));
+                    }
+                    parent = Some(path);
+                }
+                if !(has_child || has_sibling) {
+                    break;
+                }
+            }
+        }
+        self.paths = paths;
+        Ok(())
+    }
+
+    fn read_specs(&mut self, start: u64) -> Result<(), ImportError> {
+        let mut c = Cursor { pos: start };
+        let count = self.count(&mut c, true)?;
+        let paths = self.compressed_ints(&mut c, count, Width::W32)?;
+        let sets = self.compressed_ints(&mut c, count, Width::W32)?;
+        let kinds = self.compressed_ints(&mut c, count, Width::W32)?;
+        self.specs = paths
+            .iter()
+            .zip(&sets)
+            .zip(&kinds)
+            .map(|((&p, &s), &k)| Spec {
+                path: p as u32,
+                field_set: s as u32,
+                kind: k as u32,
+            })
+            .collect();
+        Ok(())
+    }
+
+    // -------------------------------------------------------------------------------
+    // Spec lookups
+    // -------------------------------------------------------------------------------
+
+    /// The spec at `path`, if any.
+    pub(super) fn spec(&self, path: &str) -> Option<Spec> {
+        self.by_path
+            .get(path)
+            .and_then(|&i| self.specs.get(i))
+            .copied()
+    }
+
+    /// The fields of a spec: (name, value representation), in file order.
+    pub(super) fn fields(&self, spec: Spec) -> Result<Vec<(&str, u64)>, ImportError> {
+        let mut out = Vec::new();
+        let mut i = spec.field_set as usize;
+        loop {
+            let Some(&f) = self.field_sets.get(i) else {
+                return Err(self.invalid(
+                    0,
+                    format!(
+                        "field set {} of <{}> runs past the field sets",
+                        spec.field_set,
+                        self.paths
+                            .get(spec.path as usize)
+                            .and_then(|p| p.as_deref())
+                            .unwrap_or("?")
+                    ),
+                ));
+            };
+            if f == FIELD_SET_END {
+                return Ok(out);
+            }
+            let &(name, rep) = self
+                .fields
+                .get(f as usize)
+                .ok_or_else(|| self.invalid(0, format!("field index {f} out of range")))?;
+            out.push((self.token(0, name)?, rep));
+            i += 1;
+        }
+    }
+}
+
+/// The path of prim `name` under `parent` (`/`, a prim, or a variant selection).
+pub(super) fn child_path(parent: &str, name: &str) -> String {
+    if parent == "/" || parent.ends_with('}') {
+        format!("{parent}{name}")
+    } else {
+        format!("{parent}/{name}")
+    }
+}
+
+/// `SdfPath::AppendElementToken` / `AppendProperty` as strings.
+fn append_path(parent: &str, element: &str, property: bool) -> String {
+    if property {
+        format!("{parent}.{element}")
+    } else if element.starts_with('{') || element.starts_with('[') || element.starts_with('.') {
+        format!("{parent}{element}")
+    } else {
+        child_path(parent, element)
+    }
+}
+
+/// LZ4-decompresses integer codes whose exact size is unknown (at most `max` bytes).
+fn decompress_up_to(input: &[u8], max: usize) -> Result<Vec<u8>, coding::CodingError> {
+    // The coded size depends on the values; decompress into the largest size and keep
+    // what was written.
+    coding::decompress_prefix(input, max)
+}
