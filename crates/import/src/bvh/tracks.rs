@@ -138,5 +138,5 @@ fn joint_tracks<'b>(
     Ok(tracks)
 }
 
-/// Unit axes by [`Channel::axis`].
+/// Unit axes by [`Channel::axis`](super::types::Channel::axis).
 const AXES: [DVec3; 3] = [DVec3::X, DVec3::Y, DVec3::Z];
