@@ -1130,6 +1130,7 @@ fn assemble(
             ));
         }
         skins.push(SkinBinding {
+            method: Default::default(),
             mesh: MeshIndex(0),
             joints: (0..skeleton.len() as u32).map(JointIndex).collect(),
             inv_bind: inverse_bind_matrices(&skeleton),
@@ -1137,6 +1138,7 @@ fn assemble(
         });
     }
     let asset = Asset {
+        frame: Default::default(),
         name: name.to_string(),
         skeleton,
         meshes: vec![mesh],

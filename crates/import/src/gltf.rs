@@ -710,6 +710,7 @@ impl<'a> Importer<'a> {
                             skin.index(),
                         )?;
                         skins.push(SkinBinding {
+                            method: Default::default(),
                             mesh: mesh_index,
                             joints: data.joints,
                             inv_bind: data.inv_bind,
@@ -753,6 +754,7 @@ impl<'a> Importer<'a> {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
         let asset = Asset {
+            frame: Default::default(),
             name,
             skeleton,
             meshes,

@@ -8,6 +8,7 @@
 mod asset;
 mod clip;
 pub mod conventions;
+mod frame;
 mod index;
 mod mesh;
 mod skeleton;
@@ -17,6 +18,7 @@ mod warning;
 
 pub use asset::{Asset, AssetError};
 pub use clip::{Clip, Interpolation, Track, TrackTarget};
+pub use frame::{SceneFrame, SkinningMethod, UpAxis};
 pub use index::{JointIndex, MeshIndex};
 pub use mesh::{Mesh, MorphTarget};
 pub use skeleton::{parents_first_order, Joint, Skeleton, SkeletonProblem};

@@ -375,6 +375,7 @@ impl<'l> Importer<'l, '_> {
         }
 
         let asset = Asset {
+            frame: Default::default(),
             name: self
                 .path
                 .file_stem()
@@ -1499,6 +1500,7 @@ impl<'l> Importer<'l, '_> {
             }
         }
         Ok(SkinBinding {
+            method: Default::default(),
             mesh: MeshIndex(0),
             joints: palette.iter().map(|&j| JointIndex(j as u32)).collect(),
             inv_bind,
