@@ -13,6 +13,7 @@ mod bad_input;
 mod common;
 mod csci520;
 mod demo;
+mod frames;
 mod gltf_read;
 mod gltf_samples;
 mod ik;

@@ -66,13 +66,16 @@ pub(crate) fn build(asset: &Asset, opts: &GltfOptions) -> Result<Built, ExportEr
     if !problems.is_empty() {
         return Err(ExportError::Invalid { problems });
     }
+    // glTF is +Y up in metres: a source in another frame is converted (see `frame.rs`).
+    let mut warnings = Vec::new();
+    let converted = super::frame::to_gltf_frame(asset, &mut warnings)?;
+    let asset = converted.as_ref().unwrap_or(asset);
 
     let mut b = Builder::new(json::Asset {
         generator: Some(format!("rigport {}", env!("CARGO_PKG_VERSION"))),
         version: "2.0".into(),
         ..Default::default()
     });
-    let mut warnings = Vec::new();
     let skeleton = &asset.skeleton;
     let joint_count = skeleton.len();
 
