@@ -128,6 +128,23 @@ pub struct OutputArgs {
     /// use `rigport bake --skinning dqs` to bake DQS into a glTF.
     #[arg(long, value_enum, default_value_t = Skinning::Lbs)]
     pub skinning: Skinning,
+    /// The `upAxis` a .usda declares (default: the source's; the root prim's transform
+    /// converts). glTF is always +Y up in metres.
+    #[arg(long, value_enum, value_name = "AXIS")]
+    pub up_axis: Option<UpAxisArg>,
+    /// The `metersPerUnit` a .usda declares (default: the source's, 1 when it states none;
+    /// the root prim's transform converts).
+    #[arg(long, value_name = "M")]
+    pub meters_per_unit: Option<f64>,
+}
+
+/// An up axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum UpAxisArg {
+    /// +Y up.
+    Y,
+    /// +Z up.
+    Z,
 }
 
 /// A skinning method.

@@ -114,6 +114,11 @@ pub fn write_asset(
                     Skinning::Lbs => UsdSkinning::Lbs,
                     Skinning::Dqs => UsdSkinning::Dqs,
                 },
+                up_axis: args.up_axis.map(|a| match a {
+                    crate::cli::UpAxisArg::Y => rigport_model::UpAxis::Y,
+                    crate::cli::UpAxisArg::Z => rigport_model::UpAxis::Z,
+                }),
+                meters_per_unit: args.meters_per_unit,
             };
             let prepared = ctx
                 .step("building USD", || {

@@ -91,6 +91,8 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
         reduce_tolerance: None,
         // The file itself is LBS; the DQS result lives in its morph targets.
         skinning: Skinning::Lbs,
+        up_axis: None,
+        meters_per_unit: None,
     };
     let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
     let mut asset = imported.asset;

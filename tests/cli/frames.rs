@@ -1,7 +1,7 @@
 //! Scene frames and units at the format boundaries (issue 22): glTF is +Y up in metres,
 //! USD keeps the source's frame; UsdSkel's evaluation (usd-core) is the reference.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use crate::common::*;
