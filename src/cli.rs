@@ -124,10 +124,11 @@ pub struct OutputArgs {
     /// rig's length unit) of the full clip at every original key time.
     #[arg(long, value_name = "D")]
     pub reduce_tolerance: Option<f32>,
-    /// Skinning method a .usda declares (primvars:skel:skinningMethod). glTF is always LBS;
-    /// use `rigport bake --skinning dqs` to bake DQS into a glTF.
-    #[arg(long, value_enum, default_value_t = Skinning::Lbs)]
-    pub skinning: Skinning,
+    /// Skinning method a .usda declares (primvars:skel:skinningMethod; default: each skin's
+    /// own, as the source declares it). glTF is always LBS; use `rigport bake --skinning
+    /// dqs` to bake DQS into a glTF.
+    #[arg(long, value_enum)]
+    pub skinning: Option<Skinning>,
     /// The `upAxis` a .usda declares (default: the source's; the root prim's transform
     /// converts). glTF is always +Y up in metres.
     #[arg(long, value_enum, value_name = "AXIS")]
@@ -313,9 +314,10 @@ pub struct EvalArgs {
     /// Sample the clip at F frames per second (default: at its own key times).
     #[arg(long, value_name = "F", conflicts_with = "pose")]
     pub fps: Option<f32>,
-    /// Skinning method.
-    #[arg(long, value_enum, default_value_t = Skinning::Lbs)]
-    pub skinning: Skinning,
+    /// Skinning method (default: the one the source declares for its skin, LBS unless a
+    /// USD mesh says `dualQuaternion`).
+    #[arg(long, value_enum)]
+    pub skinning: Option<Skinning>,
 }
 
 /// `rigport demo`.

@@ -93,7 +93,7 @@ pub fn write_asset(
     };
     match format {
         Format::Gltf => {
-            if args.skinning == Skinning::Dqs {
+            if args.skinning == Some(Skinning::Dqs) {
                 bail!("glTF defines only linear blend skinning; `rigport bake --skinning dqs` bakes a DQS result into a glTF, and a .usda output can declare DQS");
             }
             let opts = GltfOptions {
@@ -110,10 +110,10 @@ pub fn write_asset(
         }
         Format::Usda => {
             let opts = UsdOptions {
-                skinning: match args.skinning {
+                skinning: args.skinning.map(|m| match m {
                     Skinning::Lbs => UsdSkinning::Lbs,
                     Skinning::Dqs => UsdSkinning::Dqs,
-                },
+                }),
                 up_axis: args.up_axis.map(|a| match a {
                     crate::cli::UpAxisArg::Y => rigport_model::UpAxis::Y,
                     crate::cli::UpAxisArg::Z => rigport_model::UpAxis::Z,

@@ -39,9 +39,10 @@ pub struct BakeArgs {
     /// Output file: .glb or .gltf (+ .bin).
     #[arg(long, short, value_name = "OUT")]
     pub output: PathBuf,
-    /// The skinning to bake. `lbs` needs no correction and writes the plain file.
+    /// The skinning to bake (default: the one the source declares for its skin). `lbs`
+    /// needs no correction and writes the plain file.
     #[arg(long, value_enum)]
-    pub skinning: Skinning,
+    pub skinning: Option<Skinning>,
     /// The clip to bake (default: the first).
     #[arg(long, value_name = "NAME")]
     pub clip: Option<String>,
@@ -90,14 +91,20 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
         max_influences: args.max_influences,
         reduce_tolerance: None,
         // The file itself is LBS; the DQS result lives in its morph targets.
-        skinning: Skinning::Lbs,
+        skinning: Some(Skinning::Lbs),
         up_axis: None,
         meters_per_unit: None,
     };
     let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
     let mut asset = imported.asset;
     let mut warnings = imported.warnings;
-    if args.skinning == Skinning::Lbs {
+    let skinning = args.skinning.unwrap_or(
+        match asset.skins.first().map(|s| s.method).unwrap_or_default() {
+            rigport_model::SkinningMethod::Lbs => Skinning::Lbs,
+            rigport_model::SkinningMethod::Dqs => Skinning::Dqs,
+        },
+    );
+    if skinning == Skinning::Lbs {
         warnings.push(Warning::Note {
             location: plan.label(),
             message: "--skinning lbs: glTF skins with LBS already, no corrective targets needed; writing the plain file".into(),
@@ -117,6 +124,11 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
         },
         &mut warnings,
     )?;
+    // The DQS result is baked into the targets: the file itself skins linearly.
+    asset
+        .skins
+        .iter_mut()
+        .for_each(|s| s.method = Default::default());
     output::write_asset(ctx, &asset, warnings, &out_args)?;
     if !ctx.quiet {
         for line in &lines {

@@ -62,8 +62,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "HANDLES.json")]
     pub handles: Option<PathBuf>,
     /// Skinning method; `both` draws LBS (left) and DQS (right) with the same camera.
-    #[arg(long, value_enum, default_value_t = SkinningArg::Lbs)]
-    pub skinning: SkinningArg,
+    /// Default: the method the source declares for its skin (LBS unless a USD mesh says
+    /// `dualQuaternion`).
+    #[arg(long, value_enum)]
+    pub skinning: Option<SkinningArg>,
     /// Do not draw the skeleton over the mesh.
     #[arg(long)]
     pub no_skeleton: bool,
@@ -189,9 +191,13 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
             CameraArg::Perspective => Projection::PERSPECTIVE,
         },
         skinning: match args.skinning {
-            SkinningArg::Lbs => SkinningChoice::Lbs,
-            SkinningArg::Dqs => SkinningChoice::Dqs,
-            SkinningArg::Both => SkinningChoice::Both,
+            Some(SkinningArg::Lbs) => SkinningChoice::Lbs,
+            Some(SkinningArg::Dqs) => SkinningChoice::Dqs,
+            Some(SkinningArg::Both) => SkinningChoice::Both,
+            None => match asset.skins.first().map(|s| s.method) {
+                Some(rigport_model::SkinningMethod::Dqs) => SkinningChoice::Dqs,
+                _ => SkinningChoice::Lbs,
+            },
         },
         skeleton: !args.no_skeleton,
         frame_counter: !args.no_frame_counter,

@@ -68,6 +68,17 @@ pub(crate) fn build(asset: &Asset, opts: &GltfOptions) -> Result<Built, ExportEr
     }
     // glTF is +Y up in metres: a source in another frame is converted (see `frame.rs`).
     let mut warnings = Vec::new();
+    for (si, skin) in asset.skins.iter().enumerate() {
+        if skin.method != rigport_model::SkinningMethod::Lbs {
+            warnings.push(Warning::Repaired {
+                location: format!("skin {si}"),
+                message: "the source skins this mesh with dual quaternions; glTF skins \
+                          linearly, so the file deforms differently (`rigport bake \
+                          --skinning dqs` bakes the DQS result into morph targets)"
+                    .into(),
+            });
+        }
+    }
     let converted = super::frame::to_gltf_frame(asset, &mut warnings)?;
     let asset = converted.as_ref().unwrap_or(asset);
 

@@ -124,22 +124,18 @@ use rigport_model::{Asset, UpAxis, Warning};
 
 use crate::ExportError;
 
-/// The skinning method a USD reader should use for skinned meshes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum UsdSkinning {
-    /// Linear blend skinning (UsdSkel's `classicLinear`, its default; nothing is written).
-    #[default]
-    Lbs,
-    /// Dual quaternion skinning: every skinned mesh gets
-    /// `uniform token primvars:skel:skinningMethod = "dualQuaternion"` (USD >= 23.02).
-    Dqs,
-}
+/// The skinning method a USD reader should use for skinned meshes: the model's
+/// [`SkinningMethod`](rigport_model::SkinningMethod) (`Lbs` writes nothing, UsdSkel's
+/// default `classicLinear`; `Dqs` writes
+/// `uniform token primvars:skel:skinningMethod = "dualQuaternion"`, USD >= 23.02).
+pub type UsdSkinning = rigport_model::SkinningMethod;
 
 /// Options for the USD exporter.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct UsdOptions {
-    /// Skinning method of skinned meshes. Default [`UsdSkinning::Lbs`].
-    pub skinning: UsdSkinning,
+    /// Skinning method of every skinned mesh; `None` (the default) keeps each skin's own
+    /// [`SkinBinding::method`](rigport_model::SkinBinding::method).
+    pub skinning: Option<UsdSkinning>,
     /// The stage's `upAxis`; `None` keeps the asset's ([`rigport_model::SceneFrame::up_axis`]).
     pub up_axis: Option<UpAxis>,
     /// The stage's `metersPerUnit`; `None` keeps the asset's (1 when it states none).

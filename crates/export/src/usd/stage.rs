@@ -1369,7 +1369,7 @@ fn write_mesh(
                     Some(rows.element_size),
                     "vertex",
                 );
-                if ctx.options.skinning == UsdSkinning::Dqs {
+                if ctx.options.skinning.unwrap_or(binding.method) == UsdSkinning::Dqs {
                     doc.line("uniform token primvars:skel:skinningMethod = \"dualQuaternion\"");
                 }
             }

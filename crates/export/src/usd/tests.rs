@@ -22,7 +22,7 @@ fn usda(asset: &Asset, skinning: UsdSkinning) -> ExportedUsd {
     to_usda(
         asset,
         &UsdOptions {
-            skinning,
+            skinning: Some(skinning),
             ..Default::default()
         },
     )
@@ -554,7 +554,7 @@ fn every_sample_passes_usd_validation() {
             &asset,
             &path,
             &UsdOptions {
-                skinning,
+                skinning: Some(skinning),
                 ..Default::default()
             },
         )
@@ -978,7 +978,7 @@ fn usd_evaluation_matches_the_reference() {
         &asset,
         &usd,
         &UsdOptions {
-            skinning: UsdSkinning::Dqs,
+            skinning: Some(UsdSkinning::Dqs),
             ..Default::default()
         },
     )

@@ -56,9 +56,8 @@
 //! - **Rotations** are read `(w, x, y, z)` and stored `xyzw`, normalized and made
 //!   sign-continuous along each track; `half` values (`half3[] scales`) are rounded to
 //!   binary16 as USD stores them.
-//! - `primvars:skel:skinningMethod = "dualQuaternion"` (inherited) gets a
-//!   [`Warning::Note`]: the model has no per-skin method, the evaluator takes one
-//!   (`rigport eval --skinning dqs`).
+//! - `primvars:skel:skinningMethod` (inherited) is the skin's
+//!   [`SkinBinding::method`]; an unknown token is skinned linearly with a warning.
 //! - Blend shapes are not imported (a [`Warning::Incomplete`]); non-`Mesh` skinnable prims
 //!   (curves, points, implicit shapes) are left out with a warning.
 //!
@@ -85,7 +84,8 @@ use glam::{DMat3, DMat4, DVec3};
 use rigport_model::glam::{Mat4, Quat, Vec2, Vec3};
 use rigport_model::{
     Asset, Clip, Influence, Influences, Interpolation, Joint, JointIndex, Mesh, MeshIndex,
-    SceneFrame, Skeleton, SkinBinding, Track, TrackTarget, Transform, UpAxis, Warning,
+    SceneFrame, Skeleton, SkinBinding, SkinningMethod, Track, TrackTarget, Transform, UpAxis,
+    Warning,
 };
 
 use self::parse::{Layer, PrimSpec, Value};
@@ -1524,22 +1524,23 @@ impl<'l> Importer<'l, '_> {
                  primvars (rigport reads them)",
             );
         }
-        if let Some(method) = self.skinning_method(index) {
-            match method {
-                "classicLinear" => {}
-                "dualQuaternion" => self.note(
-                    &path,
-                    "declares dual-quaternion skinning (primvars:skel:skinningMethod); the model \
-                     keeps no per-skin method: evaluate with --skinning dqs",
-                ),
-                other => self.note(
-                    &path,
-                    format!("unknown primvars:skel:skinningMethod {other:?}: treated as linear"),
-                ),
+        let mut method = SkinningMethod::Lbs;
+        if let Some(token) = self.skinning_method(index) {
+            match SkinningMethod::from_usd_token(token) {
+                Some(m) => method = m,
+                None => {
+                    let location = self.location(&path);
+                    self.warnings.push(Warning::Repaired {
+                        location,
+                        message: format!(
+                            "unknown primvars:skel:skinningMethod {token:?}: skinned linearly"
+                        ),
+                    });
+                }
             }
         }
         Ok(SkinBinding {
-            method: Default::default(),
+            method,
             mesh: MeshIndex(0),
             joints: palette.iter().map(|&j| JointIndex(j as u32)).collect(),
             inv_bind,

@@ -477,11 +477,12 @@ fn corpus_bake_inputs_import() {
             .filter(|w| w.to_string().contains("is not a Mesh"))
             .count();
         assert_eq!(skipped, 4, "curves, sphere, cube, cylinder");
-        let dqs = imported
-            .warnings
-            .iter()
-            .any(|w| w.to_string().contains("dual-quaternion"));
-        assert_eq!(dqs, rel == "dqs.usda");
+        let want = if rel == "dqs.usda" {
+            rigport_model::SkinningMethod::Dqs
+        } else {
+            rigport_model::SkinningMethod::Lbs
+        };
+        assert!(a.skins.iter().all(|s| s.method == want), "{rel}");
     }
 }
 
