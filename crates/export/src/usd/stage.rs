@@ -928,7 +928,7 @@ fn sample_times(
     let k0 = (first * resample_fps).ceil();
     let k1 = (last * resample_fps).floor();
     if k1 - k0 > MAX_RESAMPLED_FRAMES {
-        warnings.push(Warning::Note {
+        warnings.push(Warning::Repaired {
             location: anim.location.clone(),
             message: format!(
                 "step and cubic-spline tracks sampled at their keys only ({} frames at {resample_fps} fps would be too many); USD interpolates linearly between them",
@@ -955,7 +955,7 @@ fn sample_times(
         k += 1.0;
     }
     out.sort_by(|a, b| a.0.total_cmp(&b.0));
-    warnings.push(Warning::Note {
+    warnings.push(Warning::Repaired {
         location: anim.location.clone(),
         message: format!(
             "step and cubic-spline tracks sampled at {resample_fps} fps: USD interpolates time \
@@ -1079,7 +1079,7 @@ fn write_animation(
         poses.push(pose);
     }
     if half_error.worst > HALF_REPORT_TOLERANCE {
-        warnings.push(Warning::Note {
+        warnings.push(Warning::Repaired {
             location: anim.location.clone(),
             message: format!(
                 "{} scale values rounded to half precision (SkelAnimation scales are half3[]); largest relative change {:.2e}",

@@ -192,10 +192,10 @@ fn rig_text_has_the_usdskel_layout() {
         &|w| matches!(w, Warning::Repaired { message, .. } if message.contains("1 vertex had no influence"))
     ));
     assert!(has(
-        &|w| matches!(w, Warning::Note { location, message } if location == "clip \"wave\"" && message.contains("half precision"))
+        &|w| matches!(w, Warning::Repaired { location, message } if location == "clip \"wave\"" && message.contains("half precision"))
     ));
     assert!(has(
-        &|w| matches!(w, Warning::Note { message, .. } if message.contains("sampled at 24 fps"))
+        &|w| matches!(w, Warning::Repaired { message, .. } if message.contains("sampled at 24 fps"))
     ));
 
     let dqs = usda(&asset, UsdSkinning::Dqs).text;

@@ -249,6 +249,15 @@ impl<'l> Importer<'l, '_> {
         });
     }
 
+    /// A warning: the result differs from what USD would make of the input.
+    fn repaired(&mut self, prim: &str, message: impl Into<String>) {
+        let location = self.location(prim);
+        self.warnings.push(Warning::Repaired {
+            location,
+            message: message.into(),
+        });
+    }
+
     fn incomplete(&mut self, prim: &str, message: impl Into<String>) {
         let location = self.location(prim);
         self.warnings.push(Warning::Incomplete {
@@ -632,7 +641,7 @@ impl<'l> Importer<'l, '_> {
         let (value, sampled) = values::static_value(&prop)?;
         if sampled {
             let path = prim.path.clone();
-            self.note(
+            self.incomplete(
                 &path,
                 format!("{name} is only time-sampled: its first sample is used"),
             );
@@ -1219,7 +1228,7 @@ impl<'l> Importer<'l, '_> {
             }
         }
         if degenerate > 0 {
-            self.note(
+            self.repaired(
                 &path,
                 format!("{degenerate} face(s) with fewer than 3 vertices skipped"),
             );
@@ -1492,7 +1501,7 @@ impl<'l> Importer<'l, '_> {
             );
         }
         if empty > 0 {
-            self.note(
+            self.repaired(
                 &path,
                 format!(
                     "{} point(s) have no non-zero weight: UsdSkel moves them to the origin, \
@@ -1518,7 +1527,7 @@ impl<'l> Importer<'l, '_> {
             point_rows.get(r).cloned().unwrap_or_default()
         }));
         if !prim.api_schemas.contains(&"SkelBindingAPI") {
-            self.note(
+            self.repaired(
                 &path,
                 "SkelBindingAPI is not applied: usd-core 23.08 and later ignore its skinning \
                  primvars (rigport reads them)",
@@ -1706,7 +1715,7 @@ impl<'l> Importer<'l, '_> {
             .map(|(t, _)| *t)
             .collect();
         if !unknown.is_empty() {
-            self.note(
+            self.incomplete(
                 &path,
                 format!(
                     "{} joint(s) not in the Skeleton <{}> ignored: {}",

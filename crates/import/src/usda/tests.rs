@@ -626,3 +626,24 @@ def Xform "A"
         a.meshes[1].positions[0]
     );
 }
+
+#[test]
+fn results_that_differ_from_usdskel_are_warnings_not_notes() {
+    // Without SkelBindingAPI, usd-core ignores the mesh's skinning primvars; rigport skins
+    // it: `--deny-warnings` must catch that.
+    let text = ARM.replace(
+        "    def Mesh \"Sleeve\" (\n        prepend apiSchemas = [\"SkelBindingAPI\"]\n    )",
+        "    def Mesh \"Sleeve\"",
+    );
+    assert_ne!(text, ARM, "the fixture changed");
+    let imported = ok(&text, "no_api.usda");
+    assert!(
+        imported
+            .warnings
+            .iter()
+            .any(|w| matches!(w, Warning::Repaired { message, .. }
+            if message.contains("SkelBindingAPI"))),
+        "{:?}",
+        imported.warnings
+    );
+}
