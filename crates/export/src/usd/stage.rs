@@ -473,19 +473,25 @@ pub(crate) fn build(
             let line = doc.start();
             line.push_str("    ");
             quoted(line, &anim.prim);
-            line.push_str(" (");
-            doc.end();
-            doc.line("        customData = {");
-            let line = doc.start();
-            line.push_str("            double endTimeCode = ");
-            put(line, b);
-            doc.end();
-            let line = doc.start();
-            line.push_str("            double startTimeCode = ");
-            put(line, a);
-            doc.end();
-            doc.line("        }");
-            doc.line("    ) {");
+            if anims.len() > 1 {
+                // Clips differ in length: each variant says its own range.
+                line.push_str(" (");
+                doc.end();
+                doc.line("        customData = {");
+                let line = doc.start();
+                line.push_str("            double endTimeCode = ");
+                put(line, b);
+                doc.end();
+                let line = doc.start();
+                line.push_str("            double startTimeCode = ");
+                put(line, a);
+                doc.end();
+                doc.line("        }");
+                doc.line("    ) {");
+            } else {
+                line.push_str(" {");
+                doc.end();
+            }
             for prim in &skeleton_prims {
                 doc.line(&format!("        over \"{prim}\""));
                 doc.line("        {");
