@@ -37,8 +37,8 @@
 //!   - without clips but with non-zero default morph weights, a `SkelAnimation "rest"`
 //!     bound directly, since UsdSkel reads blend-shape weights only from an animation;
 //!   - a variant set `clip` on the SkelRoot, one variant per clip named after its
-//!     SkelAnimation prim, each binding `skel:animationSource` on the Skeleton(s) and, with
-//!     several clips, carrying its own time range as `customData = { double startTimeCode,
+//!     SkelAnimation prim, each binding `skel:animationSource` on the Skeleton(s) and, when
+//!     the clips' time ranges differ, carrying its own time range as `customData = { double startTimeCode,
 //!     double endTimeCode }` on the SkelRoot (layer metadata cannot vary per variant; the
 //!     stage's `startTimeCode`/`endTimeCode` are the selected, first, clip's); the
 //!     selection is the first clip. **Other clips are reached by switching the variant**

@@ -469,11 +469,12 @@ pub(crate) fn build(
 
     if !anims.is_empty() {
         doc.line(&format!("variantSet \"{CLIP_VARIANT_SET}\" = {{"));
+        let ranges_differ = ranges.windows(2).any(|w| w[0] != w[1]);
         for (anim, &(a, b)) in anims.iter().zip(&ranges) {
             let line = doc.start();
             line.push_str("    ");
             quoted(line, &anim.prim);
-            if anims.len() > 1 {
+            if ranges_differ {
                 // Clips differ in length: each variant says its own range.
                 line.push_str(" (");
                 doc.end();

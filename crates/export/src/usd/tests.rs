@@ -130,7 +130,7 @@ fn rig_text_has_the_usdskel_layout() {
     let idle = block(text, "def SkelAnimation \"idle\"");
     assert!(idle.contains("uniform token[] joints = [\"root\", \"root/mid\"]\n"));
     assert!(text.contains(
-        "        \"idle\" (\n            customData = {\n                double endTimeCode = 48\n                double startTimeCode = 0\n            }\n        ) {\n            over \"Skeleton\"\n            {\n                rel skel:animationSource = </rig/Animations/idle>\n            }\n        }\n"
+        "        \"idle\" {\n            over \"Skeleton\"\n            {\n                rel skel:animationSource = </rig/Animations/idle>\n            }\n        }\n"
     ));
 
     // The skinned mesh: 1-8 raw entries over a 3-joint palette merge to at most 3.
