@@ -126,10 +126,28 @@ pub struct OutputArgs {
     /// rig's length unit) of the full clip at every original key time.
     #[arg(long, value_name = "D")]
     pub reduce_tolerance: Option<f32>,
-    /// Skinning method a .usda declares (primvars:skel:skinningMethod). glTF is always LBS;
-    /// use `rigport bake --skinning dqs` to bake DQS into a glTF.
-    #[arg(long, value_enum, default_value_t = Skinning::Lbs)]
-    pub skinning: Skinning,
+    /// Skinning method a .usda declares (primvars:skel:skinningMethod; default: each skin's
+    /// own, as the source declares it). glTF is always LBS; use `rigport bake --skinning
+    /// dqs` to bake DQS into a glTF.
+    #[arg(long, value_enum)]
+    pub skinning: Option<Skinning>,
+    /// The `upAxis` a .usda declares (default: the source's; the root prim's transform
+    /// converts). glTF is always +Y up in metres.
+    #[arg(long, value_enum, value_name = "AXIS")]
+    pub up_axis: Option<UpAxisArg>,
+    /// The `metersPerUnit` a .usda declares (default: the source's, 1 when it states none;
+    /// the root prim's transform converts).
+    #[arg(long, value_name = "M")]
+    pub meters_per_unit: Option<f64>,
+}
+
+/// An up axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum UpAxisArg {
+    /// +Y up.
+    Y,
+    /// +Z up.
+    Z,
 }
 
 /// A skinning method.
@@ -298,9 +316,10 @@ pub struct EvalArgs {
     /// Sample the clip at F frames per second (default: at its own key times).
     #[arg(long, value_name = "F", conflicts_with = "pose")]
     pub fps: Option<f32>,
-    /// Skinning method.
-    #[arg(long, value_enum, default_value_t = Skinning::Lbs)]
-    pub skinning: Skinning,
+    /// Skinning method (default: the one the source declares for its skin, LBS unless a
+    /// USD mesh says `dualQuaternion`).
+    #[arg(long, value_enum)]
+    pub skinning: Option<Skinning>,
 }
 
 /// `rigport demo`.
@@ -338,9 +357,10 @@ pub struct BakeArgs {
     /// Output file: .glb or .gltf (+ .bin).
     #[arg(long, short, value_name = "OUT")]
     pub output: PathBuf,
-    /// The skinning to bake. `lbs` needs no correction and writes the plain file.
+    /// The skinning to bake (default: the one the source declares for its skin). `lbs`
+    /// needs no correction and writes the plain file.
     #[arg(long, value_enum)]
-    pub skinning: Skinning,
+    pub skinning: Option<Skinning>,
     /// The clip to bake (default: the first).
     #[arg(long, value_name = "NAME")]
     pub clip: Option<String>,
@@ -408,8 +428,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "HANDLES.json")]
     pub handles: Option<PathBuf>,
     /// Skinning method; `both` draws LBS (left) and DQS (right) with the same camera.
-    #[arg(long, value_enum, default_value_t = SkinningArg::Lbs)]
-    pub skinning: SkinningArg,
+    /// Default: the method the source declares for its skin (LBS unless a USD mesh says
+    /// `dualQuaternion`).
+    #[arg(long, value_enum)]
+    pub skinning: Option<SkinningArg>,
     /// Do not draw the skeleton over the mesh.
     #[arg(long)]
     pub no_skeleton: bool,

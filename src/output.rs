@@ -223,7 +223,7 @@ pub fn write_asset(
     let format = format_of(path)?;
     match format {
         Format::Gltf => {
-            if args.skinning == Skinning::Dqs {
+            if args.skinning == Some(Skinning::Dqs) {
                 bail!("glTF defines only linear blend skinning; `rigport bake --skinning dqs` bakes a DQS result into a glTF, and a .usda output can declare DQS");
             }
             let opts = GltfOptions {
@@ -240,10 +240,15 @@ pub fn write_asset(
         }
         Format::Usda => {
             let opts = UsdOptions {
-                skinning: match args.skinning {
+                skinning: args.skinning.map(|m| match m {
                     Skinning::Lbs => UsdSkinning::Lbs,
                     Skinning::Dqs => UsdSkinning::Dqs,
-                },
+                }),
+                up_axis: args.up_axis.map(|a| match a {
+                    crate::cli::UpAxisArg::Y => rigport_model::UpAxis::Y,
+                    crate::cli::UpAxisArg::Z => rigport_model::UpAxis::Z,
+                }),
+                meters_per_unit: args.meters_per_unit,
             };
             let prepared = ctx
                 .step("building USD", || {

@@ -34,12 +34,20 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
         max_influences: args.max_influences,
         reduce_tolerance: None,
         // The file itself is LBS; the DQS result lives in its morph targets.
-        skinning: Skinning::Lbs,
+        skinning: Some(Skinning::Lbs),
+        up_axis: None,
+        meters_per_unit: None,
     };
     let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
     let mut asset = imported.asset;
     let mut warnings = imported.warnings;
-    if args.skinning == Skinning::Lbs {
+    let skinning = args.skinning.unwrap_or(
+        match asset.skins.first().map(|s| s.method).unwrap_or_default() {
+            rigport_model::SkinningMethod::Lbs => Skinning::Lbs,
+            rigport_model::SkinningMethod::Dqs => Skinning::Dqs,
+        },
+    );
+    if skinning == Skinning::Lbs {
         warnings.push(Warning::Note {
             location: plan.label(),
             message: "--skinning lbs: glTF skins with LBS already, no corrective targets needed; writing the plain file".into(),
@@ -63,6 +71,11 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
             &mut warnings,
         )
     })?;
+    // The DQS result is baked into the targets: the file itself skins linearly.
+    asset
+        .skins
+        .iter_mut()
+        .for_each(|s| s.method = Default::default());
     output::write_asset(ctx, &asset, warnings, &out_args)?;
     if !ctx.quiet {
         for report in &reports {

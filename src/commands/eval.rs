@@ -192,9 +192,15 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
             plan.label()
         );
     }
-    let (method, method_name) = match args.skinning {
-        Skinning::Lbs => (SkinningMethod::Lbs, "lbs"),
-        Skinning::Dqs => (SkinningMethod::Dqs, "dqs"),
+    // --skinning, else the method the source declares for its (first) skin.
+    let method = match args.skinning {
+        Some(Skinning::Lbs) => SkinningMethod::Lbs,
+        Some(Skinning::Dqs) => SkinningMethod::Dqs,
+        None => asset.skins.first().map(|s| s.method).unwrap_or_default(),
+    };
+    let method_name = match method {
+        SkinningMethod::Lbs => "lbs",
+        SkinningMethod::Dqs => "dqs",
     };
     let rig = Rig::new(asset).context("the rig cannot be evaluated")?;
     let mut dump = Dump::new(asset, &rig, method_name);

@@ -60,9 +60,13 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
             CameraArg::Perspective => Projection::PERSPECTIVE,
         },
         skinning: match args.skinning {
-            SkinningArg::Lbs => SkinningChoice::Lbs,
-            SkinningArg::Dqs => SkinningChoice::Dqs,
-            SkinningArg::Both => SkinningChoice::Both,
+            Some(SkinningArg::Lbs) => SkinningChoice::Lbs,
+            Some(SkinningArg::Dqs) => SkinningChoice::Dqs,
+            Some(SkinningArg::Both) => SkinningChoice::Both,
+            None => match asset.skins.first().map(|s| s.method) {
+                Some(rigport_model::SkinningMethod::Dqs) => SkinningChoice::Dqs,
+                _ => SkinningChoice::Lbs,
+            },
         },
         skeleton: !args.no_skeleton,
         frame_counter: !args.no_frame_counter,

@@ -14,6 +14,7 @@ mod common;
 mod csci520;
 mod demo;
 mod frame_limit;
+mod frames;
 mod gltf_read;
 mod gltf_samples;
 mod ik;

@@ -665,8 +665,30 @@ fn asf_amc_corpus_converts_and_matches_reference_fk() {
             s(&glb),
             "--quiet",
         ]);
-        check_glb(&glb, frames.len(), fps, &reference, 1e-5 * h);
+        // glTF is in metres: the ASF's `:units length` (inches per unit) converts it.
+        let mpu = asf_meters_per_unit(&std::fs::read_to_string(&asf).unwrap());
+        let in_metres = |f: usize| {
+            let mut r = reference(f);
+            r.values_mut().for_each(|p| *p *= mpu);
+            r
+        };
+        check_glb(&glb, frames.len(), fps, &in_metres, 1e-5 * h * mpu);
     }
+}
+
+/// Metres per unit of an ASF: `0.0254 / length` when `:units` states `length`, else 1.
+fn asf_meters_per_unit(text: &str) -> f64 {
+    let mut in_units = false;
+    for line in text.lines().map(str::trim) {
+        if line.starts_with(':') {
+            in_units = line.starts_with(":units");
+            continue;
+        }
+        if let (true, Some(v)) = (in_units, line.strip_prefix("length")) {
+            return 0.0254 / v.trim().parse::<f64>().unwrap();
+        }
+    }
+    1.0
 }
 
 #[test]

@@ -142,6 +142,7 @@ pub fn bone_mesh(skeleton: &Skeleton) -> Option<(Mesh, SkinBinding)> {
         attached_to: None,
     };
     let skin = SkinBinding {
+        method: Default::default(),
         mesh: MeshIndex(0),
         joints,
         inv_bind,

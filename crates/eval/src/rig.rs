@@ -215,6 +215,7 @@ mod tests {
                 ..Mesh::default()
             }],
             skins: vec![SkinBinding {
+                method: Default::default(),
                 mesh: MeshIndex(0),
                 joints: vec![JointIndex(0), JointIndex(1)],
                 inv_bind,

@@ -192,10 +192,12 @@ pub(crate) fn rig() -> Asset {
     let influences = cylinder_influences(&body, &heights, false);
     let inv_bind = inverse_binds(&skeleton, &palette);
     Asset {
+        frame: Default::default(),
         name: "rig".into(),
         skeleton,
         meshes: vec![body, hat(JointIndex(2))],
         skins: vec![SkinBinding {
+            method: Default::default(),
             mesh: MeshIndex(0),
             joints: palette,
             inv_bind,
@@ -216,10 +218,12 @@ pub(crate) fn wide_rig() -> Asset {
     let influences = cylinder_influences(&body, &heights, true);
     let inv_bind = inverse_binds(&skeleton, &palette);
     Asset {
+        frame: Default::default(),
         name: "wide".into(),
         skeleton,
         meshes: vec![body],
         skins: vec![SkinBinding {
+            method: Default::default(),
             mesh: MeshIndex(0),
             joints: palette,
             inv_bind,
@@ -267,10 +271,12 @@ pub(crate) fn two_roots() -> Asset {
     }));
     let inv_bind = inverse_binds(&skeleton, &palette);
     Asset {
+        frame: Default::default(),
         name: "two_roots".into(),
         skeleton,
         meshes: vec![body],
         skins: vec![SkinBinding {
+            method: Default::default(),
             mesh: MeshIndex(0),
             joints: palette,
             inv_bind,
@@ -336,6 +342,7 @@ pub(crate) fn big_palette() -> Asset {
     }));
     let inv_bind = inverse_binds(&skeleton, &palette);
     Asset {
+        frame: Default::default(),
         name: "big_palette".into(),
         skeleton,
         meshes: vec![Mesh {
@@ -346,6 +353,7 @@ pub(crate) fn big_palette() -> Asset {
             ..Default::default()
         }],
         skins: vec![SkinBinding {
+            method: Default::default(),
             mesh: MeshIndex(0),
             joints: palette,
             inv_bind,
@@ -499,6 +507,7 @@ pub(crate) fn static_props() -> Asset {
         normal_deltas: None,
     });
     Asset {
+        frame: Default::default(),
         name: "props".into(),
         skeleton: Skeleton::default(),
         meshes: vec![grid, hat],

@@ -733,10 +733,12 @@ fn assemble_from<'a>(
     }
     let palette = (0..skeleton_out.len() as u32).map(JointIndex).collect();
     let asset = Asset {
+        frame: Default::default(),
         name: name.to_string(),
         skeleton: skeleton_out,
         meshes: vec![mesh],
         skins: vec![SkinBinding {
+            method: Default::default(),
             mesh: MeshIndex(0),
             joints: palette,
             inv_bind,

@@ -1,4 +1,6 @@
-use crate::{Clip, Interpolation, JointIndex, Mesh, Skeleton, SkinBinding, TrackTarget};
+use crate::{
+    Clip, Interpolation, JointIndex, Mesh, SceneFrame, Skeleton, SkinBinding, TrackTarget,
+};
 
 /// Everything rigport knows about one rig: skeleton, meshes, skin bindings and clips.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -15,6 +17,10 @@ pub struct Asset {
     pub clips: Vec<Clip>,
     /// Metres per length unit, when the source states it.
     pub meters_per_unit: Option<f64>,
+    /// Where the model sits in the source's scene: up axis and the transform of model
+    /// space (the skeleton's space) in the scene. Identity and +Y up unless the source
+    /// says otherwise.
+    pub frame: SceneFrame,
     /// Joints the rig names as inverse-kinematics handles (end effectors), in the source's
     /// order (e.g. CSCI 520 `IKJointIDs`).
     pub ik_handles: Vec<JointIndex>,

@@ -3,7 +3,8 @@
 //! | what | convention |
 //! |---|---|
 //! | lengths | the source file's own unit, kept unless the user asks for a conversion; [`crate::Asset::meters_per_unit`] says what it is when known |
-//! | axes | +Y up, right-handed (+X right, +Z towards the viewer); importers of Z-up sources convert |
+//! | axes | right-handed; the source's up axis is kept and recorded in [`crate::Asset::frame`] ([`crate::UpAxis`]); exporters convert (glTF is +Y up in metres) |
+//! | placement | model space is the skeleton's space; [`crate::SceneFrame::model_to_scene`] places it in the source's scene (USD `xformOp`s above the skeleton); animated placement becomes root-joint tracks |
 //! | matrices | column vectors (`p' = M * p`), column-major storage (glam's) |
 //! | quaternions | `[x, y, z, w]`, unit length, Hamilton product |
 //! | transform order | scale, then rotate, then translate: `M = T * R * S` |
@@ -13,11 +14,13 @@
 //!
 //! Spaces are named in field names: `local_` (relative to the parent joint), `model_`
 //! (relative to the asset root), `bind_` / `inv_bind_` (model space at bind time).
-//! Axis, unit and Euler-order conversions live only in importers and exporters.
+//! The model keeps the source's units and up axis; exporters convert to what their format
+//! defines. Euler-order conversions live only in importers.
 
 use glam::Vec3;
 
-/// The up axis of every rigport asset.
+/// The default up axis of a rigport asset (when [`crate::Asset::frame`] says +Y, the usual
+/// case); a Z-up source keeps its axes and says so in its [`crate::SceneFrame`].
 pub const UP: Vec3 = Vec3::Y;
 
 /// Weights smaller than this are treated as zero when influences are compacted.

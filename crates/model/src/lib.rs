@@ -8,6 +8,7 @@
 mod asset;
 mod clip;
 pub mod conventions;
+mod frame;
 mod handle;
 mod index;
 mod keyed;
@@ -19,6 +20,7 @@ mod warning;
 
 pub use asset::{Asset, AssetError};
 pub use clip::{Clip, Interpolation, Track, TrackTarget};
+pub use frame::{SceneFrame, SkinningMethod, UpAxis};
 pub use handle::{HandleSet, HandleTrack};
 pub use index::{JointIndex, MeshIndex};
 pub use keyed::{PoseKey, PoseKeys, RestRotation};

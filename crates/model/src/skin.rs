@@ -1,6 +1,6 @@
 use glam::Mat4;
 
-use crate::{JointIndex, MeshIndex};
+use crate::{JointIndex, MeshIndex, SkinningMethod};
 
 /// One joint's weight on a vertex. `joint` indexes the owning [`SkinBinding::joints`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,6 +95,9 @@ pub struct SkinBinding {
     pub inv_bind: Vec<Mat4>,
     /// Per-vertex influences, one row per mesh vertex.
     pub influences: Influences,
+    /// How the source skins this mesh (UsdSkel `primvars:skel:skinningMethod`; linear for
+    /// every other format). Evaluators use it unless told otherwise.
+    pub method: SkinningMethod,
 }
 
 #[cfg(test)]

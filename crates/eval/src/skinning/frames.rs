@@ -17,26 +17,10 @@ const LEAF: usize = 1024;
 /// Frames skinned per pass over a block of vertices.
 const FRAME_BLOCK: usize = 16;
 
-/// How skinned positions are computed from the joints' skinning matrices.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum SkinningMethod {
-    /// Linear blend skinning (glTF's only method; UsdSkel `classicLinear`).
-    #[default]
-    Lbs,
-    /// Dual quaternion skinning as UsdSkel computes it (`dualQuaternion`; see
-    /// [`crate::dqs`]).
-    Dqs,
-}
-
-impl SkinningMethod {
-    /// The `primvars:skel:skinningMethod` token UsdSkel uses for this method.
-    pub fn usd_token(self) -> &'static str {
-        match self {
-            Self::Lbs => "classicLinear",
-            Self::Dqs => "dualQuaternion",
-        }
-    }
-}
+/// How skinned positions are computed from the joints' skinning matrices: the model's
+/// [`rigport_model::SkinningMethod`] (LBS, or DQS as UsdSkel computes it, see
+/// [`crate::dqs`]), re-exported under its old path.
+pub use rigport_model::SkinningMethod;
 
 /// How [`PackedInfluences`] stores its rows.
 #[derive(Clone, Debug, PartialEq)]

@@ -66,13 +66,27 @@ pub(crate) fn build(asset: &Asset, opts: &GltfOptions) -> Result<Built, ExportEr
     if !problems.is_empty() {
         return Err(ExportError::Invalid { problems });
     }
+    // glTF is +Y up in metres: a source in another frame is converted (see `frame.rs`).
+    let mut warnings = Vec::new();
+    for (si, skin) in asset.skins.iter().enumerate() {
+        if skin.method != rigport_model::SkinningMethod::Lbs {
+            warnings.push(Warning::Repaired {
+                location: format!("skin {si}"),
+                message: "the source skins this mesh with dual quaternions; glTF skins \
+                          linearly, so the file deforms differently (`rigport bake \
+                          --skinning dqs` bakes the DQS result into morph targets)"
+                    .into(),
+            });
+        }
+    }
+    let converted = super::frame::to_gltf_frame(asset, &mut warnings)?;
+    let asset = converted.as_ref().unwrap_or(asset);
 
     let mut b = Builder::new(json::Asset {
         generator: Some(format!("rigport {}", env!("CARGO_PKG_VERSION"))),
         version: "2.0".into(),
         ..Default::default()
     });
-    let mut warnings = Vec::new();
     let skeleton = &asset.skeleton;
     let joint_count = skeleton.len();
 

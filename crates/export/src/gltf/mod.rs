@@ -15,12 +15,23 @@
 //! - one skin per binding, `skeleton` = the palette's nearest common ancestor;
 //! - one animation per clip, one sampler per track.
 //!
+//! glTF is +Y up and in metres (spec, "Coordinate System and Units"). An asset whose
+//! [`SceneFrame`](rigport_model::SceneFrame) is Z-up, placed by a transform above its
+//! skeleton, or whose [`meters_per_unit`](rigport_model::Asset::meters_per_unit) is stated
+//! and not 1 is converted by **transforming the data** (joint rest and animation
+//! translations, root joints, inverse bind matrices, mesh points, normals and morph deltas;
+//! see `frame.rs`), not by a corrective root node, so a skinned mesh's node stays at the
+//! scene root without transform. A CMU ASF (`:units length 0.45`) comes out in metres, a
+//! Blender USD (Z-up, `metersPerUnit = 0.01`, `scale 100`) Y-up in metres; sources that
+//! state no unit (OBJ, Pinocchio, BVH, CSCI 520) keep their numbers.
+//!
 //! Everything binary lives in one buffer; output bytes depend only on the input (no hash
 //! order, no time stamps).
 
 mod animation;
 mod buffer;
 pub(crate) mod document;
+mod frame;
 #[cfg(test)]
 mod tests;
 

@@ -1,11 +1,18 @@
 //! Asset -> USD text (`.usda`) with UsdSkel.
 //!
 //! What the stage holds (`<root>` is the asset name made an identifier, `rig` when empty):
-//! - layer metadata: `defaultPrim = "<root>"`, `upAxis = "Y"`, `metersPerUnit` (the asset's
-//!   [`meters_per_unit`](rigport_model::Asset::meters_per_unit); **1 when unknown**, the
-//!   same assumption the glTF exporter makes, since glTF's unit is the metre, rather than
-//!   USD's fallback of 0.01), and with clips `timeCodesPerSecond`, `startTimeCode`,
-//!   `endTimeCode` (see "Time" below);
+//! - layer metadata: `defaultPrim = "<root>"`, `upAxis` (the asset's
+//!   [`frame`](rigport_model::Asset::frame) up axis, or [`UsdOptions::up_axis`]),
+//!   `metersPerUnit` (the asset's [`meters_per_unit`](rigport_model::Asset::meters_per_unit);
+//!   **1 when unknown**, the same assumption the glTF exporter makes, since glTF's unit is
+//!   the metre, rather than USD's fallback of 0.01; or [`UsdOptions::meters_per_unit`]),
+//!   and with clips `timeCodesPerSecond`, `startTimeCode`, `endTimeCode` (see "Time"
+//!   below);
+//! - the data stays in model space (the skeleton's): the root prim carries
+//!   `matrix4d xformOp:transform` = the asset's
+//!   [`model_to_scene`](rigport_model::SceneFrame::model_to_scene), preceded by the
+//!   up-axis rotation and unit scale when the options ask for another frame; nothing is
+//!   authored when that is the identity;
 //! - `def SkelRoot "<root>"` when the asset has joints or morph targets (else an `Xform`
 //!   holding plain meshes; morph targets without joints get a Skeleton with no joints,
 //!   which drives their blend shapes), with:
@@ -30,7 +37,10 @@
 //!   - without clips but with non-zero default morph weights, a `SkelAnimation "rest"`
 //!     bound directly, since UsdSkel reads blend-shape weights only from an animation;
 //!   - a variant set `clip` on the SkelRoot, one variant per clip named after its
-//!     SkelAnimation prim, each binding `skel:animationSource` on the Skeleton(s); the
+//!     SkelAnimation prim, each binding `skel:animationSource` on the Skeleton(s) and, when
+//!     the clips' time ranges differ, carrying its own time range as `customData = { double startTimeCode,
+//!     double endTimeCode }` on the SkelRoot (layer metadata cannot vary per variant; the
+//!     stage's `startTimeCode`/`endTimeCode` are the selected, first, clip's); the
 //!     selection is the first clip. **Other clips are reached by switching the variant**
 //!     (usdview: the prim's Variants; Python: `prim.GetVariantSet("clip").SetVariantSelection("idle")`).
 //!
@@ -61,7 +71,9 @@
 //! `timeCodesPerSecond` comes from the first clip's key times: when three or more keys are
 //! evenly spaced at 24 or more per second, that rate (`1 / spacing`, an integer when within
 //! `f32` noise of one; BVH's `Frame Time: 0.0333333` gives 30.00003 so key k is time code k
-//! exactly); else the first of the rate the smallest key interval suggests, 24, 25, 30, 48,
+//! exactly); else the rate of the smallest key interval refined over the clip's span when
+//! it is `n/k` (k <= 8) within `f32` noise (a reduced clip at 37.5 keys/s gets 37.5), then
+//! the rate the smallest key interval suggests rounded, 24, 25, 30, 48,
 //! 50, 60, 100, 120, 240 (and for sparse keys a multiple of theirs from 24 up) that puts
 //! every key within 1e-3 frames of a frame; else 1000 (millisecond time codes); 24 (USD's
 //! default) when the first clip has fewer than two keys. Every clip is sampled at time code
@@ -108,26 +120,27 @@ mod text;
 
 use std::path::{Path, PathBuf};
 
-use rigport_model::{Asset, Warning};
+use rigport_model::{Asset, UpAxis, Warning};
 
 use crate::ExportError;
 
-/// The skinning method a USD reader should use for skinned meshes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum UsdSkinning {
-    /// Linear blend skinning (UsdSkel's `classicLinear`, its default; nothing is written).
-    #[default]
-    Lbs,
-    /// Dual quaternion skinning: every skinned mesh gets
-    /// `uniform token primvars:skel:skinningMethod = "dualQuaternion"` (USD >= 23.02).
-    Dqs,
-}
+/// The skinning method a USD reader should use for skinned meshes: the model's
+/// [`SkinningMethod`](rigport_model::SkinningMethod) (`Lbs` writes nothing, UsdSkel's
+/// default `classicLinear`; `Dqs` writes
+/// `uniform token primvars:skel:skinningMethod = "dualQuaternion"`, USD >= 23.02).
+pub type UsdSkinning = rigport_model::SkinningMethod;
 
 /// Options for the USD exporter.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct UsdOptions {
-    /// Skinning method of skinned meshes. Default [`UsdSkinning::Lbs`].
-    pub skinning: UsdSkinning,
+    /// Skinning method of every skinned mesh; `None` (the default) keeps each skin's own
+    /// [`SkinBinding::method`](rigport_model::SkinBinding::method).
+    pub skinning: Option<UsdSkinning>,
+    /// The stage's `upAxis`; `None` keeps the asset's ([`rigport_model::SceneFrame::up_axis`]).
+    pub up_axis: Option<UpAxis>,
+    /// The stage's `metersPerUnit`; `None` keeps the asset's (1 when it states none).
+    /// Lengths are converted by the root prim's transform, not in the data.
+    pub meters_per_unit: Option<f64>,
 }
 
 /// A `.usda` file in memory.

@@ -264,7 +264,7 @@ pub(crate) fn build(
     let resample_fps = detected_rate.unwrap_or(FALLBACK_RESAMPLE_FPS);
 
     // USD wants a positive unit; 1 (metres) when the source does not say, as for glTF.
-    let meters_per_unit = match asset.meters_per_unit {
+    let source_mpu = match asset.meters_per_unit {
         Some(m) if m.is_finite() && m > 0.0 => m,
         Some(m) => {
             warnings.push(Warning::Repaired {
@@ -275,6 +275,23 @@ pub(crate) fn build(
         }
         None => 1.0,
     };
+    // The stage's frame: the source's unless asked; the root prim's transform places the
+    // model space in it.
+    let up_axis = options.up_axis.unwrap_or(asset.frame.up_axis);
+    let meters_per_unit = match options.meters_per_unit {
+        Some(m) if m.is_finite() && m > 0.0 => m,
+        Some(m) => {
+            return Err(ExportError::Invalid {
+                problems: vec![Problem::Asset(rigport_model::AssetError::NonFinite {
+                    what: format!("the requested metersPerUnit {m}"),
+                })],
+            })
+        }
+        None => source_mpu,
+    };
+    let root_xform = asset
+        .frame
+        .model_to(Some(source_mpu), up_axis, Some(meters_per_unit));
 
     let root_name = {
         let mut ns = Namespace::default();
@@ -288,9 +305,19 @@ pub(crate) fn build(
         .iter()
         .map(|anim| sample_times(anim, tcps, resample_fps, &mut warnings))
         .collect();
-    let all_codes = sampled.iter().flat_map(|t| t.iter().map(|&(tc, _)| tc));
-    let start = all_codes.clone().fold(f64::INFINITY, f64::min);
-    let end = all_codes.fold(f64::NEG_INFINITY, f64::max);
+    // Each clip's own range (its variant's); the stage's is the selected (first) clip's.
+    let ranges: Vec<(f64, f64)> = sampled
+        .iter()
+        .map(|t| {
+            let codes = t.iter().map(|&(tc, _)| tc);
+            (
+                codes.clone().fold(f64::INFINITY, f64::min),
+                codes.fold(f64::NEG_INFINITY, f64::max),
+            )
+        })
+        .map(|(a, b)| if a.is_finite() { (a, b) } else { (0.0, 0.0) })
+        .collect();
+    let (start, end) = ranges.first().copied().unwrap_or((0.0, 0.0));
 
     doc.line("#usda 1.0");
     doc.line("(");
@@ -323,7 +350,7 @@ pub(crate) fn build(
         } else {
             meta("metersPerUnit", &|s| put(s, meters_per_unit));
         }
-        meta("upAxis", &|s| quoted(s, "Y"));
+        meta("upAxis", &|s| quoted(s, up_axis.as_str()));
     }
     doc.line(")");
     doc.blank();
@@ -352,6 +379,11 @@ pub(crate) fn build(
         doc.open_body();
     } else {
         doc.open(&header);
+    }
+    if root_xform != DMat4::IDENTITY {
+        write_matrices_one(&mut doc, "matrix4d xformOp:transform", &root_xform);
+        doc.line("uniform token[] xformOpOrder = [\"xformOp:transform\"]");
+        doc.blank();
     }
 
     if skel_root {
@@ -437,12 +469,30 @@ pub(crate) fn build(
 
     if !anims.is_empty() {
         doc.line(&format!("variantSet \"{CLIP_VARIANT_SET}\" = {{"));
-        for anim in &anims {
+        let ranges_differ = ranges.windows(2).any(|w| w[0] != w[1]);
+        for (anim, &(a, b)) in anims.iter().zip(&ranges) {
             let line = doc.start();
             line.push_str("    ");
             quoted(line, &anim.prim);
-            line.push_str(" {");
-            doc.end();
+            if ranges_differ {
+                // Clips differ in length: each variant says its own range.
+                line.push_str(" (");
+                doc.end();
+                doc.line("        customData = {");
+                let line = doc.start();
+                line.push_str("            double endTimeCode = ");
+                put(line, b);
+                doc.end();
+                let line = doc.start();
+                line.push_str("            double startTimeCode = ");
+                put(line, a);
+                doc.end();
+                doc.line("        }");
+                doc.line("    ) {");
+            } else {
+                line.push_str(" {");
+                doc.end();
+            }
             for prim in &skeleton_prims {
                 doc.line(&format!("        over \"{prim}\""));
                 doc.line("        {");
@@ -802,8 +852,27 @@ pub(crate) fn frame_rate(times: &[f64]) -> Option<f64> {
         .filter(|&d| d > 0.0)
         .fold(f64::INFINITY, f64::min);
     let suggested = (1.0 / min_gap).round();
+    // The smallest gap's rate exactly when it is a ratio with a small denominator
+    // (37.5 = 75/2 keys per second): keys dropped by a reducer leave uneven gaps, but
+    // every key is still on that rate's frames. The gap of two f32 times is imprecise, so
+    // the rate is refined over the whole span (frames between the first and last key at
+    // the gap's rate), then snapped to k/n only when within f32 noise.
+    let span = last - first;
+    let frames = (span / min_gap).round();
+    let exact = (frames >= 1.0).then(|| frames / span).and_then(|r| {
+        (1..=8).find_map(|k| {
+            let rk = r * k as f64;
+            let whole = rk.round();
+            ((rk - whole).abs() <= rk * F32_NOISE * 4.0 && whole > 0.0).then(|| whole / k as f64)
+        })
+    });
     let candidates: Vec<f64> = if suggested >= MIN_FRAME_RATE {
-        std::iter::once(suggested).chain(COMMON_RATES).collect()
+        exact
+            .filter(|&e| e >= MIN_FRAME_RATE && e != suggested)
+            .into_iter()
+            .chain(std::iter::once(suggested))
+            .chain(COMMON_RATES)
+            .collect()
     } else {
         let multiple = suggested * (MIN_FRAME_RATE / suggested.max(1.0)).ceil();
         COMMON_RATES.into_iter().chain([multiple]).collect()
@@ -866,7 +935,7 @@ fn sample_times(
     let k0 = (first * resample_fps).ceil();
     let k1 = (last * resample_fps).floor();
     if k1 - k0 > MAX_RESAMPLED_FRAMES {
-        warnings.push(Warning::Note {
+        warnings.push(Warning::Repaired {
             location: anim.location.clone(),
             message: format!(
                 "step and cubic-spline tracks sampled at their keys only ({} frames at {resample_fps} fps would be too many); USD interpolates linearly between them",
@@ -893,7 +962,7 @@ fn sample_times(
         k += 1.0;
     }
     out.sort_by(|a, b| a.0.total_cmp(&b.0));
-    warnings.push(Warning::Note {
+    warnings.push(Warning::Repaired {
         location: anim.location.clone(),
         message: format!(
             "step and cubic-spline tracks sampled at {resample_fps} fps: USD interpolates time \
@@ -909,6 +978,15 @@ fn write_matrices(doc: &mut Usda, decl: &str, ms: &[DMat4]) {
     line.push_str(decl);
     line.push_str(" = ");
     array(line, ms, matrix);
+    doc.end();
+}
+
+/// Writes `decl = ( (..), .. )`, one matrix (transposed to USD's row vectors).
+fn write_matrices_one(doc: &mut Usda, decl: &str, m: &DMat4) {
+    let line = doc.start();
+    line.push_str(decl);
+    line.push_str(" = ");
+    matrix(line, m);
     doc.end();
 }
 
@@ -1008,7 +1086,7 @@ fn write_animation(
         poses.push(pose);
     }
     if half_error.worst > HALF_REPORT_TOLERANCE {
-        warnings.push(Warning::Note {
+        warnings.push(Warning::Repaired {
             location: anim.location.clone(),
             message: format!(
                 "{} scale values rounded to half precision (SkelAnimation scales are half3[]); largest relative change {:.2e}",
@@ -1298,7 +1376,7 @@ fn write_mesh(
                     Some(rows.element_size),
                     "vertex",
                 );
-                if ctx.options.skinning == UsdSkinning::Dqs {
+                if ctx.options.skinning.unwrap_or(binding.method) == UsdSkinning::Dqs {
                     doc.line("uniform token primvars:skel:skinningMethod = \"dualQuaternion\"");
                 }
             }

@@ -19,7 +19,14 @@ use crate::gltf::document::fallback_palette_index;
 use crate::{sample, Problem};
 
 fn usda(asset: &Asset, skinning: UsdSkinning) -> ExportedUsd {
-    to_usda(asset, &UsdOptions { skinning }).expect("export")
+    to_usda(
+        asset,
+        &UsdOptions {
+            skinning: Some(skinning),
+            ..Default::default()
+        },
+    )
+    .expect("export")
 }
 
 /// The block of text from the line containing `start` to the next line equal to `end`
@@ -185,10 +192,10 @@ fn rig_text_has_the_usdskel_layout() {
         &|w| matches!(w, Warning::Repaired { message, .. } if message.contains("1 vertex had no influence"))
     ));
     assert!(has(
-        &|w| matches!(w, Warning::Note { location, message } if location == "clip \"wave\"" && message.contains("half precision"))
+        &|w| matches!(w, Warning::Repaired { location, message } if location == "clip \"wave\"" && message.contains("half precision"))
     ));
     assert!(has(
-        &|w| matches!(w, Warning::Note { message, .. } if message.contains("sampled at 24 fps"))
+        &|w| matches!(w, Warning::Repaired { message, .. } if message.contains("sampled at 24 fps"))
     ));
 
     let dqs = usda(&asset, UsdSkinning::Dqs).text;
@@ -543,10 +550,17 @@ fn every_sample_passes_usd_validation() {
     ];
     for (name, asset, skinning) in cases {
         let path = dir.path().join(format!("{name}.usda"));
-        prepare_usd(&asset, &path, &UsdOptions { skinning })
-            .unwrap()
-            .write()
-            .unwrap();
+        prepare_usd(
+            &asset,
+            &path,
+            &UsdOptions {
+                skinning: Some(skinning),
+                ..Default::default()
+            },
+        )
+        .unwrap()
+        .write()
+        .unwrap();
         let (code, out) = check(&python, &[&path], &["--strict"]);
         assert_eq!(code, 0, "{name}:\n{out}");
         assert!(
@@ -964,7 +978,8 @@ fn usd_evaluation_matches_the_reference() {
         &asset,
         &usd,
         &UsdOptions {
-            skinning: UsdSkinning::Dqs,
+            skinning: Some(UsdSkinning::Dqs),
+            ..Default::default()
         },
     )
     .unwrap()
@@ -1003,4 +1018,94 @@ fn reference_helpers_are_sane() {
         );
     }
     assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+}
+
+#[test]
+fn a_rate_of_37_5_with_uneven_keys_is_found_exactly() {
+    // 1300 keys at 37.5 per second, some dropped (a key reducer's output): the gaps are
+    // uneven, but every key is on a frame of 37.5.
+    let times: Vec<f64> = (0..1300)
+        .filter(|k| k % 7 != 3)
+        .map(|k| f64::from((k as f64 / 37.5) as f32))
+        .collect();
+    assert_eq!(frame_rate(&times), Some(37.5));
+}
+
+#[test]
+fn each_clip_variant_has_its_own_time_range() {
+    let mut asset = sample::two_roots();
+    let mut long = asset.clips[0].clone();
+    long.name = "long".into();
+    for t in &mut long.tracks {
+        t.times.iter_mut().for_each(|x| *x *= 2.0);
+    }
+    asset.clips.push(long);
+    let text = usda(&asset, UsdSkinning::Lbs).text;
+    assert!(
+        text.contains("endTimeCode = 24\n"),
+        "the stage: the selected clip"
+    );
+    let variant = |name: &str| block(&text, &format!("\"{name}\" (")).to_string();
+    let first = &asset.clips[0].name;
+    assert!(
+        variant(first).contains("double endTimeCode = 24\n"),
+        "{}",
+        variant(first)
+    );
+    assert!(
+        variant("long").contains("double endTimeCode = 48\n"),
+        "{}",
+        variant("long")
+    );
+    assert!(variant("long").contains("double startTimeCode = 0\n"));
+}
+
+#[test]
+fn the_scene_frame_is_written_as_authored_or_converted() {
+    use rigport_model::{SceneFrame, UpAxis};
+    let mut asset = sample::rig();
+    let place = DMat4::from_scale_rotation_translation(
+        DVec3::splat(100.0),
+        DQuat::from_rotation_z(0.5),
+        DVec3::new(1.0, 2.0, 3.0),
+    );
+    asset.frame = SceneFrame {
+        up_axis: UpAxis::Z,
+        model_to_scene: place,
+    };
+    asset.meters_per_unit = Some(0.01);
+    let text = usda(&asset, UsdSkinning::Lbs).text;
+    assert!(text.contains("upAxis = \"Z\"\n"), "kept");
+    assert!(text.contains("metersPerUnit = 0.01\n"), "kept");
+    let xform = numbers(&text, "matrix4d xformOp:transform");
+    // Written row by row in USD's row-vector form: the column-vector matrix's columns.
+    let want = place.to_cols_array();
+    assert!(
+        xform.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-9),
+        "{xform:?}"
+    );
+    assert!(text.contains("uniform token[] xformOpOrder = [\"xformOp:transform\"]"));
+    // Asked for Y-up metres: the root's transform converts.
+    let out = to_usda(
+        &asset,
+        &UsdOptions {
+            up_axis: Some(UpAxis::Y),
+            meters_per_unit: Some(1.0),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .text;
+    assert!(out.contains("upAxis = \"Y\"\n") && out.contains("metersPerUnit = 1\n"));
+    let xform = numbers(&out, "matrix4d xformOp:transform");
+    let want = (DMat4::from_scale(DVec3::splat(0.01)) * UpAxis::Z.conversion_to(UpAxis::Y) * place)
+        .to_cols_array();
+    assert!(
+        xform.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-9),
+        "{xform:?}"
+    );
+    // An identity frame authors no transform.
+    assert!(!usda(&sample::rig(), UsdSkinning::Lbs)
+        .text
+        .contains("xformOp"));
 }

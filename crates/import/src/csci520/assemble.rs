@@ -90,6 +90,7 @@ pub(super) fn assemble(
             joints: (0..skeleton.len() as u32).map(JointIndex).collect(),
             inv_bind: inverse_bind_matrices(&skeleton),
             influences: remap_influences(&weights, &new_index, &mesh.source_vertex),
+            method: Default::default(),
         });
     }
     let asset = Asset {
@@ -99,6 +100,7 @@ pub(super) fn assemble(
         skins,
         clips: Vec::new(),
         meters_per_unit: None,
+        frame: Default::default(),
         ik_handles: Vec::new(),
     };
     if let Err(errors) = asset.validate() {

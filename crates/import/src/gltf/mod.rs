@@ -210,6 +210,7 @@ impl<'a> Importer<'a> {
                             joints: data.joints,
                             inv_bind: data.inv_bind,
                             influences,
+                            method: Default::default(),
                         });
                     }
                     (Some(_), false) => {
@@ -256,6 +257,7 @@ impl<'a> Importer<'a> {
             clips,
             // glTF 2.0 §3.4: "The units for all linear distances are meters."
             meters_per_unit: Some(1.0),
+            frame: Default::default(),
             ik_handles: Vec::new(),
         };
         asset.validate().map_err(|problems| {

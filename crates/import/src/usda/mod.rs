@@ -23,17 +23,23 @@
 //! | `Mesh` with `primvars:skel:jointIndices`/`jointWeights` under a `SkelRoot`, bound by `skel:skeleton` (inherited) | one [`Mesh`] and one [`SkinBinding`] whose palette is the skeleton joints it uses; indices go through the mesh's `skel:joints` when authored; `constant` interpolation binds every point rigidly to the same influences |
 //! | `primvars:skel:geomBindTransform` | applied to points and normals, which are then in skeleton space at bind time (UsdSkel applies it before the skinning transforms) |
 //! | `SkelAnimation` | one [`Clip`] (named after the prim), LINEAR tracks at the authored samples; the bound one (`skel:animationSource`, inherited) first, then every other one in document order, then those only found in unselected variants |
-//! | `Mesh` without skinning primvars | a static [`Mesh`] in its own space |
+//! | `Mesh` without skinning primvars | a static [`Mesh`], points moved to model space |
+//! | stage `upAxis`, `xformOp`s above the Skeleton | [`Asset::frame`] |
 //! | stage `metersPerUnit` | [`Asset::meters_per_unit`] (USD's fallback 0.01 when absent) |
 //!
 //! Details:
 //! - **One skeleton.** The first skeleton a mesh binds to (in document order; without
 //!   bindings, the first `Skeleton`) is imported; meshes bound to other skeletons are left
 //!   out with a [`Warning::Incomplete`] naming them.
-//! - **Space.** Transforms (`xformOp`s) are not evaluated: the asset is in the skeleton's
-//!   space, which is where UsdSkel skins points before it maps them into a mesh's own
-//!   space; a [`Warning::Note`] names every prim on the way whose transform is dropped.
-//!   Axes are kept as authored; a Z-up stage gets a [`Warning::Note`] (no conversion).
+//! - **Space.** Model space is the Skeleton's space, where UsdSkel skins points. The
+//!   `xformOp`s of the Skeleton prim and every prim above it (`translate`, `scale`,
+//!   `rotateX`.., `rotateXYZ`.., `orient`, `transform`, `!invert!`, `!resetXformStack!`;
+//!   see `xform.rs`) give [`SceneFrame::model_to_scene`]; the stage's `upAxis` gives
+//!   [`SceneFrame::up_axis`]. Nothing is converted: exporters place the model from the
+//!   frame. A static (unskinned) mesh's points and normals are moved from its own space to
+//!   model space through its world transform. Time-sampled ops are evaluated at the
+//!   default time (else their first sample) with a [`Warning::Incomplete`] (they are not
+//!   yet turned into root motion).
 //! - **Weights** are kept as authored, as UsdSkel skins with them (it does not normalize):
 //!   zero weights are dropped, a joint listed twice for a point is merged, and rows that do
 //!   not sum to 1 get a [`Warning::Note`].
@@ -53,9 +59,8 @@
 //! - **Rotations** are read `(w, x, y, z)` and stored `xyzw`, normalized and made
 //!   sign-continuous along each track; `half` values (`half3[] scales`) are rounded to
 //!   binary16 as USD stores them.
-//! - `primvars:skel:skinningMethod = "dualQuaternion"` (inherited) gets a
-//!   [`Warning::Note`]: the model has no per-skin method, the evaluator takes one
-//!   (`rigport eval --skinning dqs`).
+//! - `primvars:skel:skinningMethod` (inherited) is the skin's
+//!   [`SkinBinding::method`]; an unknown token is skinned linearly with a warning.
 //! - Blend shapes are not imported (a [`Warning::Incomplete`]); non-`Mesh` skinnable prims
 //!   (curves, points, implicit shapes) are left out with a warning.
 //!
@@ -75,6 +80,7 @@ mod stage;
 mod tests;
 mod usdz;
 mod values;
+mod xform;
 
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
@@ -83,7 +89,8 @@ use glam::{DMat3, DMat4, DVec3};
 use rigport_model::glam::{Mat4, Quat, Vec2, Vec3};
 use rigport_model::{
     Asset, Clip, Influence, Influences, Interpolation, Joint, JointIndex, Mesh, MeshIndex,
-    Skeleton, SkinBinding, Track, TrackTarget, Transform, Warning,
+    SceneFrame, Skeleton, SkinBinding, SkinningMethod, Track, TrackTarget, Transform, UpAxis,
+    Warning,
 };
 
 use self::parse::{Layer, PrimSpec, Value};
@@ -136,6 +143,8 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
         stage: Stage::compose(&layer.root, None),
         warnings: Vec::new(),
         tcps: DEFAULT_TIME_CODES_PER_SECOND,
+        up_axis: UpAxis::Y,
+        skel_world: DMat4::IDENTITY,
     };
     let asset = importer.run()?;
     Ok(Imported {
@@ -160,6 +169,11 @@ struct Importer<'l, 'p> {
     stage: Stage<'l>,
     warnings: Vec<Warning>,
     tcps: f64,
+    /// The stage's up axis.
+    up_axis: UpAxis,
+    /// World transform of the imported Skeleton prim (model space -> stage), identity
+    /// without a skeleton.
+    skel_world: DMat4,
 }
 
 /// Interpolation of a primvar (`UsdGeomPrimvar`).
@@ -235,6 +249,15 @@ impl<'l> Importer<'l, '_> {
     fn note(&mut self, prim: &str, message: impl Into<String>) {
         let location = self.location(prim);
         self.warnings.push(Warning::Note {
+            location,
+            message: message.into(),
+        });
+    }
+
+    /// A warning: the result differs from what USD would make of the input.
+    fn repaired(&mut self, prim: &str, message: impl Into<String>) {
+        let location = self.location(prim);
+        self.warnings.push(Warning::Repaired {
             location,
             message: message.into(),
         });
@@ -332,6 +355,21 @@ impl<'l> Importer<'l, '_> {
             }
             None => (Skeleton::default(), None),
         };
+        if let Some((s, _)) = &skel {
+            let (world, animated) = self.world(*s)?;
+            self.skel_world = world;
+            if !animated.is_empty() {
+                let path = self.prim(*s).path.clone();
+                self.incomplete(
+                    &path,
+                    format!(
+                        "time-sampled transforms (xformOp) on {} are not imported as root \
+                         motion: their value at the default time is used",
+                        animated.join(", ")
+                    ),
+                );
+            }
+        }
 
         // Meshes.
         let mut meshes = Vec::new();
@@ -375,11 +413,12 @@ impl<'l> Importer<'l, '_> {
             Some((s, data)) => self.clips(*s, data)?,
             None => Vec::new(),
         };
-        if let Some((s, _)) = &skel {
-            self.space_notes(*s);
-        }
 
         let asset = Asset {
+            frame: SceneFrame {
+                up_axis: self.up_axis,
+                model_to_scene: self.skel_world,
+            },
             name: self
                 .path
                 .file_stem()
@@ -434,13 +473,8 @@ impl<'l> Importer<'l, '_> {
         };
         if let Some(m) = self.layer_meta("upAxis") {
             match token(&m.value) {
-                Some("Y") => {}
-                Some("Z") => self.warnings.push(Warning::Note {
-                    location: self.path.display().to_string(),
-                    message: "the stage is Z-up (upAxis = \"Z\"): coordinates are kept as \
-                              authored, not converted to Y-up"
-                        .into(),
-                }),
+                Some("Y") => self.up_axis = UpAxis::Y,
+                Some("Z") => self.up_axis = UpAxis::Z,
                 _ => {
                     return Err(ImportError::invalid(
                         Location::line(self.path, m.line),
@@ -612,7 +646,7 @@ impl<'l> Importer<'l, '_> {
         let (value, sampled) = values::static_value(&prop)?;
         if sampled {
             let path = prim.path.clone();
-            self.note(
+            self.incomplete(
                 &path,
                 format!("{name} is only time-sampled: its first sample is used"),
             );
@@ -1199,7 +1233,7 @@ impl<'l> Importer<'l, '_> {
             }
         }
         if degenerate > 0 {
-            self.note(
+            self.repaired(
                 &path,
                 format!("{degenerate} face(s) with fewer than 3 vertices skipped"),
             );
@@ -1219,25 +1253,40 @@ impl<'l> Importer<'l, '_> {
             morph_weights: Vec::new(),
             attached_to: None,
         };
+        let mut mesh = mesh;
         let skin = match skel {
             Some(skel) => Some(self.skin(index, skel, n_points, &mesh.source_vertex)?),
             None => {
-                // UsdSkel ignores a skinned mesh's own transform; a static mesh keeps it.
-                let moved: Vec<String> = self
-                    .stage
-                    .ancestry(index)
-                    .filter(|p| p.has_xform)
-                    .map(|p| format!("<{}>", p.path))
-                    .collect();
-                if !moved.is_empty() {
-                    self.note(
+                // UsdSkel ignores a skinned mesh's own transform; a static mesh keeps it:
+                // its points go to model space (the skeleton's), which the scene frame
+                // places in the stage.
+                let (world, animated) = self.world(index)?;
+                if !animated.is_empty() {
+                    self.incomplete(
                         &path,
                         format!(
-                            "a static mesh: transforms (xformOp) on {} are not applied, its \
-                             points stay in its own space",
-                            moved.join(", ")
+                            "a static mesh under time-sampled transforms (xformOp) on {}: \
+                             their value at the default time is used",
+                            animated.join(", ")
                         ),
                     );
+                }
+                let m = self.skel_world.inverse() * world;
+                if m != DMat4::IDENTITY {
+                    for p in &mut mesh.positions {
+                        *p = m.transform_point3(p.as_dvec3()).as_vec3();
+                    }
+                    let n = DMat3::from_mat4(m).inverse().transpose();
+                    if let Some(normals) = &mut mesh.normals {
+                        for v in normals {
+                            *v = (n * v.as_dvec3()).normalize_or_zero().as_vec3();
+                        }
+                    }
+                    if m.determinant() < 0.0 {
+                        for t in &mut mesh.triangles {
+                            t.swap(1, 2);
+                        }
+                    }
                 }
                 None
             }
@@ -1457,7 +1506,7 @@ impl<'l> Importer<'l, '_> {
             );
         }
         if empty > 0 {
-            self.note(
+            self.repaired(
                 &path,
                 format!(
                     "{} point(s) have no non-zero weight: UsdSkel moves them to the origin, \
@@ -1483,27 +1532,29 @@ impl<'l> Importer<'l, '_> {
             point_rows.get(r).cloned().unwrap_or_default()
         }));
         if !prim.api_schemas.contains(&"SkelBindingAPI") {
-            self.note(
+            self.repaired(
                 &path,
                 "SkelBindingAPI is not applied: usd-core 23.08 and later ignore its skinning \
                  primvars (rigport reads them)",
             );
         }
-        if let Some(method) = self.skinning_method(index) {
-            match method {
-                "classicLinear" => {}
-                "dualQuaternion" => self.note(
-                    &path,
-                    "declares dual-quaternion skinning (primvars:skel:skinningMethod); the model \
-                     keeps no per-skin method: evaluate with --skinning dqs",
-                ),
-                other => self.note(
-                    &path,
-                    format!("unknown primvars:skel:skinningMethod {other:?}: treated as linear"),
-                ),
+        let mut method = SkinningMethod::Lbs;
+        if let Some(token) = self.skinning_method(index) {
+            match SkinningMethod::from_usd_token(token) {
+                Some(m) => method = m,
+                None => {
+                    let location = self.location(&path);
+                    self.warnings.push(Warning::Repaired {
+                        location,
+                        message: format!(
+                            "unknown primvars:skel:skinningMethod {token:?}: skinned linearly"
+                        ),
+                    });
+                }
             }
         }
         Ok(SkinBinding {
+            method,
             mesh: MeshIndex(0),
             joints: palette.iter().map(|&j| JointIndex(j as u32)).collect(),
             inv_bind,
@@ -1669,7 +1720,7 @@ impl<'l> Importer<'l, '_> {
             .map(|(t, _)| *t)
             .collect();
         if !unknown.is_empty() {
-            self.note(
+            self.incomplete(
                 &path,
                 format!(
                     "{} joint(s) not in the Skeleton <{}> ignored: {}",
@@ -1834,26 +1885,25 @@ impl<'l> Importer<'l, '_> {
         }
     }
 
-    /// Notes on transforms that are not applied: on the skeleton and its ancestors, and on
-    /// unskinned meshes.
-    fn space_notes(&mut self, skel_index: usize) {
-        let with_xform: Vec<String> = self
-            .stage
-            .ancestry(skel_index)
-            .filter(|p| p.has_xform)
-            .map(|p| format!("<{}>", p.path))
-            .collect();
-        if !with_xform.is_empty() {
-            let path = self.prim(skel_index).path.clone();
-            self.note(
-                &path,
-                format!(
-                    "transforms (xformOp) on {} are not applied: the asset is in the \
-                     Skeleton's own space",
-                    with_xform.join(", ")
-                ),
-            );
+    /// The world transform of prim `index` at the default time (its ancestors' and its
+    /// own `xformOp`s, honouring `!resetXformStack!`), and the paths of prims on the way
+    /// whose ops are time-sampled.
+    fn world(&self, index: usize) -> Result<(DMat4, Vec<String>), ImportError> {
+        let mut m = DMat4::IDENTITY;
+        let mut animated = Vec::new();
+        for p in self.stage.ancestry(index) {
+            let local = xform::local(p, None).map_err(|e| self.err(&p.path, e))?;
+            if let Some(local) = local {
+                m = local.matrix * m;
+                if local.animated {
+                    animated.push(format!("<{}>", p.path));
+                }
+                if local.resets {
+                    break;
+                }
+            }
         }
+        Ok((m, animated))
     }
 }
 

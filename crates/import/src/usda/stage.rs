@@ -61,8 +61,6 @@ pub(crate) struct Prim<'l> {
     /// Composition arcs that are not resolved (`references`, `payload`, `inherits`,
     /// `specializes`) authored on this prim.
     pub arcs: Vec<&'l str>,
-    /// Whether the prim carries `xformOpOrder` (its transform is not applied).
-    pub has_xform: bool,
     /// The variant selections in force on this prim (set, variant).
     pub selections: Vec<(&'l str, &'l str)>,
     /// Its variant sets: name and variant names.
@@ -241,7 +239,6 @@ impl<'l> Stage<'l> {
                 }
             }
         }
-        let has_xform = props.iter().any(|(n, _)| *n == "xformOpOrder");
         let index = self.prims.len();
         self.prims.push(Prim {
             path: path.clone(),
@@ -254,7 +251,6 @@ impl<'l> Stage<'l> {
             children: Vec::new(),
             parent,
             arcs,
-            has_xform,
             selections,
             variant_sets,
         });

@@ -185,7 +185,8 @@ fn rigid_binding_rest_from_bind_and_shifted_times() {
     );
     let text: Vec<String> = imported.warnings.iter().map(ToString::to_string).collect();
     let has = |needle: &str| text.iter().any(|w| w.contains(needle));
-    assert!(has("Z-up"), "{text:?}");
+    assert!(!has("Z-up"), "the up axis is in the frame: {text:?}");
+    assert_eq!(a.frame.up_axis, rigport_model::UpAxis::Z);
     assert!(has("</Root/Prop>: references not resolved"), "{text:?}");
     assert!(has("no restTransforms"), "{text:?}");
     assert!(has("shifted by 0.5 s"), "{text:?}");
@@ -476,11 +477,12 @@ fn corpus_bake_inputs_import() {
             .filter(|w| w.to_string().contains("is not a Mesh"))
             .count();
         assert_eq!(skipped, 4, "curves, sphere, cube, cylinder");
-        let dqs = imported
-            .warnings
-            .iter()
-            .any(|w| w.to_string().contains("dual-quaternion"));
-        assert_eq!(dqs, rel == "dqs.usda");
+        let want = if rel == "dqs.usda" {
+            rigport_model::SkinningMethod::Dqs
+        } else {
+            rigport_model::SkinningMethod::Lbs
+        };
+        assert!(a.skins.iter().all(|s| s.method == want), "{rel}");
     }
 }
 
@@ -536,4 +538,112 @@ proptest::proptest! {
         bytes.truncate(cut % (bytes.len() + 1));
         let _ = import_slice(&bytes, Path::new("p.usda"));
     }
+}
+
+#[test]
+fn transforms_above_the_skeleton_become_the_scene_frame() {
+    use glam::{DMat4, DQuat, DVec3};
+    let text = include_str!("../../../../fixtures/usda/blender_frame.usda");
+    let imported = ok(text, "blender_frame.usda");
+    let a = &imported.asset;
+    let text: Vec<String> = imported.warnings.iter().map(ToString::to_string).collect();
+    assert!(
+        !text.iter().any(|w| w.contains("xformOp")),
+        "transforms are applied, not reported: {text:?}"
+    );
+    assert_eq!(a.frame.up_axis, rigport_model::UpAxis::Z);
+    assert_eq!(a.meters_per_unit, Some(0.01));
+    let deg = f64::to_radians;
+    // rotateXYZ: X first, then Y, then Z.
+    let rot = DQuat::from_rotation_z(deg(30.0)) * DQuat::from_rotation_x(deg(90.0));
+    let orient = DQuat::from_xyzw(0.0, 0.70710677, 0.0, 0.70710677).normalize();
+    let expect = DMat4::from_scale(DVec3::splat(100.0))
+        * DMat4::from_translation(DVec3::new(0.5, 0.0, 0.0))
+        * DMat4::from_quat(rot)
+        * DMat4::from_quat(orient);
+    assert!(
+        a.frame.model_to_scene.abs_diff_eq(expect, 1e-9),
+        "{} vs {expect}",
+        a.frame.model_to_scene
+    );
+    // The static prop's points are in model space: the frame maps them to the stage.
+    let prop = &a.meshes[1];
+    let stage_of = |p: Vec3| a.frame.model_to_scene.transform_point3(p.as_dvec3());
+    let want = DMat4::from_scale(DVec3::splat(100.0)) * DMat4::from_translation(DVec3::Z);
+    for (p, src) in prop.positions.iter().zip([DVec3::ZERO, DVec3::X, DVec3::Y]) {
+        assert!(
+            (stage_of(*p) - want.transform_point3(src)).length() < 1e-4,
+            "{p} -> {} vs {}",
+            stage_of(*p),
+            want.transform_point3(src)
+        );
+    }
+}
+
+#[test]
+fn xform_op_orders_and_reset_stack() {
+    let text = r#"#usda 1.0
+def Xform "A"
+{
+    double3 xformOp:translate = (1, 2, 3)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+    def Xform "B"
+    {
+        double3 xformOp:translate:pivot = (0, 1, 0)
+        float xformOp:rotateZ = 90
+        matrix4d xformOp:transform = ((2,0,0,0),(0,2,0,0),(0,0,2,0),(0,0,5,1))
+        uniform token[] xformOpOrder = ["xformOp:transform", "xformOp:translate:pivot", "xformOp:rotateZ", "!invert!xformOp:translate:pivot"]
+        def Mesh "M"
+        {
+            int[] faceVertexCounts = [3]
+            int[] faceVertexIndices = [0, 1, 2]
+            point3f[] points = [(1, 1, 0), (0, 0, 0), (0, 1, 0)]
+        }
+    }
+    def Xform "C"
+    {
+        uniform token[] xformOpOrder = ["!resetXformStack!"]
+        def Mesh "N"
+        {
+            int[] faceVertexCounts = [3]
+            int[] faceVertexIndices = [0, 1, 2]
+            point3f[] points = [(1, 1, 0), (0, 0, 0), (0, 1, 0)]
+        }
+    }
+}
+"#;
+    let a = ok(text, "ops.usda").asset;
+    // (1,1,0): about the pivot (0,1,0) by 90° about Z -> (0,2,0); x2 and +(0,0,5) -> (0,4,5);
+    // + (1,2,3) -> (1,6,8).
+    assert!(
+        close(a.meshes[0].positions[0], Vec3::new(1.0, 6.0, 8.0)),
+        "{}",
+        a.meshes[0].positions[0]
+    );
+    assert!(
+        close(a.meshes[1].positions[0], Vec3::new(1.0, 1.0, 0.0)),
+        "reset: {}",
+        a.meshes[1].positions[0]
+    );
+}
+
+#[test]
+fn results_that_differ_from_usdskel_are_warnings_not_notes() {
+    // Without SkelBindingAPI, usd-core ignores the mesh's skinning primvars; rigport skins
+    // it: `--deny-warnings` must catch that.
+    let text = ARM.replace(
+        "    def Mesh \"Sleeve\" (\n        prepend apiSchemas = [\"SkelBindingAPI\"]\n    )",
+        "    def Mesh \"Sleeve\"",
+    );
+    assert_ne!(text, ARM, "the fixture changed");
+    let imported = ok(&text, "no_api.usda");
+    assert!(
+        imported
+            .warnings
+            .iter()
+            .any(|w| matches!(w, Warning::Repaired { message, .. }
+            if message.contains("SkelBindingAPI"))),
+        "{:?}",
+        imported.warnings
+    );
 }

@@ -1,0 +1,67 @@
+"""UsdSkel's evaluation of a stage in +Y-up metres, for tests/cli/frames.rs.
+
+    python usd_world.py STAGE TOOLS_DIR SECONDS_JSON [--clip NAME]
+
+Prints JSON: {"tcps", "up", "mpu", "frames": [{"joints": [[x,y,z]...], "points": [[x,y,z]...]}]}
+Joints: the first Skeleton's joint world translations (ComputeJointWorldTransforms, every
+xformOp above it applied); points: every Mesh under the default prim, skinned by UsdSkel
+(tools/check_usd.py's `mesh_points`: blend shapes, skinning method, world transforms).
+Both are then multiplied by the stage's metersPerUnit and turned +Y up ((x, y, z) ->
+(x, z, -y) for a Z-up stage). SECONDS_JSON lists times in seconds (time code = seconds x
+timeCodesPerSecond, snapped as check_usd.py does); `null` means the default time.
+"""
+
+import json
+import sys
+
+import numpy as np
+from pxr import Usd, UsdGeom, UsdSkel
+
+
+def main() -> None:
+    path, tools, seconds = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
+    sys.path.insert(0, tools)
+    import check_usd as cu
+
+    stage = Usd.Stage.Open(path)
+    if "--clip" in sys.argv:
+        name = sys.argv[sys.argv.index("--clip") + 1]
+        stage.GetDefaultPrim().GetVariantSet("clip").SetVariantSelection(name)
+    cache = UsdSkel.Cache()
+    skinning = {}
+    skel_queries = []
+    for prim in stage.Traverse():
+        if prim.IsA(UsdSkel.Root):
+            root = UsdSkel.Root(prim)
+            cache.Populate(root, Usd.PrimDefaultPredicate)
+            for binding in cache.ComputeSkelBindings(root, Usd.PrimDefaultPredicate):
+                sq = cache.GetSkelQuery(binding.GetSkeleton())
+                for query in binding.GetSkinningTargets():
+                    skinning[query.GetPrim().GetPath()] = (sq, query)
+    for prim in stage.Traverse():
+        if prim.IsA(UsdSkel.Skeleton):
+            skel_queries.append(cache.GetSkelQuery(UsdSkel.Skeleton(prim)))
+    mpu = UsdGeom.GetStageMetersPerUnit(stage)
+    up = UsdGeom.GetStageUpAxis(stage)
+    tcps = stage.GetTimeCodesPerSecond()
+
+    def fix(a):
+        a = np.asarray(a, dtype=np.float64).reshape(-1, 3) * mpu
+        if up == "Z":
+            a = np.stack([a[:, 0], a[:, 2], -a[:, 1]], axis=1)
+        return a.tolist()
+
+    frames = []
+    for s in seconds if seconds is not None else [None]:
+        time = Usd.TimeCode.Default() if s is None else Usd.TimeCode(cu.time_code(float(s), tcps))
+        joints = []
+        if skel_queries:
+            w = np.asarray(skel_queries[0].ComputeJointWorldTransforms(UsdGeom.XformCache(time)))
+            joints = fix(w[:, 3, :3]) if len(w) else []
+        points = fix(cu.mesh_points(stage, cache, skinning, time, np))
+        frames.append({"joints": joints, "points": points})
+    print(json.dumps({"tcps": tcps, "up": up, "mpu": mpu, "frames": frames}))
+
+
+if __name__ == "__main__":
+    main()
