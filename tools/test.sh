@@ -10,6 +10,8 @@
 #  7. clippy                 cargo clippy --workspace --all-targets --locked -- -D warnings
 #  8. output hashes          tools/output_hashes.sh (the demo and every corpus conversion
 #                            hash as recorded in tools/output_hashes.txt)
+#  9. module circles         tools/module_cycles.py (no file of a crate imports one that
+#                            imports it back)
 # then a summary. Steps 3-8 all run even if one fails; the exit status is 0
 # only if every step passed.
 #
@@ -256,5 +258,15 @@ if cargo build --locked "${PROFILE_ARGS[@]}" --bin rigport \
   record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
 else
   record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "outputs differ from tools/output_hashes.txt"
+fi
+
+# --------------------------------------------------------- 9 module circles
+CURRENT_STEP="module circles (tools/module_cycles.py)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+if python3 tools/module_cycles.py; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "files that import each other (listed above)"
 fi
 # The EXIT trap prints the summary and sets the exit status.

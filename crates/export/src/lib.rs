@@ -36,6 +36,7 @@
 mod atomic;
 mod error;
 mod gltf;
+mod labels;
 mod usd;
 mod weights;
 

@@ -333,7 +333,7 @@ pub fn gltf_influences(
     skin: &rigport_model::SkinBinding,
     max_influences: usize,
 ) -> Influences {
-    let fallback = crate::gltf::document::fallback_palette_index(skeleton, &skin.joints);
+    let fallback = crate::labels::fallback_palette_index(skeleton, &skin.joints);
     let packed = pack(&skin.influences, max_influences, fallback as u16);
     Influences::from_rows(packed.rows.iter().map(|r| {
         r.joints

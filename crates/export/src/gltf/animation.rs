@@ -17,8 +17,8 @@ use json::Index;
 use rigport_model::{Asset, Clip, Interpolation, Track, TrackTarget, Transform, Warning};
 
 use super::buffer::{Bounds, Builder};
-use super::document::mesh_label;
 use super::{quat_dot, unit_quat};
+use crate::labels::mesh_label;
 
 /// Writes one glTF animation per clip that has an exportable track.
 ///

@@ -16,6 +16,7 @@ use rigport_model::{
 use super::animation;
 use super::buffer::{Bounds, Builder};
 use super::{quat_length, unit_quat};
+use crate::labels::{fallback_palette_index, mesh_label};
 use crate::weights::{self, SET_SLOTS};
 use crate::{ExportError, GltfOptions, Problem};
 
@@ -187,15 +188,6 @@ fn non_empty(name: &str) -> Option<String> {
     (!name.is_empty()).then(|| name.to_owned())
 }
 
-/// How warnings name a mesh: its name, or `#index` when it has none.
-pub(crate) fn mesh_label(index: usize, mesh: &Mesh) -> String {
-    if mesh.name.is_empty() {
-        format!("#{index}")
-    } else {
-        mesh.name.clone()
-    }
-}
-
 /// A joint's node: name and rest TRS, identity components omitted (they are the defaults).
 fn joint_node(joint: &rigport_model::Joint) -> json::Node {
     let t = &joint.rest_local;
@@ -242,26 +234,6 @@ pub(crate) fn common_ancestor(
         acc = a;
     }
     Some(acc)
-}
-
-/// The palette index a vertex without influence is bound to: the first palette joint whose
-/// parent is not in the palette, i.e. the root of (the first tree of) the skin. Such a vertex
-/// then follows the skeleton as a whole rather than an arbitrary bone.
-pub(crate) fn fallback_palette_index(
-    skeleton: &Skeleton,
-    palette: &[rigport_model::JointIndex],
-) -> usize {
-    let mut in_palette = vec![false; skeleton.len()];
-    for j in palette {
-        in_palette[j.get()] = true;
-    }
-    palette
-        .iter()
-        .position(|j| match skeleton.joint(*j).parent {
-            None => true,
-            Some(p) => !in_palette[p.get()],
-        })
-        .unwrap_or(0)
 }
 
 /// `1 vertex`, `2 vertices`.

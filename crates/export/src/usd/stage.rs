@@ -14,7 +14,7 @@ use super::names::{Namespace, Renames};
 use super::sampler::{dot, Sampler};
 use super::text::{array, float, matrix, put, quoted, to_half, tuple, Usda};
 use super::{UsdOptions, UsdSkinning};
-use crate::gltf::document::{fallback_palette_index, mesh_label};
+use crate::labels::{fallback_palette_index, mesh_label};
 use crate::weights::ROW_SUM_TOLERANCE;
 use crate::{ExportError, Problem};
 

@@ -15,7 +15,7 @@ use rigport_model::{
 use super::sampler::Sampler;
 use super::stage::frame_rate;
 use super::*;
-use crate::gltf::document::fallback_palette_index;
+use crate::labels::fallback_palette_index;
 use crate::{sample, Problem};
 
 fn usda(asset: &Asset, skinning: UsdSkinning) -> ExportedUsd {

@@ -1341,11 +1341,17 @@ impl<'l> Importer<'l, '_> {
             None => 1,
             Some(v) => match number(v) {
                 Some(n) if n >= 1.0 && n.fract() == 0.0 && n <= 1e6 => n as usize,
-                _ => {
+                other => {
+                    // The value as written (`2147483647`, `2.5`), not its Rust debug form.
+                    let shown = match other {
+                        Some(n) if n.fract() == 0.0 && n.abs() < 1e15 => format!("{}", n as i64),
+                        Some(n) => format!("{n}"),
+                        None => "that is not a number".to_string(),
+                    };
                     return Err(self.err(
                         path,
-                        format!("{name} has elementSize {v:?}; it must be a positive integer"),
-                    ))
+                        format!("{name} has elementSize {shown}; it must be a positive integer"),
+                    ));
                 }
             },
         };

@@ -244,6 +244,13 @@ fn bad_element_size_names_the_mesh() {
     );
     let zero = edit(ARM, "elementSize = 2", "elementSize = 0");
     assert!(err(&zero).contains("</Arm/Sleeve>: primvars:skel:jointIndices has elementSize"));
+    // The number as written, not `Number(2147483647.0)` (issue 15).
+    let huge = edit(ARM, "elementSize = 2", "elementSize = 2147483647");
+    assert!(
+        err(&huge).contains("has elementSize 2147483647; it must be a positive integer"),
+        "{}",
+        err(&huge)
+    );
     let differ = edit(
         ARM,
         "elementSize = 2\n        )\n        float",
