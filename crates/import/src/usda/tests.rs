@@ -3,7 +3,9 @@
 use std::path::{Path, PathBuf};
 
 use rigport_model::glam::{Mat4, Quat, Vec2, Vec3};
-use rigport_model::{Influence, JointIndex, TrackTarget, Warning};
+use rigport_model::{
+    Clip, Influence, Interpolation, JointIndex, MeshIndex, Track, TrackTarget, Warning,
+};
 
 use super::*;
 

@@ -13,8 +13,14 @@ use glam::{DMat4, DQuat, DVec3};
 
 use super::parse::Value;
 use super::stage::{Prim, Prop};
-use super::usd_matrix;
 use super::values::{matrix, number, tokens, tuple};
+
+/// The column-vector matrix of a USD row-vector `matrix4d` as written (rows): USD's row
+/// `i` is the column `i` of the column-vector matrix (translation in the last row there,
+/// the last column here).
+pub(super) fn usd_matrix(rows: &[[f64; 4]; 4]) -> DMat4 {
+    DMat4::from_cols_array_2d(rows)
+}
 
 /// A prim's evaluated local transform.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,0 +1,446 @@
+//! `Mesh` prims: topology (n-gons to triangle fans, orientation), primvars of any
+//! interpolation, normals and UVs (splitting points into further vertices where values
+//! differ), the geom bind transform, and static (unskinned) meshes moved to model space.
+
+use std::collections::HashMap;
+
+use glam::{DMat3, DMat4, DVec3};
+use rigport_model::glam::{Vec2, Vec3};
+use rigport_model::{Mesh, SkinBinding};
+
+use super::importer::{Importer, Interp, Primvar, SkelData};
+use super::stage::Prim;
+use super::values::{self, is_half_type, matrix, numbers, round_to_half, token, tuples};
+use super::xform::usd_matrix;
+use crate::ImportError;
+
+impl<'l> Importer<'l, '_> {
+    /// A primvar of `N`-tuples (`N = 1` reads plain numbers) with its indices.
+    fn primvar<const N: usize>(
+        &self,
+        prim: &Prim<'l>,
+        name: &str,
+        default_interp: Interp,
+    ) -> Result<Option<Primvar<N>>, ImportError> {
+        let Some(prop) = prim.prop(name) else {
+            return Ok(None);
+        };
+        let Some((value, _)) = values::static_value(prop) else {
+            return Ok(None);
+        };
+        let half = prop.type_name.is_some_and(is_half_type);
+        let mut values: Vec<[f64; N]> = if N == 1 {
+            numbers(value).map(|v| {
+                v.into_iter()
+                    .map(|x| {
+                        let mut a = [0.0; N];
+                        if let Some(s) = a.first_mut() {
+                            *s = x;
+                        }
+                        a
+                    })
+                    .collect()
+            })
+        } else {
+            tuples::<N>(value)
+        }
+        .ok_or_else(|| {
+            self.err_at(
+                prop.line,
+                &prim.path,
+                format!(
+                    "{name} must be an array of {N}-component values, not {}",
+                    prop.type_name.unwrap_or("?")
+                ),
+            )
+        })?;
+        if half {
+            for v in &mut values {
+                for x in v.iter_mut() {
+                    *x = f64::from(round_to_half(*x as f32));
+                }
+            }
+        }
+        if values.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(self.err(&prim.path, format!("{name} holds a non-finite value")));
+        }
+        let interp = match prop.meta("interpolation").map(token) {
+            None => default_interp,
+            Some(Some("constant")) => Interp::Constant,
+            Some(Some("uniform")) => Interp::Uniform,
+            Some(Some("vertex" | "varying")) => Interp::Vertex,
+            Some(Some("faceVarying")) => Interp::FaceVarying,
+            Some(other) => {
+                return Err(self.err(
+                    &prim.path,
+                    format!(
+                        "{name} has an unknown interpolation {:?}",
+                        other.unwrap_or("?")
+                    ),
+                ))
+            }
+        };
+        let indices = match self.int_list(prim, &format!("{name}:indices"))? {
+            None => None,
+            Some(ix) => Some(
+                ix.into_iter()
+                    .map(|i| {
+                        usize::try_from(i)
+                            .ok()
+                            .filter(|&i| i < values.len())
+                            .ok_or_else(|| {
+                                self.err(
+                                    &prim.path,
+                                    format!(
+                                        "{name}:indices holds {i}, out of range for {} values",
+                                        values.len()
+                                    ),
+                                )
+                            })
+                    })
+                    .collect::<Result<Vec<_>, _>>()?,
+            ),
+        };
+        Ok(Some(Primvar {
+            values,
+            indices,
+            interp,
+        }))
+    }
+
+    /// Checks that a primvar has one element per interpolation site.
+    fn check_primvar<const N: usize>(
+        &self,
+        prim: &str,
+        name: &str,
+        pv: &Primvar<N>,
+        faces: usize,
+        points: usize,
+        corners: usize,
+    ) -> Result<(), ImportError> {
+        let (expected, what) = match pv.interp {
+            Interp::Constant => (1, "constant interpolation"),
+            Interp::Uniform => (faces, "faces (uniform interpolation)"),
+            Interp::Vertex => (points, "points (vertex interpolation)"),
+            Interp::FaceVarying => (corners, "face corners (faceVarying interpolation)"),
+        };
+        let found = pv.indices.as_ref().map_or(pv.values.len(), Vec::len);
+        if found != expected {
+            return Err(self.err(
+                prim,
+                format!("{name} has {found} elements for {expected} {what}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Builds one Mesh prim (and its skin when `skel` is given).
+    pub(super) fn mesh(
+        &mut self,
+        index: usize,
+        skel: Option<&SkelData>,
+    ) -> Result<Option<(Mesh, Option<SkinBinding>)>, ImportError> {
+        let prim = self.prim(index).clone();
+        let path = prim.path.clone();
+        let Some((points_value, points_prop)) = self.static_attr(&prim, "points") else {
+            if !self.behind_arc(index).is_empty() && skel.is_some() {
+                return Err(self.err(
+                    &path,
+                    format!("the bound Mesh has no points{}", self.behind_arc(index)),
+                ));
+            }
+            self.incomplete(&path, "a Mesh without points: not imported");
+            return Ok(None);
+        };
+        let half = points_prop.type_name.is_some_and(is_half_type);
+        let mut points = tuples::<3>(points_value)
+            .ok_or_else(|| self.err_at(points_prop.line, &path, "points must be a point3f[]"))?;
+        if half {
+            for p in &mut points {
+                for x in p.iter_mut() {
+                    *x = f64::from(round_to_half(*x as f32));
+                }
+            }
+        }
+        if points.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(self.err(&path, "points holds a non-finite value"));
+        }
+        let n_points = points.len();
+        let counts = self.int_list(&prim, "faceVertexCounts")?;
+        let indices = self.int_list(&prim, "faceVertexIndices")?;
+        let (counts, indices) = match (counts, indices) {
+            (Some(c), Some(i)) => (c, i),
+            (None, None) => (Vec::new(), Vec::new()),
+            (Some(_), None) => {
+                return Err(self.err(&path, "faceVertexCounts without faceVertexIndices"))
+            }
+            (None, Some(_)) => {
+                return Err(self.err(&path, "faceVertexIndices without faceVertexCounts"))
+            }
+        };
+        let mut total = 0usize;
+        for (f, &c) in counts.iter().enumerate() {
+            let c = usize::try_from(c)
+                .map_err(|_| self.err(&path, format!("faceVertexCounts[{f}] is negative ({c})")))?;
+            total = total.saturating_add(c);
+        }
+        if total != indices.len() {
+            return Err(self.err(
+                &path,
+                format!(
+                    "faceVertexCounts add up to {total} but faceVertexIndices has {} entries",
+                    indices.len()
+                ),
+            ));
+        }
+        let corner_points: Vec<usize> = indices
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| {
+                usize::try_from(i).ok().filter(|&i| i < n_points).ok_or_else(|| {
+                    self.err(
+                        &path,
+                        format!("faceVertexIndices[{k}] = {i} is out of range for {n_points} points"),
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        let n_faces = counts.len();
+        let n_corners = corner_points.len();
+        let left_handed = match prim.prop("orientation").and_then(values::static_value) {
+            Some((v, _)) => token(v) == Some("leftHanded"),
+            None => false,
+        };
+
+        let normals_name = if prim.prop("primvars:normals").is_some() {
+            "primvars:normals"
+        } else {
+            "normals"
+        };
+        // UsdGeomPointBased: `normals` interpolates per vertex unless it says otherwise;
+        // a primvar's fallback interpolation is constant.
+        let normals_default = if normals_name == "normals" {
+            Interp::Vertex
+        } else {
+            Interp::Constant
+        };
+        let normals = self.primvar::<3>(&prim, normals_name, normals_default)?;
+        let uv_name = if prim.prop("primvars:st").is_some() {
+            Some("primvars:st".to_string())
+        } else {
+            prim.props
+                .iter()
+                .find(|(n, p)| {
+                    n.starts_with("primvars:")
+                        && !n.ends_with(":indices")
+                        && p.type_name.is_some_and(|t| t.starts_with("texCoord2"))
+                })
+                .map(|(n, _)| n.to_string())
+        };
+        let uvs = match &uv_name {
+            Some(name) => self.primvar::<2>(&prim, name, Interp::Constant)?,
+            None => None,
+        };
+        if let Some(pv) = &normals {
+            self.check_primvar(&path, normals_name, pv, n_faces, n_points, n_corners)?;
+        }
+        if let (Some(pv), Some(name)) = (&uvs, &uv_name) {
+            self.check_primvar(&path, name, pv, n_faces, n_points, n_corners)?;
+        }
+
+        // geomBindTransform: into skeleton space at bind time.
+        let geom_bind = match (skel, prim.prop("primvars:skel:geomBindTransform")) {
+            (Some(_), Some(prop)) => match values::static_value(prop) {
+                Some((v, _)) => {
+                    let m = matrix(v).map(|r| usd_matrix(&r)).ok_or_else(|| {
+                        self.err_at(
+                            prop.line,
+                            &path,
+                            "primvars:skel:geomBindTransform must be a matrix4d",
+                        )
+                    })?;
+                    if !m.is_finite() {
+                        return Err(
+                            self.err(&path, "primvars:skel:geomBindTransform is not finite")
+                        );
+                    }
+                    m
+                }
+                None => DMat4::IDENTITY,
+            },
+            _ => DMat4::IDENTITY,
+        };
+        let normal_matrix = DMat3::from_mat4(geom_bind).inverse().transpose();
+        let to_normal = |n: [f64; 3]| -> Vec3 {
+            let v = if normal_matrix.is_finite() {
+                normal_matrix * DVec3::from_array(n)
+            } else {
+                DVec3::from_array(n)
+            };
+            v.try_normalize().map_or(Vec3::Y, |v| v.as_vec3())
+        };
+        let to_uv = |t: [f64; 2]| Vec2::new(t[0] as f32, (1.0 - t[1]) as f32);
+
+        // Output vertices: points first, then splits.
+        let mut positions: Vec<Vec3> = points
+            .iter()
+            .map(|p| geom_bind.transform_point3(DVec3::from_array(*p)).as_vec3())
+            .collect();
+        let mut source_vertex: Vec<u32> = (0..n_points as u32).collect();
+        let mut out_normals: Option<Vec<Vec3>> = normals.as_ref().map(|_| vec![Vec3::Y; n_points]);
+        let mut out_uvs: Option<Vec<Vec2>> = uvs.as_ref().map(|_| vec![Vec2::ZERO; n_points]);
+        let per_point = normals.as_ref().is_none_or(Primvar::per_point)
+            && uvs.as_ref().is_none_or(Primvar::per_point);
+        let mut corner_vertex: Vec<u32> = Vec::with_capacity(n_corners);
+        {
+            // The face of each corner.
+            let mut face_of = Vec::with_capacity(n_corners);
+            for (f, &c) in counts.iter().enumerate() {
+                face_of.extend(std::iter::repeat_n(f, c as usize));
+            }
+            let attrs = |k: usize, p: usize| {
+                let f = face_of.get(k).copied().unwrap_or(0);
+                (
+                    normals.as_ref().map(|pv| to_normal(pv.at(f, k, p))),
+                    uvs.as_ref().map(|pv| to_uv(pv.at(f, k, p))),
+                )
+            };
+            if per_point {
+                for p in 0..n_points {
+                    let (n, t) = attrs(0, p);
+                    if let (Some(out), Some(n)) = (&mut out_normals, n) {
+                        out[p] = n;
+                    }
+                    if let (Some(out), Some(t)) = (&mut out_uvs, t) {
+                        out[p] = t;
+                    }
+                }
+                corner_vertex.extend(corner_points.iter().map(|&p| p as u32));
+            } else {
+                let mut assigned = vec![false; n_points];
+                let mut splits: HashMap<(usize, [u32; 5]), u32> = HashMap::new();
+                let bits = |n: Option<Vec3>, t: Option<Vec2>| {
+                    let n = n.unwrap_or(Vec3::ZERO);
+                    let t = t.unwrap_or(Vec2::ZERO);
+                    [n.x, n.y, n.z, t.x, t.y].map(f32::to_bits)
+                };
+                for (k, &p) in corner_points.iter().enumerate() {
+                    let (n, t) = attrs(k, p);
+                    if !assigned[p] {
+                        assigned[p] = true;
+                        if let (Some(out), Some(n)) = (&mut out_normals, n) {
+                            out[p] = n;
+                        }
+                        if let (Some(out), Some(t)) = (&mut out_uvs, t) {
+                            out[p] = t;
+                        }
+                        corner_vertex.push(p as u32);
+                        continue;
+                    }
+                    let have = bits(
+                        out_normals.as_ref().map(|o| o[p]),
+                        out_uvs.as_ref().map(|o| o[p]),
+                    );
+                    let want = bits(n, t);
+                    if have == want {
+                        corner_vertex.push(p as u32);
+                        continue;
+                    }
+                    let v = *splits.entry((p, want)).or_insert_with(|| {
+                        let v = positions.len() as u32;
+                        positions.push(positions[p]);
+                        source_vertex.push(p as u32);
+                        if let (Some(out), Some(n)) = (&mut out_normals, n) {
+                            out.push(n);
+                        }
+                        if let (Some(out), Some(t)) = (&mut out_uvs, t) {
+                            out.push(t);
+                        }
+                        v
+                    });
+                    corner_vertex.push(v);
+                }
+            }
+        }
+        let mut triangles = Vec::with_capacity(n_corners);
+        let mut start = 0usize;
+        let mut degenerate = 0usize;
+        for &c in &counts {
+            let c = c as usize;
+            let face = corner_vertex.get(start..start + c).unwrap_or_default();
+            start += c;
+            if c < 3 {
+                degenerate += 1;
+                continue;
+            }
+            for k in 1..c - 1 {
+                let (a, b, d) = (face[0], face[k], face[k + 1]);
+                triangles.push(if left_handed { [a, d, b] } else { [a, b, d] });
+            }
+        }
+        if degenerate > 0 {
+            self.repaired(
+                &path,
+                format!("{degenerate} face(s) with fewer than 3 vertices skipped"),
+            );
+        }
+        if prim.prop("skel:blendShapes").is_some() || prim.prop("skel:blendShapeTargets").is_some()
+        {
+            self.incomplete(&path, "blend shapes are not imported");
+        }
+        let mesh = Mesh {
+            name: prim.name.to_string(),
+            positions,
+            normals: out_normals,
+            uvs: out_uvs,
+            triangles,
+            source_vertex,
+            morph_targets: Vec::new(),
+            morph_weights: Vec::new(),
+            attached_to: None,
+        };
+        let mut mesh = mesh;
+        let skin = match skel {
+            Some(skel) => Some(self.skin(index, skel, n_points, &mesh.source_vertex)?),
+            None => {
+                // UsdSkel ignores a skinned mesh's own transform; a static mesh keeps it:
+                // its points go to model space (the skeleton's), which the scene frame
+                // places in the stage.
+                let (world, animated) = self.world(index)?;
+                if !animated.is_empty() {
+                    self.incomplete(
+                        &path,
+                        format!(
+                            "a static mesh under time-sampled transforms (xformOp) on {}: \
+                             their value at the default time is used",
+                            animated.join(", ")
+                        ),
+                    );
+                }
+                let m = self.skel_world.inverse() * world;
+                if m != DMat4::IDENTITY {
+                    for p in &mut mesh.positions {
+                        *p = m.transform_point3(p.as_dvec3()).as_vec3();
+                    }
+                    let n = DMat3::from_mat4(m).inverse().transpose();
+                    if let Some(normals) = &mut mesh.normals {
+                        for v in normals {
+                            *v = (n * v.as_dvec3()).normalize_or_zero().as_vec3();
+                        }
+                    }
+                    if m.determinant() < 0.0 {
+                        for t in &mut mesh.triangles {
+                            t.swap(1, 2);
+                        }
+                    }
+                }
+                None
+            }
+        };
+        Ok(Some((mesh, skin)))
+    }
+
+    // -----------------------------------------------------------------------------------
+    // Skin
+    // -----------------------------------------------------------------------------------
+}
