@@ -111,8 +111,13 @@
 //! # Ok::<(), rigport_export::ExportError>(())
 //! ```
 
+mod anim;
+mod checks;
+mod mesh;
 mod names;
 mod sampler;
+mod skeleton;
+mod skin;
 mod stage;
 #[cfg(test)]
 mod tests;

@@ -12,8 +12,8 @@ use rigport_model::{
     TrackTarget, Transform, Warning,
 };
 
+use super::anim::frame_rate;
 use super::sampler::Sampler;
-use super::stage::frame_rate;
 use super::*;
 use crate::labels::fallback_palette_index;
 use crate::{sample, Problem};

@@ -192,6 +192,33 @@ pub(crate) fn to_half(x: f32) -> f32 {
     (r * ulp).min(MAX_HALF).copysign(x)
 }
 
+/// Writes `decl = [m, m, ...]` of matrices.
+pub(crate) fn write_matrices(doc: &mut Usda, decl: &str, ms: &[DMat4]) {
+    let line = doc.start();
+    line.push_str(decl);
+    line.push_str(" = ");
+    array(line, ms, matrix);
+    doc.end();
+}
+
+/// Writes `decl = ( (..), .. )`, one matrix (transposed to USD's row vectors).
+pub(crate) fn write_matrices_one(doc: &mut Usda, decl: &str, m: &DMat4) {
+    let line = doc.start();
+    line.push_str(decl);
+    line.push_str(" = ");
+    matrix(line, m);
+    doc.end();
+}
+
+/// Writes `decl = ["a", "b", ...]`.
+pub(crate) fn write_tokens(doc: &mut Usda, decl: &str, tokens: &[String]) {
+    let line = doc.start();
+    line.push_str(decl);
+    line.push_str(" = ");
+    array(line, tokens, |s, t| quoted(s, t));
+    doc.end();
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,321 @@
+//! Mesh prims: points, faces, normals, UVs, skinning primvars and BlendShape children.
+
+use glam::{DMat4, Vec2, Vec3};
+use rigport_model::{Asset, Mesh, Warning};
+
+use super::skeleton::SKELETON;
+use super::skin::{skin_rows, Binding};
+use super::text::{array, float, matrix, put, tuple, write_tokens, Usda};
+use super::{UsdOptions, UsdSkinning};
+use crate::labels::mesh_label;
+
+/// One mesh as it will be written.
+pub(super) struct MeshPlan {
+    pub(super) prim: String,
+    pub(super) binding: Binding,
+    /// BlendShape prim names, one per morph target.
+    pub(super) shapes: Vec<String>,
+    /// The blend-shape channel tokens (unique over the stage), one per morph target.
+    pub(super) channels: Vec<String>,
+}
+
+/// What [`write_mesh`] needs besides the mesh.
+pub(super) struct MeshContext<'a> {
+    pub(super) root_path: &'a str,
+    pub(super) skeleton_prims: &'a [String],
+    pub(super) skeleton_binds: &'a [Vec<DMat4>],
+    pub(super) options: &'a UsdOptions,
+}
+
+/// Writes `decl = [..] ( interpolation = "vertex" [elementSize = n] )`.
+fn write_primvar(
+    doc: &mut Usda,
+    decl: &str,
+    value: impl FnOnce(&mut String),
+    element_size: Option<usize>,
+    interpolation: &str,
+) {
+    let line = doc.start();
+    line.push_str(decl);
+    line.push_str(" = ");
+    value(line);
+    line.push_str(" (");
+    doc.end();
+    if let Some(n) = element_size {
+        doc.line(&format!("    elementSize = {n}"));
+    }
+    doc.line(&format!("    interpolation = \"{interpolation}\""));
+    doc.line(")");
+}
+
+/// Writes one Mesh prim (and its BlendShape children).
+pub(super) fn write_mesh(
+    doc: &mut Usda,
+    asset: &Asset,
+    mi: usize,
+    mesh: &Mesh,
+    plan: &MeshPlan,
+    ctx: &MeshContext<'_>,
+    warnings: &mut Vec<Warning>,
+) {
+    let label = mesh_label(mi, mesh);
+    let header = format!("def Mesh \"{}\"", plan.prim);
+    if matches!(plan.binding, Binding::None) {
+        doc.open(&header);
+    } else {
+        doc.open_meta(&header);
+        doc.line("prepend apiSchemas = [\"SkelBindingAPI\"]");
+        doc.close_meta();
+        doc.open_body();
+    }
+
+    if let Some((lo, hi)) = mesh.bounds() {
+        let line = doc.start();
+        line.push_str("float3[] extent = ");
+        array(line, &[lo, hi], |s, v| tuple(s, &v.to_array()));
+        doc.end();
+    }
+    let line = doc.start();
+    line.push_str("int[] faceVertexCounts = ");
+    array(line, &mesh.triangles, |s, _| s.push('3'));
+    doc.end();
+    // Triangles are counter-clockwise (glTF's and the model's rule), USD's default
+    // `orientation = "rightHanded"`: written as they are.
+    let line = doc.start();
+    line.push_str("int[] faceVertexIndices = ");
+    let flat: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    array(line, &flat, |s, i| put(s, i));
+    doc.end();
+
+    let normals = mesh_normals(mesh, &label, warnings);
+    write_primvar(
+        doc,
+        "normal3f[] normals",
+        |s| array(s, &normals, |s, n| tuple(s, &n.to_array())),
+        None,
+        "vertex",
+    );
+    let line = doc.start();
+    line.push_str("point3f[] points = ");
+    array(line, &mesh.positions, |s, p| tuple(s, &p.to_array()));
+    doc.end();
+
+    // The dump of `rigport eval` lists vertices by source vertex; say how points map to
+    // them when the mesh split vertices (seams).
+    let identity = mesh
+        .source_vertex
+        .iter()
+        .enumerate()
+        .all(|(v, &s)| s as usize == v);
+    if !identity {
+        write_primvar(
+            doc,
+            "int[] primvars:rigport:sourceVertex",
+            |s| array(s, &mesh.source_vertex, |s, v| put(s, v)),
+            None,
+            "vertex",
+        );
+    }
+
+    let skeleton_path = |k: usize| {
+        format!(
+            "{}/{}",
+            ctx.root_path,
+            ctx.skeleton_prims.get(k).map_or(SKELETON, String::as_str)
+        )
+    };
+    let mut skeleton_rel = None;
+    match plan.binding {
+        Binding::None => {}
+        Binding::MorphOnly => skeleton_rel = Some(skeleton_path(0)),
+        Binding::Rigid { joint } => {
+            // Points are in the joint's space: geomBindTransform carries them to the
+            // joint's bind pose, where the skinning transform (jointWorld · bind⁻¹) takes
+            // over, so the mesh moves as jointWorld · p.
+            let bind = ctx
+                .skeleton_binds
+                .first()
+                .and_then(|b| b.get(joint))
+                .copied()
+                .unwrap_or(DMat4::IDENTITY);
+            write_geom_bind(doc, &bind);
+            write_primvar(
+                doc,
+                "int[] primvars:skel:jointIndices",
+                |s| array(s, &[joint], |s, j| put(s, j)),
+                Some(1),
+                "constant",
+            );
+            write_primvar(
+                doc,
+                "float[] primvars:skel:jointWeights",
+                |s| s.push_str("[1]"),
+                Some(1),
+                "constant",
+            );
+            skeleton_rel = Some(skeleton_path(0));
+        }
+        Binding::Skinned {
+            skin,
+            skeleton,
+            geom_bind,
+        } => {
+            if let Some(binding) = asset.skins.get(skin) {
+                let rows = skin_rows(asset, skin, binding, &label, warnings);
+                write_geom_bind(doc, &geom_bind);
+                write_primvar(
+                    doc,
+                    "int[] primvars:skel:jointIndices",
+                    |s| array(s, &rows.indices, |s, j| put(s, j)),
+                    Some(rows.element_size),
+                    "vertex",
+                );
+                write_primvar(
+                    doc,
+                    "float[] primvars:skel:jointWeights",
+                    |s| array(s, &rows.weights, |s, w| float(s, *w)),
+                    Some(rows.element_size),
+                    "vertex",
+                );
+                if ctx.options.skinning.unwrap_or(binding.method) == UsdSkinning::Dqs {
+                    doc.line("uniform token primvars:skel:skinningMethod = \"dualQuaternion\"");
+                }
+            }
+            skeleton_rel = Some(skeleton_path(skeleton));
+        }
+    }
+
+    if let Some(uvs) = &mesh.uvs {
+        // The model's UVs follow glTF (origin top-left, v down); USD's st have their origin
+        // bottom-left with t up.
+        let st: Vec<Vec2> = uvs.iter().map(|uv| Vec2::new(uv.x, 1.0 - uv.y)).collect();
+        write_primvar(
+            doc,
+            "texCoord2f[] primvars:st",
+            |s| array(s, &st, |s, v| tuple(s, &v.to_array())),
+            None,
+            "vertex",
+        );
+    }
+
+    let mesh_path = format!("{}/{}", ctx.root_path, plan.prim);
+    if !plan.channels.is_empty() && skeleton_rel.is_some() {
+        write_tokens(doc, "uniform token[] skel:blendShapes", &plan.channels);
+        let line = doc.start();
+        line.push_str("rel skel:blendShapeTargets = ");
+        array(line, &plan.shapes, |s, shape| {
+            s.push('<');
+            s.push_str(&mesh_path);
+            s.push('/');
+            s.push_str(shape);
+            s.push('>');
+        });
+        doc.end();
+    }
+    if let Some(path) = &skeleton_rel {
+        doc.line(&format!("rel skel:skeleton = <{path}>"));
+    }
+    // rigport meshes are polygonal; USD's fallback scheme would subdivide them.
+    doc.line("uniform token subdivisionScheme = \"none\"");
+
+    if skeleton_rel.is_some() {
+        for (target, shape) in mesh.morph_targets.iter().zip(&plan.shapes) {
+            doc.blank();
+            write_blend_shape(doc, target, shape);
+        }
+    }
+    doc.close();
+}
+
+/// `matrix4d primvars:skel:geomBindTransform = ...`.
+fn write_geom_bind(doc: &mut Usda, m: &DMat4) {
+    let line = doc.start();
+    line.push_str("matrix4d primvars:skel:geomBindTransform = ");
+    matrix(line, m);
+    doc.end();
+}
+
+/// One BlendShape prim: offsets (sparse with `pointIndices` when some points do not move).
+fn write_blend_shape(doc: &mut Usda, target: &rigport_model::MorphTarget, prim: &str) {
+    let moved: Vec<usize> = (0..target.position_deltas.len())
+        .filter(|&v| {
+            target
+                .position_deltas
+                .get(v)
+                .is_some_and(|d| *d != Vec3::ZERO)
+                || target
+                    .normal_deltas
+                    .as_ref()
+                    .and_then(|n| n.get(v))
+                    .is_some_and(|d| *d != Vec3::ZERO)
+        })
+        .collect();
+    let dense = moved.is_empty() || moved.len() == target.position_deltas.len();
+    let pick = |values: &[Vec3]| -> Vec<Vec3> {
+        if dense {
+            values.to_vec()
+        } else {
+            moved
+                .iter()
+                .filter_map(|&v| values.get(v).copied())
+                .collect()
+        }
+    };
+    doc.open(&format!("def BlendShape \"{prim}\""));
+    if let Some(normals) = &target.normal_deltas {
+        let line = doc.start();
+        line.push_str("uniform vector3f[] normalOffsets = ");
+        array(line, &pick(normals), |s, v| tuple(s, &v.to_array()));
+        doc.end();
+    }
+    let line = doc.start();
+    line.push_str("uniform vector3f[] offsets = ");
+    array(line, &pick(&target.position_deltas), |s, v| {
+        tuple(s, &v.to_array())
+    });
+    doc.end();
+    if !dense {
+        let line = doc.start();
+        line.push_str("uniform int[] pointIndices = ");
+        array(line, &moved, |s, v| put(s, v));
+        doc.end();
+    }
+    doc.close();
+}
+
+/// Unit normals: given ones (already-unit kept bit for bit, others normalized, zero-length
+/// ones replaced by computed ones with a warning), or computed from the triangles.
+fn mesh_normals(mesh: &Mesh, label: &str, warnings: &mut Vec<Warning>) -> Vec<Vec3> {
+    let Some(given) = &mesh.normals else {
+        return mesh.compute_normals();
+    };
+    let mut computed: Option<Vec<Vec3>> = None;
+    let mut repaired = 0;
+    let out = given
+        .iter()
+        .enumerate()
+        .map(|(v, n)| {
+            if (n.length_squared() - 1.0).abs() <= 1e-6 {
+                return *n;
+            }
+            n.try_normalize().unwrap_or_else(|| {
+                repaired += 1;
+                computed
+                    .get_or_insert_with(|| mesh.compute_normals())
+                    .get(v)
+                    .copied()
+                    .unwrap_or(Vec3::Y)
+            })
+        })
+        .collect();
+    if repaired > 0 {
+        warnings.push(Warning::Repaired {
+            location: format!("mesh {label:?}"),
+            message: format!(
+                "{repaired} zero-length normal{} replaced by computed ones",
+                if repaired == 1 { "" } else { "s" }
+            ),
+        });
+    }
+    out
+}
