@@ -338,6 +338,28 @@ def rigport_checks(stage, report: Report) -> None:
 # ----------------------------------------------------------------------------- comparison
 
 
+def skel_queries_of(stage):
+    """A populated `UsdSkel.Cache`, the skinning targets by prim path (skeleton query, skinning
+    query), and a skeleton query per Skeleton prim in stage order."""
+    from pxr import Usd, UsdSkel
+
+    cache = UsdSkel.Cache()
+    skinning = {}
+    skel_queries = []
+    for prim in stage.Traverse():
+        if prim.IsA(UsdSkel.Root):
+            root = UsdSkel.Root(prim)
+            cache.Populate(root, Usd.PrimDefaultPredicate)
+            for binding in cache.ComputeSkelBindings(root, Usd.PrimDefaultPredicate):
+                skel_query = cache.GetSkelQuery(binding.GetSkeleton())
+                for query in binding.GetSkinningTargets():
+                    skinning[query.GetPrim().GetPath()] = (skel_query, query)
+    for prim in stage.Traverse():
+        if prim.IsA(UsdSkel.Skeleton):
+            skel_queries.append(cache.GetSkelQuery(UsdSkel.Skeleton(prim)))
+    return cache, skinning, skel_queries
+
+
 def mesh_points(stage, cache, skinning, time, np):
     """Evaluated points of every Mesh under the default prim, stage order, dump order."""
     from pxr import Usd, UsdGeom, UsdSkel, Vt
@@ -428,20 +450,7 @@ def compare(stage, dump_path: str, tolerance: float, report: Report) -> None:
             report.error(f"dump: {key} has {len(arr)} frames but times has {frames}")
             return
 
-    cache = UsdSkel.Cache()
-    skinning = {}
-    skel_queries = []
-    for prim in stage.Traverse():
-        if prim.IsA(UsdSkel.Root):
-            root = UsdSkel.Root(prim)
-            cache.Populate(root, Usd.PrimDefaultPredicate)
-            for binding in cache.ComputeSkelBindings(root, Usd.PrimDefaultPredicate):
-                skel_query = cache.GetSkelQuery(binding.GetSkeleton())
-                for query in binding.GetSkinningTargets():
-                    skinning[query.GetPrim().GetPath()] = (skel_query, query)
-    for prim in stage.Traverse():
-        if prim.IsA(UsdSkel.Skeleton):
-            skel_queries.append(cache.GetSkelQuery(UsdSkel.Skeleton(prim)))
+    cache, skinning, skel_queries = skel_queries_of(stage)
     skel_query = skel_queries[0] if skel_queries else None
     if joint_world is not None and joint_world.shape[1] > 0:
         if skel_query is None:

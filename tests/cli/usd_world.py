@@ -15,7 +15,7 @@ import json
 import sys
 
 import numpy as np
-from pxr import Usd, UsdGeom, UsdSkel
+from pxr import Usd, UsdGeom
 
 
 def main() -> None:
@@ -27,20 +27,7 @@ def main() -> None:
     if "--clip" in sys.argv:
         name = sys.argv[sys.argv.index("--clip") + 1]
         stage.GetDefaultPrim().GetVariantSet("clip").SetVariantSelection(name)
-    cache = UsdSkel.Cache()
-    skinning = {}
-    skel_queries = []
-    for prim in stage.Traverse():
-        if prim.IsA(UsdSkel.Root):
-            root = UsdSkel.Root(prim)
-            cache.Populate(root, Usd.PrimDefaultPredicate)
-            for binding in cache.ComputeSkelBindings(root, Usd.PrimDefaultPredicate):
-                sq = cache.GetSkelQuery(binding.GetSkeleton())
-                for query in binding.GetSkinningTargets():
-                    skinning[query.GetPrim().GetPath()] = (sq, query)
-    for prim in stage.Traverse():
-        if prim.IsA(UsdSkel.Skeleton):
-            skel_queries.append(cache.GetSkelQuery(UsdSkel.Skeleton(prim)))
+    cache, skinning, skel_queries = cu.skel_queries_of(stage)
     mpu = UsdGeom.GetStageMetersPerUnit(stage)
     up = UsdGeom.GetStageUpAxis(stage)
     tcps = stage.GetTimeCodesPerSecond()
