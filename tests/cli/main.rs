@@ -24,5 +24,6 @@ mod outputs;
 mod pinocchio;
 mod render;
 mod skinning;
+mod three;
 mod usd;
 mod usd_import;
