@@ -168,8 +168,11 @@ pub fn json_handles(data: &[u8]) {
     }
 }
 
+/// A fuzz entry point.
+pub type Target = fn(&[u8]);
+
 /// Every target by name, for the regression test and tools.
-pub const TARGETS: [(&str, fn(&[u8])); 11] = [
+pub const TARGETS: [(&str, Target); 11] = [
     ("obj", obj),
     ("pinocchio", pinocchio),
     ("csci520", csci520),
