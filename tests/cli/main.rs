@@ -19,6 +19,7 @@ mod gltf_read;
 mod gltf_samples;
 mod ik;
 mod memory;
+mod message_audit;
 mod messages;
 mod motion;
 mod outputs;
