@@ -25,7 +25,7 @@ pub fn set(max_memory: Option<u64>) {
         None => match machine_memory() {
             Some(total) => MemoryBudget {
                 limit: total / 4 * 3,
-                origin: "default: 3/4 of this machine's memory",
+                origin: "default: 3/4 of the memory this process may use",
             },
             None => MemoryBudget {
                 limit: 8_000_000_000,
