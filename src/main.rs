@@ -10,7 +10,6 @@ mod context;
 mod exit;
 mod input;
 mod keys;
-mod npz;
 mod output;
 mod signals;
 

@@ -37,6 +37,8 @@ mod atomic;
 mod error;
 mod gltf;
 mod labels;
+pub mod npz;
+pub mod report;
 mod usd;
 mod weights;
 
