@@ -11,7 +11,6 @@ mod exit;
 mod input;
 mod keys;
 mod memory;
-mod npz;
 mod output;
 mod signals;
 

@@ -38,6 +38,8 @@ mod error;
 pub mod estimate;
 mod gltf;
 mod labels;
+pub mod npz;
+pub mod report;
 mod usd;
 mod weights;
 
