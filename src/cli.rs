@@ -128,11 +128,17 @@ pub struct OutputArgs {
     /// Output file: .glb, .gltf (+ a .bin of the same stem beside it) or .usda.
     #[arg(long, short, value_name = "OUT")]
     pub output: PathBuf,
-    /// Influences kept per vertex in glTF: 1 to 8; above 4, vertices with more than 4 get a
-    /// second set (JOINTS_1/WEIGHTS_1). Each vertex keeps its largest weights, renormalized.
-    /// USD keeps every influence.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=8))]
-    pub max_influences: u8,
+    /// Influences kept per vertex: 1 to 8 (glTF default 4; above 4, vertices with more get
+    /// a second set, JOINTS_1/WEIGHTS_1, which three.js, model-viewer, Filament, Bevy and
+    /// Unity ignore). USD keeps every influence unless this is given.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    pub max_influences: Option<u8>,
+    /// How a vertex with more influences than the limit drops the rest: `truncate` keeps
+    /// its largest weights, renormalized (what Blender, gltfpack and Assimp do); `refit`
+    /// fits K weights so the deformation stays closest to all weights' over the clips'
+    /// frames (or a range-of-motion pose set) and prints both deviations.
+    #[arg(long, value_enum, default_value_t = InfluencesFit::Truncate)]
+    pub influences_fit: InfluencesFit,
     /// Remove animation keys while every joint's world position stays within D (in the
     /// rig's length unit) of the full clip at every original key time.
     #[arg(long, value_name = "D")]
@@ -150,6 +156,15 @@ pub struct OutputArgs {
     /// the root prim's transform converts).
     #[arg(long, value_name = "M")]
     pub meters_per_unit: Option<f64>,
+}
+
+/// How influences beyond the per-vertex limit are dropped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum InfluencesFit {
+    /// Keep the largest weights, renormalized.
+    Truncate,
+    /// Fit the kept weights to the full deformation over a pose set.
+    Refit,
 }
 
 /// An up axis.

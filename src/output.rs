@@ -7,7 +7,7 @@ use anyhow::{bail, Context as _, Result};
 use rigport_export::{ExportError, GltfOptions, UsdOptions, UsdSkinning};
 use rigport_model::{Asset, Warning};
 
-use crate::cli::{InputArgs, OutputArgs, Skinning};
+use crate::cli::{InfluencesFit, InputArgs, OutputArgs, Skinning};
 use crate::context::Context;
 use crate::exit::{OutputError, UsageError};
 use crate::input::{self, Plan};
@@ -234,6 +234,61 @@ fn check_memory(asset: &Asset, path: &Path, format: Format) -> Result<()> {
     Ok(crate::memory::budget().check(what, needed)?)
 }
 
+/// The asset with at most `--max-influences` per vertex as `--influences-fit` asks (glTF:
+/// 4 by default; USD: all unless given), or `None` when the writer's own limiting does.
+/// A refit prints, per skin, its deviation from the full weights against truncation's.
+fn fit_influences(
+    ctx: &Context,
+    asset: &Asset,
+    args: &OutputArgs,
+    format: Format,
+) -> Result<Option<Asset>> {
+    use rigport_eval::refit::{self, asset::PoseSet};
+    let k = match (format, args.max_influences) {
+        (Format::Usda, None) => return Ok(None),
+        (_, limit) => limit.map_or(4, usize::from),
+    };
+    let k = std::num::NonZeroUsize::new(k).context("--max-influences is at least 1")?;
+    if asset
+        .skins
+        .iter()
+        .all(|s| s.influences.max_per_vertex() <= k.get())
+    {
+        return Ok(None);
+    }
+    let mut fitted = asset.clone();
+    match args.influences_fit {
+        InfluencesFit::Truncate if format == Format::Gltf => return Ok(None),
+        InfluencesFit::Truncate => {
+            for skin in &mut fitted.skins {
+                skin.influences = rigport_model::Influences::from_rows(
+                    skin.influences
+                        .rows()
+                        .map(|r| refit::truncate_row(r, k.get())),
+                );
+            }
+        }
+        InfluencesFit::Refit => {
+            let report = ctx.step("refitting influences", || {
+                refit::asset::refit_asset(&mut fitted, k)
+            })?;
+            let poses = match report.pose_set {
+                PoseSet::Clips => "the clips' frames",
+                PoseSet::RangeOfMotion => "a range of motion",
+            };
+            for s in report.skins.iter().filter(|_| !ctx.quiet) {
+                let rel = |d: f64| d / s.diagonal.max(f64::MIN_POSITIVE);
+                eprintln!(
+                    "influences: skin {} refitted to {k} per vertex over {} poses ({poses}): deviation from all weights, max {:.2e} -> {:.2e}, RMS {:.2e} -> {:.2e} of the diagonal (truncation -> refit); {} vertices changed",
+                    s.skin, report.poses, rel(s.truncated.max), rel(s.refit.max),
+                    rel(s.truncated.rms), rel(s.refit.rms), s.changed
+                );
+            }
+        }
+    }
+    Ok(Some(fitted))
+}
+
 pub fn write_asset(
     ctx: &Context,
     asset: &Asset,
@@ -243,13 +298,15 @@ pub fn write_asset(
     let path = &args.output;
     let format = format_of(path)?;
     check_memory(asset, path, format)?;
+    let fitted = fit_influences(ctx, asset, args, format)?;
+    let asset = fitted.as_ref().unwrap_or(asset);
     match format {
         Format::Gltf => {
             if args.skinning == Some(Skinning::Dqs) {
                 bail!("glTF defines only linear blend skinning; `rigport bake --skinning dqs` bakes a DQS result into a glTF, and a .usda output can declare DQS");
             }
             let opts = GltfOptions {
-                max_influences: usize::from(args.max_influences),
+                max_influences: args.max_influences.map_or(4, usize::from),
             };
             let prepared = ctx
                 .step("building glTF", || {

@@ -31,7 +31,9 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
     }
     let out_args = OutputArgs {
         output: args.output.clone(),
-        max_influences: args.max_influences,
+        max_influences: Some(args.max_influences),
+        // The DQS corrections are measured against what truncation leaves.
+        influences_fit: crate::cli::InfluencesFit::Truncate,
         reduce_tolerance: None,
         // The file itself is LBS; the DQS result lives in its morph targets.
         skinning: Some(Skinning::Lbs),

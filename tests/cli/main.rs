@@ -24,6 +24,7 @@ mod messages;
 mod motion;
 mod outputs;
 mod pinocchio;
+mod refit;
 mod render;
 mod skinning;
 mod three;

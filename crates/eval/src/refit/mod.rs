@@ -32,6 +32,8 @@
 //! asset has clips, otherwise [`range_of_motion`] (documented there). Held-out poses (a
 //! different seed) measure how well a refit generalizes.
 
+pub mod asset;
+
 use std::num::NonZeroUsize;
 
 use glam::{DMat4, DVec3, Mat4, Quat, Vec3};
