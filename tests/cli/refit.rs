@@ -13,7 +13,7 @@ fn report_max(stderr: &str) -> (f64, f64) {
         .unwrap_or_else(|| panic!("no refit report: {stderr}"));
     let after = line.split(", max ").nth(1).expect("max figures");
     let mut numbers = after
-        .split(|c: char| c == ' ' || c == ',')
+        .split([' ', ','])
         .filter_map(|w| w.parse::<f64>().ok());
     (numbers.next().unwrap(), numbers.next().unwrap())
 }
