@@ -38,9 +38,10 @@
 //! assert_eq!(records[0].status, Status::Done);
 //! assert_eq!(records[1].status, Status::Failed);
 //! assert_eq!(rigport_batch::exit_code(&records), 1);
-//! // Resumed: the finished item is skipped.
+//! // Resumed: the finished item is skipped, the bad input reported again without a rerun.
 //! let again = run(&items, &options, &copy, &|_| {})?;
 //! assert_eq!(again[0].status, Status::Skipped);
+//! assert_eq!(again[1].error, records[1].error);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![warn(missing_docs)]

@@ -7,6 +7,9 @@
 //! input refers to on its own (a `.gltf`'s `.bin`, textures) are not hashed; list them as
 //! inputs of the item, or run without `--resume`.
 //!
+//! An item that failed on bad input records its failure too: `--resume` reports it again
+//! without running it (output failures are retried).
+//!
 //! Sidecars live in `OUT/.rigport-batch/items/<hash of the id>.json` and are written
 //! (atomically) after every output of the item was written, so an item interrupted
 //! between its outputs and its sidecar is redone.
@@ -79,6 +82,11 @@ pub struct Sidecar {
     pub key: String,
     /// The warnings its run reported, repeated in the report of a run that skips it.
     pub warnings: Vec<String>,
+    /// Its input failure, if it failed on bad input: the same bytes, options and version
+    /// fail the same way, so a resumed run reports it again without running it. Output
+    /// failures are never recorded (they may be transient).
+    #[serde(default)]
+    pub error: Option<crate::report::Failure>,
 }
 
 /// Where the sidecar of the item with this id lives in `out_dir`.

@@ -159,70 +159,94 @@ fn run_one(item: &Item, options: &RunOptions, executor: &impl Executor) -> Recor
         error: None,
         seconds: 0.0,
     };
-    let result = execute(item, options, executor, &outputs, &mut record);
-    if let Err(e) = result {
-        record.status = Status::Failed;
-        record.error = Some(Failure {
-            kind: e.kind,
-            location: location_of(&e.message),
-            message: e.message,
-        });
-    }
-    record.seconds = (start.elapsed().as_secs_f64() * 1000.0).round() / 1000.0;
-    record
-}
-
-fn execute(
-    item: &Item,
-    options: &RunOptions,
-    executor: &impl Executor,
-    outputs: &[PathBuf],
-    record: &mut Record,
-) -> Result<(), ItemError> {
     // An unreadable input has no key: the item runs and reports the error itself.
     let key = resume::key(item, &options.version).ok();
     let sidecar_path = resume::sidecar_path(&options.out_dir, &item.id);
     if options.resume {
         if let (Some(key), Some(sidecar)) = (&key, resume::read_sidecar(&sidecar_path, &item.id)) {
-            if &sidecar.key == key && outputs.iter().all(|o| o.is_file()) {
-                record.status = Status::Skipped;
-                record.warnings = sidecar.warnings;
-                return Ok(());
+            if &sidecar.key == key {
+                if let Some(error) = sidecar.error {
+                    record.status = Status::Failed;
+                    record.error = Some(error);
+                    record.seconds = elapsed(start);
+                    return record;
+                }
+                if outputs.iter().all(|o| o.is_file()) {
+                    record.status = Status::Skipped;
+                    record.warnings = sidecar.warnings;
+                    record.seconds = elapsed(start);
+                    return record;
+                }
             }
         }
     }
     // A sidecar of an older state must not survive a failed redo.
     let _ = std::fs::remove_file(&sidecar_path);
-    let output_error = |path: &Path, e: std::io::Error| ItemError {
-        kind: FailureKind::Output,
-        message: format!("cannot write {}: {e}", path.display()),
-    };
-    for o in outputs {
-        if let Some(dir) = o.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| output_error(dir, e))?;
-        }
-    }
-    let warnings = catch_unwind(AssertUnwindSafe(|| executor.execute(item, outputs)))
-        .unwrap_or_else(|panic| {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            Err(ItemError {
-                kind: FailureKind::Input,
-                message: format!("internal error (a bug in rigport, please report it): {what}"),
-            })
-        })?;
-    record.warnings = warnings.clone();
-    if let Some(key) = key {
+    let result = execute(item, executor, &outputs).map(|warnings| {
+        record.warnings = warnings;
+    });
+    let failure = result.err().map(|e| Failure {
+        kind: e.kind,
+        location: location_of(&e.message),
+        message: e.message,
+    });
+    let recorded = failure
+        .as_ref()
+        .filter(|f| f.kind == FailureKind::Input)
+        .cloned();
+    if let (Some(key), true) = (key, failure.is_none() || recorded.is_some()) {
         let sidecar = Sidecar {
             id: item.id.clone(),
             key,
-            warnings,
+            warnings: record.warnings.clone(),
+            error: recorded,
         };
-        resume::write_sidecar(&sidecar_path, &sidecar)
-            .map_err(|e| output_error(&sidecar_path, e))?;
+        if let Err(e) = resume::write_sidecar(&sidecar_path, &sidecar) {
+            let message = format!("cannot write {}: {e}", sidecar_path.display());
+            record.error = Some(Failure {
+                kind: FailureKind::Output,
+                location: location_of(&message),
+                message,
+            });
+        }
     }
-    Ok(())
+    if failure.is_some() {
+        record.error = failure;
+    }
+    if record.error.is_some() {
+        record.status = Status::Failed;
+    }
+    record.seconds = elapsed(start);
+    record
+}
+
+/// Seconds since `start`, rounded to milliseconds.
+fn elapsed(start: Instant) -> f64 {
+    (start.elapsed().as_secs_f64() * 1000.0).round() / 1000.0
+}
+
+fn execute(
+    item: &Item,
+    executor: &impl Executor,
+    outputs: &[PathBuf],
+) -> Result<Vec<String>, ItemError> {
+    for o in outputs {
+        if let Some(dir) = o.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| ItemError {
+                kind: FailureKind::Output,
+                message: format!("cannot write {}: {e}", dir.display()),
+            })?;
+        }
+    }
+    catch_unwind(AssertUnwindSafe(|| executor.execute(item, outputs))).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(ItemError {
+            kind: FailureKind::Input,
+            message: format!("internal error (a bug in rigport, please report it): {what}"),
+        })
+    })
 }

@@ -1,0 +1,183 @@
+//! `rigport batch` and `rigport batch-report`: the CLI over `rigport_batch`. Each item is
+//! one rigport command run in-process: its arguments are parsed as a command line, and the
+//! command runs with a context that captures its warnings for the report.
+
+use std::ffi::OsString;
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use anyhow::{anyhow, bail, Result};
+use clap::Parser as _;
+use rigport_batch::{manifest, report, FailureKind, Item, ItemError, Record, Shard, Summary};
+
+use crate::cli::{BatchArgs, BatchReportArgs, Cli, Command};
+use crate::context::Context;
+use crate::exit::{self, OutputError};
+
+/// Runs one parsed command (`commands::run_command`, passed in: command modules do not
+/// import each other or the dispatcher).
+pub type RunCommand = fn(&Context, Command) -> Result<()>;
+
+/// The commands an item may run: those that read inputs and write one output file.
+const COMMANDS: [&str; 8] = [
+    "convert", "animate", "retime", "sequence", "ik", "bake", "render", "eval",
+];
+
+/// Runs `batch`.
+pub fn run(ctx: &Context, args: &BatchArgs, run_command: RunCommand) -> Result<()> {
+    let items = if args.manifest.is_dir() {
+        let how = rigport_batch::Expansion {
+            extension: args.to.trim_start_matches('.').to_string(),
+            options: args
+                .convert_options
+                .iter()
+                .flat_map(|o| o.split_whitespace().map(String::from))
+                .collect(),
+            exclude: Some(args.output.clone()),
+        };
+        manifest::expand_folder(&args.manifest, &how)?
+    } else {
+        manifest::read(&args.manifest)?
+    };
+    let shard = match &args.shard {
+        Some(text) => Shard::parse(text, "--shard").map_err(|e| exit::UsageError(e.to_string()))?,
+        None => Shard::from_env(|k| std::env::var(k).ok())?.unwrap_or(Shard::ALL),
+    };
+    let options = rigport_batch::RunOptions {
+        out_dir: args.output.clone(),
+        jobs: args.jobs.unwrap_or(0),
+        shard,
+        resume: args.resume,
+        version: env!("CARGO_PKG_VERSION").into(),
+    };
+    let total = items.iter().filter(|i| shard.contains(i.index)).count();
+    let bar = progress_bar(ctx, total);
+    let deny = ctx.deny_warnings;
+    let execute = |item: &Item, outputs: &[PathBuf]| execute(run_command, deny, item, outputs);
+    let records = rigport_batch::run(&items, &options, &execute, &|p| {
+        bar.set_position(p.finished as u64);
+        bar.set_message(format!("{} failed, {} skipped", p.failed, p.skipped));
+    })?;
+    bar.finish_and_clear();
+    let default = format!(
+        ".rigport-batch/report-{}-of-{}.jsonl",
+        shard.index, shard.count
+    );
+    let path = args
+        .report
+        .clone()
+        .unwrap_or_else(|| args.output.join(default));
+    report::write(&path, &records).map_err(|e| {
+        anyhow::Error::new(e).context(OutputError {
+            path: path.display().to_string(),
+        })
+    })?;
+    if !ctx.quiet {
+        eprint!("{}", Summary::of(&records));
+        eprintln!("report: {}", path.display());
+    }
+    outcome(&records)
+}
+
+/// The error (and so the exit code) for failed items.
+fn outcome(records: &[Record]) -> Result<()> {
+    let failed: Vec<&Record> = records.iter().filter(|r| r.error.is_some()).collect();
+    let message = format!("{} of {} items failed", failed.len(), records.len());
+    match report::exit_code(records) {
+        0 => Ok(()),
+        3 => {
+            let output = failed.iter().find(|r| {
+                r.error
+                    .as_ref()
+                    .is_some_and(|e| e.kind == FailureKind::Output)
+            });
+            let path = output.map(|r| r.outputs.join(", ")).unwrap_or_default();
+            Err(anyhow!("{message} (an output could not be written: retry)")
+                .context(OutputError { path }))
+        }
+        _ => bail!("{message} (bad input; the other items finished)"),
+    }
+}
+
+/// Runs one item in-process.
+fn execute(
+    run_command: RunCommand,
+    deny_warnings: bool,
+    item: &Item,
+    outputs: &[PathBuf],
+) -> Result<Vec<String>, ItemError> {
+    let input = |message: String| ItemError {
+        kind: FailureKind::Input,
+        message,
+    };
+    if !COMMANDS.contains(&item.command.as_str()) {
+        return Err(input(format!(
+            "command {:?} cannot run in a batch; expected one of {}",
+            item.command,
+            COMMANDS.join(", ")
+        )));
+    }
+    let [output] = outputs else {
+        return Err(input(format!("{} writes one output", item.command)));
+    };
+    let mut argv: Vec<OsString> = vec!["rigport".into(), item.command.clone().into()];
+    argv.extend(item.inputs.iter().map(|p| p.clone().into_os_string()));
+    argv.extend(item.options.iter().map(OsString::from));
+    argv.extend(["-o".into(), output.clone().into_os_string()]);
+    let cli = Cli::try_parse_from(argv).map_err(|e| {
+        let text = e.to_string();
+        let first = text.lines().next().unwrap_or_default();
+        input(format!(
+            "{}: {}",
+            item.command,
+            first.trim_start_matches("error: ")
+        ))
+    })?;
+    let ctx = Context {
+        quiet: true,
+        deny_warnings: deny_warnings || cli.deny_warnings,
+        captured: Some(Mutex::new(Vec::new())),
+    };
+    let result = run_command(&ctx, cli.command);
+    let warnings = ctx
+        .captured
+        .map(|c| c.into_inner().unwrap_or_else(|e| e.into_inner()))
+        .unwrap_or_default();
+    result.map(|()| warnings).map_err(|e| ItemError {
+        kind: match exit::code_for(&e) {
+            exit::OUTPUT => FailureKind::Output,
+            _ => FailureKind::Input,
+        },
+        message: format!("{e:#}"),
+    })
+}
+
+/// Items, rate, ETA and failures, on a terminal only.
+fn progress_bar(ctx: &Context, total: usize) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if ctx.quiet || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let style = indicatif::ProgressStyle::with_template(
+        "{wide_bar} {pos}/{len} items, {per_sec}, ETA {eta}, {msg}",
+    )
+    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    indicatif::ProgressBar::new(total as u64).with_style(style)
+}
+
+/// Runs `batch-report`: merges, writes the merged report if asked, prints the summary;
+/// exits as `batch` would have for all the items together.
+pub fn report(ctx: &Context, args: &BatchReportArgs) -> Result<()> {
+    let records = report::merge(&args.reports)?;
+    if let Some(path) = &args.output {
+        report::write(path, &records).map_err(|e| {
+            anyhow::Error::new(e).context(OutputError {
+                path: path.display().to_string(),
+            })
+        })?;
+    }
+    if !ctx.quiet {
+        eprint!("{}", Summary::of(&records));
+    }
+    outcome(&records)
+}
