@@ -240,7 +240,8 @@ pub struct Expansion {
 /// - each `.glb`, `.gltf`, `.bvh`, `.usda`, `.usdc`, `.usdz` and `.usd` file;
 /// - a CSCI 520 `.config` (USC CSCI 520 rig; the folder's `.obj` files are its meshes);
 /// - an `.asf` with the `.amc` files beside it (all of them when it is the folder's only
-///   `.asf`, else those whose name starts with its stem, CMU style `02.asf`, `02_01.amc`);
+///   `.asf`, else those of its subject number, CMU style: `07-walk.asf` takes
+///   `07_05-walk.amc`);
 /// - an `.obj`, with every `.out` file beside it (a Pinocchio rig; `rigport convert` says
 ///   what is wrong when they are not one skeleton and one attachment), or alone.
 ///
@@ -339,17 +340,23 @@ fn walk(
         match kind {
             Kind::Gltf | Kind::Bvh | Kind::Usda | Kind::Csci520 => {}
             Kind::Asf => {
+                // CMU numbering: `07.asf` or `07-walk.asf` takes `07_05.amc`, `07_05-walk.amc`.
                 let stem = file
                     .file_stem()
                     .map(|s| s.to_string_lossy().to_string())
                     .unwrap_or_default();
+                let subject = stem.split(['-', '_']).next().unwrap_or_default();
+                let of_subject = |amc: &&PathBuf| {
+                    let name = amc
+                        .file_stem()
+                        .map(|s| s.to_string_lossy().to_string())
+                        .unwrap_or_default();
+                    name.strip_prefix(subject)
+                        .is_some_and(|rest| rest.is_empty() || rest.starts_with(['-', '_']))
+                };
                 inputs.extend(
                     amcs.iter()
-                        .filter(|a| {
-                            asfs.len() == 1
-                                || a.file_stem()
-                                    .is_some_and(|s| s.to_string_lossy().starts_with(&stem))
-                        })
+                        .filter(|a| asfs.len() == 1 || of_subject(a))
                         .cloned(),
                 );
             }
@@ -438,7 +445,8 @@ mod tests {
             "rig/attachment.out",
             "mocap/02.asf",
             "mocap/02_01.amc",
-            "mocap/03.asf",
+            "mocap/03-run.asf",
+            "mocap/03_01-run.amc",
             ".hidden.bvh",
         ] {
             std::fs::write(d.join(f), b"")?;
@@ -456,7 +464,7 @@ mod tests {
                 "a.bvh",
                 "a.gltf",
                 "mocap/02.asf",
-                "mocap/03.asf",
+                "mocap/03-run.asf",
                 "rig/m.obj"
             ]
         );
@@ -464,7 +472,7 @@ mod tests {
         assert_eq!(outs[0], PathBuf::from("a.glb"));
         assert_eq!(outs[1], PathBuf::from("a.gltf.glb"));
         assert_eq!(items[2].inputs.len(), 2);
-        assert_eq!(items[3].inputs.len(), 1);
+        assert_eq!(items[3].inputs.len(), 2);
         assert_eq!(items[4].inputs.len(), 3);
         assert_eq!(items[4].options, ["--no-bone-mesh"]);
         Ok(())
