@@ -1,8 +1,10 @@
 //! Resume: a sidecar per finished item records what its outputs were made from.
 //!
 //! The key is a 64-bit FNV-1a hash over the rigport version, the command, its options,
-//! the outputs' names, and for every input its file name and bytes (also the bytes of
-//! every option value that names an existing file, such as `--keys k.json`). FNV-1a
+//! the outputs' names, and for every input its file name and a digest of its bytes (also
+//! of every option value that names an existing file, such as `--keys k.json`). The key
+//! follows the bytes, not the modification time: `touch` alone does not redo an item,
+//! changed content does. FNV-1a
 //! detects changes, not tampering: a sidecar is a cache entry, not a signature. Files an
 //! input refers to on its own (a `.gltf`'s `.bin`, textures) are not hashed; list them as
 //! inputs of the item, or run without `--resume`.
@@ -44,11 +46,30 @@ impl Fnv {
     }
 }
 
-/// The resume key of an item, as 16 hex digits.
+/// File digests of one run, so that items sharing an input (2,500 retimes of a few
+/// clips) read and hash it once.
+#[derive(Debug, Default)]
+pub struct Digests(std::sync::Mutex<std::collections::BTreeMap<PathBuf, u64>>);
+
+impl Digests {
+    /// The FNV-1a digest of the file's bytes.
+    fn of(&self, path: &Path) -> std::io::Result<u64> {
+        let lock = || self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(&d) = lock().get(path) {
+            return Ok(d);
+        }
+        let mut h = Fnv::new();
+        h.bytes(&std::fs::read(path)?);
+        lock().insert(path.to_path_buf(), h.0);
+        Ok(h.0)
+    }
+}
+
+/// The resume key of an item, as 16 hex digits; `digests` caches file digests over a run.
 ///
 /// # Errors
 /// An input that cannot be read (the item then runs and reports the error itself).
-pub fn key(item: &Item, version: &str) -> std::io::Result<String> {
+pub fn key(item: &Item, version: &str, digests: &Digests) -> std::io::Result<String> {
     let mut h = Fnv::new();
     h.field(version.as_bytes());
     h.field(item.command.as_bytes());
@@ -56,7 +77,7 @@ pub fn key(item: &Item, version: &str) -> std::io::Result<String> {
         h.field(o.as_bytes());
         let path = Path::new(o);
         if path.is_file() {
-            h.field(&std::fs::read(path)?);
+            h.field(&digests.of(path)?.to_le_bytes());
         }
     }
     for o in &item.outputs {
@@ -68,7 +89,7 @@ pub fn key(item: &Item, version: &str) -> std::io::Result<String> {
         if input.is_dir() {
             continue;
         }
-        h.field(&std::fs::read(input)?);
+        h.field(&digests.of(input)?.to_le_bytes());
     }
     Ok(format!("{:016x}", h.0))
 }
@@ -137,14 +158,15 @@ mod tests {
             options: vec![],
             outputs: vec!["a.glb".into()],
         };
-        let k1 = key(&item, "0.1.0")?;
-        assert_eq!(k1, key(&item, "0.1.0")?);
-        assert_ne!(k1, key(&item, "0.1.1")?);
+        let k = |item: &Item, v: &str| key(item, v, &Digests::default());
+        let k1 = k(&item, "0.1.0")?;
+        assert_eq!(k1, k(&item, "0.1.0")?);
+        assert_ne!(k1, k(&item, "0.1.1")?);
         std::fs::write(&input, b"two")?;
-        let k2 = key(&item, "0.1.0")?;
+        let k2 = k(&item, "0.1.0")?;
         assert_ne!(k1, k2);
         item.options = vec!["--fps".into(), "30".into()];
-        assert_ne!(k2, key(&item, "0.1.0")?);
+        assert_ne!(k2, k(&item, "0.1.0")?);
         Ok(())
     }
 }

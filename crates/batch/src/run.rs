@@ -112,11 +112,12 @@ pub fn run(
     let failed = AtomicUsize::new(0);
     let skipped = AtomicUsize::new(0);
     let total = mine.len();
+    let digests = resume::Digests::default();
     let records = pool.install(|| {
         mine.par_iter()
             .with_max_len(1)
             .map(|item| {
-                let record = run_one(item, options, executor);
+                let record = run_one(item, options, executor, &digests);
                 match record.status {
                     Status::Failed => failed.fetch_add(1, Ordering::Relaxed),
                     Status::Skipped => skipped.fetch_add(1, Ordering::Relaxed),
@@ -142,7 +143,12 @@ fn slash_path(p: &Path) -> String {
         .join("/")
 }
 
-fn run_one(item: &Item, options: &RunOptions, executor: &impl Executor) -> Record {
+fn run_one(
+    item: &Item,
+    options: &RunOptions,
+    executor: &impl Executor,
+    digests: &resume::Digests,
+) -> Record {
     let start = Instant::now();
     let outputs: Vec<PathBuf> = item
         .outputs
@@ -160,7 +166,7 @@ fn run_one(item: &Item, options: &RunOptions, executor: &impl Executor) -> Recor
         seconds: 0.0,
     };
     // An unreadable input has no key: the item runs and reports the error itself.
-    let key = resume::key(item, &options.version).ok();
+    let key = resume::key(item, &options.version, digests).ok();
     let sidecar_path = resume::sidecar_path(&options.out_dir, &item.id);
     if options.resume {
         if let (Some(key), Some(sidecar)) = (&key, resume::read_sidecar(&sidecar_path, &item.id)) {
