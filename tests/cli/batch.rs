@@ -433,3 +433,72 @@ fn manifest_errors_name_the_line_and_exit_codes_tell_input_from_output() {
         .contains("cannot run in a batch"));
     assert!(target.join("ok.glb").is_file());
 }
+
+/// Opt-in (`RIGPORT_TEST_RAY=1`, Ray installed in tools/.venv-ray, see docs/scale.md):
+/// three shards as Ray tasks on a local Ray give the files and merged report of one run.
+#[test]
+fn ray_shards_equal_one_run() {
+    if std::env::var_os("RIGPORT_TEST_RAY").is_none() {
+        eprintln!("SKIPPED: set RIGPORT_TEST_RAY=1 (and install Ray, docs/scale.md) to run");
+        return;
+    }
+    let python = crate::common::repo().join("tools/.venv-ray/bin/python");
+    assert!(
+        python.exists(),
+        "{} missing: see docs/scale.md",
+        python.display()
+    );
+    let tmp = scratch();
+    let Some(manifest) = mixed_manifest(tmp.path()) else {
+        return;
+    };
+    let one = tmp.path().join("one");
+    batch(&[&manifest, &one], &[]);
+    let ray_out = tmp.path().join("ray");
+    for data in [false, true] {
+        let _ = std::fs::remove_dir_all(&ray_out);
+        let mut cmd = Command::new(&python);
+        cmd.arg(crate::common::repo().join("tools/ray_shards.py"))
+            .arg("--rigport")
+            .arg(env!("CARGO_BIN_EXE_rigport"))
+            .arg("--manifest")
+            .arg(&manifest)
+            .arg("--out")
+            .arg(&ray_out)
+            .args(["--shards", "3"]);
+        if data {
+            if Command::new(&python)
+                .args(["-c", "import ray.data, pyarrow"])
+                .status()
+                .is_ok_and(|s| !s.success())
+            {
+                eprintln!("SKIPPED: Ray Data (pip install 'ray[data]') is not installed");
+                continue;
+            }
+            cmd.arg("--data");
+        }
+        let out = cmd.output().unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(files(&ray_out) == files(&one), "Ray shard outputs differ");
+        let merged = tmp.path().join("merged.jsonl");
+        let mut args = vec!["batch-report".to_string(), "-o".into()];
+        args.push(merged.display().to_string());
+        for i in 0..3 {
+            let p = ray_out.join(format!(".rigport-batch/report-{i}-of-3.jsonl"));
+            args.push(p.display().to_string());
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        rigport(&args);
+        assert_eq!(records(&merged), records(&report_of(&one)));
+        eprintln!(
+            "ray ({}): {stdout}",
+            if data { "Ray Data" } else { "tasks" }
+        );
+    }
+}
