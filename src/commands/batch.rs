@@ -3,16 +3,16 @@
 //! command runs with a context that captures its warnings for the report.
 
 use std::ffi::OsString;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use anyhow::{anyhow, bail, Result};
+use anyhow::{anyhow, Result};
 use clap::Parser as _;
 use rigport_batch::{manifest, report, FailureKind, Item, ItemError, Record, Shard, Summary};
 
 use crate::cli::{BatchArgs, BatchReportArgs, Cli, Command};
 use crate::context::Context;
-use crate::exit::{self, OutputError};
+use crate::exit::{self, OutputError, UsageError};
 
 /// Runs one parsed command (`commands::run_command`, passed in: command modules do not
 /// import each other or the dispatcher).
@@ -25,24 +25,14 @@ const COMMANDS: [&str; 8] = [
 
 /// Runs `batch`.
 pub fn run(ctx: &Context, args: &BatchArgs, run_command: RunCommand) -> Result<()> {
-    let items = if args.manifest.is_dir() {
-        let how = rigport_batch::Expansion {
-            extension: args.to.trim_start_matches('.').to_string(),
-            options: args
-                .convert_options
-                .iter()
-                .flat_map(|o| o.split_whitespace().map(String::from))
-                .collect(),
-            exclude: Some(args.output.clone()),
-        };
-        manifest::expand_folder(&args.manifest, &how)?
-    } else {
-        manifest::read(&args.manifest)?
-    };
-    let shard = match &args.shard {
-        Some(text) => Shard::parse(text, "--shard").map_err(|e| exit::UsageError(e.to_string()))?,
-        None => Shard::from_env(|k| std::env::var(k).ok())?.unwrap_or(Shard::ALL),
-    };
+    let how = manifest::Expansion::new(
+        &args.to,
+        args.convert_options.as_deref(),
+        Some(args.output.clone()),
+    );
+    let items = manifest::load(&args.manifest, &how)?;
+    let shard = Shard::resolve(args.shard.as_deref(), |k| std::env::var(k).ok())
+        .map_err(|e| UsageError(e.to_string()))?;
     let options = rigport_batch::RunOptions {
         out_dir: args.output.clone(),
         jobs: args.jobs.unwrap_or(0),
@@ -50,8 +40,10 @@ pub fn run(ctx: &Context, args: &BatchArgs, run_command: RunCommand) -> Result<(
         resume: args.resume,
         version: env!("CARGO_PKG_VERSION").into(),
     };
-    let total = items.iter().filter(|i| shard.contains(i.index)).count();
-    let bar = progress_bar(ctx, total);
+    let bar = progress_bar(
+        ctx,
+        items.iter().filter(|i| shard.contains(i.index)).count(),
+    );
     let deny = ctx.deny_warnings;
     let execute = |item: &Item, outputs: &[PathBuf]| execute(run_command, deny, item, outputs);
     let records = rigport_batch::run(&items, &options, &execute, &|p| {
@@ -59,43 +51,39 @@ pub fn run(ctx: &Context, args: &BatchArgs, run_command: RunCommand) -> Result<(
         bar.set_message(format!("{} failed, {} skipped", p.failed, p.skipped));
     })?;
     bar.finish_and_clear();
-    let default = format!(
-        ".rigport-batch/report-{}-of-{}.jsonl",
-        shard.index, shard.count
-    );
-    let path = args
-        .report
-        .clone()
-        .unwrap_or_else(|| args.output.join(default));
-    report::write(&path, &records).map_err(|e| {
-        anyhow::Error::new(e).context(OutputError {
-            path: path.display().to_string(),
-        })
-    })?;
-    if !ctx.quiet {
-        eprint!("{}", Summary::of(&records));
-        eprintln!("report: {}", path.display());
-    }
-    outcome(&records)
+    let path = (args.report.clone()).unwrap_or_else(|| report::default_path(&args.output, shard));
+    finish(ctx, &records, Some(&path))
 }
 
-/// The error (and so the exit code) for failed items.
-fn outcome(records: &[Record]) -> Result<()> {
-    let failed: Vec<&Record> = records.iter().filter(|r| r.error.is_some()).collect();
-    let message = format!("{} of {} items failed", failed.len(), records.len());
-    match report::exit_code(records) {
-        0 => Ok(()),
-        3 => {
-            let output = failed.iter().find(|r| {
-                r.error
-                    .as_ref()
-                    .is_some_and(|e| e.kind == FailureKind::Output)
-            });
-            let path = output.map(|r| r.outputs.join(", ")).unwrap_or_default();
-            Err(anyhow!("{message} (an output could not be written: retry)")
-                .context(OutputError { path }))
-        }
-        _ => bail!("{message} (bad input; the other items finished)"),
+/// Runs `batch-report`: merges, writes the merged report if asked, prints the summary and
+/// exits as `batch` would have for all the items together.
+pub fn report(ctx: &Context, args: &BatchReportArgs) -> Result<()> {
+    finish(ctx, &report::merge(&args.reports)?, args.output.as_deref())
+}
+
+/// Writes the report, prints the summary, and fails as the records say (exit 1 or 3).
+fn finish(ctx: &Context, records: &[Record], path: Option<&Path>) -> Result<()> {
+    if let Some(path) = path {
+        report::write(path, records).map_err(|e| {
+            let path = path.display().to_string();
+            anyhow::Error::new(e).context(OutputError { path })
+        })?;
+    }
+    if !ctx.quiet {
+        eprint!("{}", Summary::of(records));
+        path.inspect(|p| eprintln!("report: {}", p.display()));
+    }
+    let Some(verdict) = report::verdict(records) else {
+        return Ok(());
+    };
+    let output_failure = records
+        .iter()
+        .find(|r| (r.error.as_ref()).is_some_and(|e| e.kind == FailureKind::Output));
+    match output_failure {
+        Some(r) => Err(anyhow!(verdict).context(OutputError {
+            path: r.outputs.join(", "),
+        })),
+        None => Err(anyhow!(verdict)),
     }
 }
 
@@ -111,11 +99,12 @@ fn execute(
         message,
     };
     if !COMMANDS.contains(&item.command.as_str()) {
-        return Err(input(format!(
-            "command {:?} cannot run in a batch; expected one of {}",
-            item.command,
-            COMMANDS.join(", ")
-        )));
+        let expected = COMMANDS.join(", ");
+        let message = format!(
+            "command {:?} cannot run in a batch; expected one of {expected}",
+            item.command
+        );
+        return Err(input(message));
     }
     let [output] = outputs else {
         return Err(input(format!("{} writes one output", item.command)));
@@ -139,10 +128,10 @@ fn execute(
         captured: Some(Mutex::new(Vec::new())),
     };
     let result = run_command(&ctx, cli.command);
-    let warnings = ctx
+    let warnings = (ctx
         .captured
-        .map(|c| c.into_inner().unwrap_or_else(|e| e.into_inner()))
-        .unwrap_or_default();
+        .map(|c| c.into_inner().unwrap_or_else(|e| e.into_inner())))
+    .unwrap_or_default();
     result.map(|()| warnings).map_err(|e| ItemError {
         kind: match exit::code_for(&e) {
             exit::OUTPUT => FailureKind::Output,
@@ -158,26 +147,8 @@ fn progress_bar(ctx: &Context, total: usize) -> indicatif::ProgressBar {
     if ctx.quiet || !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();
     }
-    let style = indicatif::ProgressStyle::with_template(
-        "{wide_bar} {pos}/{len} items, {per_sec}, ETA {eta}, {msg}",
-    )
-    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    let template = "{wide_bar} {pos}/{len} items, {per_sec}, ETA {eta}, {msg}";
+    let style = indicatif::ProgressStyle::with_template(template)
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
     indicatif::ProgressBar::new(total as u64).with_style(style)
-}
-
-/// Runs `batch-report`: merges, writes the merged report if asked, prints the summary;
-/// exits as `batch` would have for all the items together.
-pub fn report(ctx: &Context, args: &BatchReportArgs) -> Result<()> {
-    let records = report::merge(&args.reports)?;
-    if let Some(path) = &args.output {
-        report::write(path, &records).map_err(|e| {
-            anyhow::Error::new(e).context(OutputError {
-                path: path.display().to_string(),
-            })
-        })?;
-    }
-    if !ctx.quiet {
-        eprint!("{}", Summary::of(&records));
-    }
-    outcome(&records)
 }

@@ -235,6 +235,33 @@ pub struct Expansion {
     pub exclude: Option<PathBuf>,
 }
 
+/// Loads the items of `path`: a folder is expanded ([`expand_folder`]), anything else is
+/// read as a JSON Lines manifest ([`read`]).
+///
+/// # Errors
+/// As those.
+pub fn load(path: &Path, how: &Expansion) -> Result<Vec<Item>, ManifestError> {
+    if path.is_dir() {
+        expand_folder(path, how)
+    } else {
+        read(path)
+    }
+}
+
+impl Expansion {
+    /// `extension` (a leading dot is dropped) and options given as one string, split on
+    /// whitespace (`"--fps 30"`), with `exclude` (the output folder) not walked.
+    pub fn new(extension: &str, options: Option<&str>, exclude: Option<PathBuf>) -> Self {
+        Expansion {
+            extension: extension.trim_start_matches('.').to_string(),
+            options: options
+                .map(|o| o.split_whitespace().map(String::from).collect())
+                .unwrap_or_default(),
+            exclude,
+        }
+    }
+}
+
 /// Expands a folder into one `convert` item per recognised asset, walking it in sorted
 /// order and skipping hidden entries:
 /// - each `.glb`, `.gltf`, `.bvh`, `.usda`, `.usdc`, `.usdz` and `.usd` file;

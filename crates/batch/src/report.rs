@@ -103,6 +103,28 @@ pub fn location_of(message: &str) -> Option<String> {
         .map(str::to_string)
 }
 
+/// Where a shard's report goes unless told: `OUT/.rigport-batch/report-I-of-N.jsonl`.
+pub fn default_path(out_dir: &Path, shard: crate::Shard) -> std::path::PathBuf {
+    out_dir
+        .join(crate::resume::STATE_DIR)
+        .join(format!("report-{}-of-{}.jsonl", shard.index, shard.count))
+}
+
+/// The one-line verdict for failed records (`None` when none failed), for the exit code
+/// [`exit_code`] gives.
+pub fn verdict(records: &[Record]) -> Option<String> {
+    let failed = records.iter().filter(|r| r.error.is_some()).count();
+    let why = match exit_code(records) {
+        0 => return None,
+        3 => "an output could not be written: retry",
+        _ => "bad input; the other items finished",
+    };
+    Some(format!(
+        "{failed} of {} items failed ({why})",
+        records.len()
+    ))
+}
+
 /// A report line as JSON (no newline).
 pub fn to_line(record: &Record) -> String {
     // A record has only strings, numbers and enums: serialising cannot fail.

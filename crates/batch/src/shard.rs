@@ -101,6 +101,21 @@ impl Shard {
         Ok(None)
     }
 
+    /// `--shard I/N` when given, else the environment's ([`Shard::from_env`]), else
+    /// every item ([`Shard::ALL`]).
+    ///
+    /// # Errors
+    /// As [`Shard::parse`] and [`Shard::from_env`].
+    pub fn resolve(
+        arg: Option<&str>,
+        var: impl Fn(&str) -> Option<String>,
+    ) -> Result<Shard, ShardError> {
+        match arg {
+            Some(text) => Shard::parse(text, "--shard"),
+            None => Ok(Shard::from_env(var)?.unwrap_or(Shard::ALL)),
+        }
+    }
+
     /// Whether the item at manifest position `k` belongs to this shard.
     pub fn contains(&self, k: usize) -> bool {
         k % self.count == self.index
