@@ -36,8 +36,9 @@ def main():
     a = p.parse_args()
     ray.init(address=a.address, include_dashboard=False, log_to_driver=False)
     if a.data:
-        import ray.data
-        rows = ray.data.range(a.shards).map(
+        from ray import data as ray_data  # needs `pip install 'ray[data]'`
+
+        rows = ray_data.range(a.shards).map(
             lambda row: run_shard(a.rigport, a.manifest, a.out, row["id"], a.shards, a.jobs),
             num_cpus=a.jobs,
         ).take_all()
