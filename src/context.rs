@@ -13,7 +13,7 @@ pub struct Context {
     /// Fail on warnings.
     pub deny_warnings: bool,
     /// When set (`batch` items), warnings are collected here instead of printed.
-    pub captured: Option<std::sync::Mutex<Vec<String>>>,
+    pub captured: Option<std::sync::Arc<std::sync::Mutex<Vec<String>>>>,
 }
 
 impl Context {

@@ -4,7 +4,7 @@
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use anyhow::{anyhow, Result};
 use clap::Parser as _;
@@ -16,7 +16,7 @@ use crate::exit::{self, OutputError, UsageError};
 
 /// Runs one parsed command (`commands::run_command`, passed in: command modules do not
 /// import each other or the dispatcher).
-pub type RunCommand = fn(&Context, Command) -> Result<()>;
+pub type RunCommand = fn(Context, Command) -> Result<()>;
 
 /// The commands an item may run: those that read inputs and write one output file.
 const COMMANDS: [&str; 8] = [
@@ -122,16 +122,14 @@ fn execute(
             first.trim_start_matches("error: ")
         ))
     })?;
+    let captured = Arc::new(Mutex::new(Vec::new()));
     let ctx = Context {
         quiet: true,
         deny_warnings: deny_warnings || cli.deny_warnings,
-        captured: Some(Mutex::new(Vec::new())),
+        captured: Some(Arc::clone(&captured)),
     };
-    let result = run_command(&ctx, cli.command);
-    let warnings = (ctx
-        .captured
-        .map(|c| c.into_inner().unwrap_or_else(|e| e.into_inner())))
-    .unwrap_or_default();
+    let result = run_command(ctx, cli.command);
+    let warnings = std::mem::take(&mut *captured.lock().unwrap_or_else(|e| e.into_inner()));
     result.map(|()| warnings).map_err(|e| ItemError {
         kind: match exit::code_for(&e) {
             exit::OUTPUT => FailureKind::Output,

@@ -32,24 +32,24 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Batch(args) => batch::run(&ctx, &args, run_command),
         Command::BatchReport(args) => batch::report(&ctx, &args),
-        command => run_command(&ctx, command),
+        command => run_command(ctx, command),
     }
 }
 
 /// Runs one command (also each item of `batch`, with a capturing context).
-fn run_command(ctx: &Context, command: Command) -> Result<()> {
+fn run_command(ctx: Context, command: Command) -> Result<()> {
     check_outputs(&command)?;
     match command {
-        Command::Convert(args) => convert::run(ctx, &args),
-        Command::Inspect(args) => inspect::run(ctx, &args),
-        Command::Eval(args) => eval::run(ctx, &args),
-        Command::Demo(args) => demo::run(ctx, &args),
-        Command::Animate(args) => animate::run(ctx, &args),
-        Command::Retime(args) => retime::run(ctx, &args),
-        Command::Sequence(args) => sequence::run(ctx, &args),
-        Command::Ik(args) => ik::run(ctx, &args),
-        Command::Bake(args) => bake::run(ctx, &args),
-        Command::Render(args) => render::run(ctx, &args),
+        Command::Convert(args) => convert::run(&ctx, &args),
+        Command::Inspect(args) => inspect::run(&ctx, &args),
+        Command::Eval(args) => eval::run(&ctx, &args),
+        Command::Demo(args) => demo::run(&ctx, &args),
+        Command::Animate(args) => animate::run(&ctx, &args),
+        Command::Retime(args) => retime::run(&ctx, &args),
+        Command::Sequence(args) => sequence::run(&ctx, &args),
+        Command::Ik(args) => ik::run(&ctx, &args),
+        Command::Bake(args) => bake::run(&ctx, &args),
+        Command::Render(args) => render::run(&ctx, &args),
         Command::Batch(_) | Command::BatchReport(_) => {
             Err(UsageError("a batch item cannot be a batch".into()).into())
         }
