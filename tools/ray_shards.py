@@ -34,7 +34,15 @@ def main():
     p.add_argument("--address", default=None, help="a Ray cluster (default: local)")
     p.add_argument("--data", action="store_true", help="use Ray Data instead of tasks")
     a = p.parse_args()
-    ray.init(address=a.address, include_dashboard=False, log_to_driver=False)
+    # A loaded machine can make the local Ray's start time out: try three times.
+    for attempt in range(3):
+        try:
+            ray.init(address=a.address, include_dashboard=False, log_to_driver=False)
+            break
+        except Exception:
+            ray.shutdown()
+            if attempt == 2:
+                raise
     if a.data:
         from ray import data as ray_data  # needs `pip install 'ray[data]'`
 
@@ -57,4 +65,10 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except Exception:  # Ray's own failure, told apart from rigport's exit codes 0-3
+        import traceback
+
+        traceback.print_exc()
+        raise SystemExit(70)
