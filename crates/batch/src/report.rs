@@ -212,19 +212,25 @@ pub fn merge(paths: &[impl AsRef<Path>]) -> Result<Vec<Record>, ReportError> {
     }
     // Stable: equal indexes stay in reading order, so the duplicate check names the first.
     all.sort_by_key(|(r, _)| r.index);
-    for pair in all.windows(2) {
-        if pair[0].0.index == pair[1].0.index || pair[0].0.id == pair[1].0.id {
-            let (path, line) = pair[1]
-                .1
+    let mut ids: std::collections::BTreeMap<&str, &str> = std::collections::BTreeMap::new();
+    for (k, (record, at)) in all.iter().enumerate() {
+        let same_index = k > 0 && all[k - 1].0.index == record.index;
+        let first = match ids.insert(&record.id, at) {
+            Some(first) => Some(first.to_string()),
+            None if same_index => Some(all[k - 1].1.clone()),
+            None => None,
+        };
+        if let Some(first) = first {
+            let (path, line) = at
                 .rsplit_once(':')
                 .map(|(p, l)| (p.to_string(), l.parse().unwrap_or(0)))
                 .unwrap_or_default();
             return Err(ReportError::Duplicate {
                 path,
                 line,
-                id: pair[1].0.id.clone(),
-                index: pair[1].0.index,
-                first: pair[0].1.clone(),
+                id: record.id.clone(),
+                index: record.index,
+                first,
             });
         }
     }
@@ -305,17 +311,24 @@ impl fmt::Display for Summary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "{:>7} {:>7} {:>7} {:>13} {:>14} {:>13}",
-            "items", "done", "skipped", "failed input", "failed output", "item seconds"
+            "{:>7} {:>7} {:>7} {:>13} {:>14} {:>14} {:>13}",
+            "items",
+            "done",
+            "skipped",
+            "failed input",
+            "failed output",
+            "with warnings",
+            "item seconds"
         )?;
         writeln!(
             f,
-            "{:>7} {:>7} {:>7} {:>13} {:>14} {:>13.3}",
+            "{:>7} {:>7} {:>7} {:>13} {:>14} {:>14} {:>13.3}",
             self.items,
             self.done,
             self.skipped,
             self.failed_input,
             self.failed_output,
+            self.with_warnings,
             self.item_seconds
         )?;
         if !self.failures.is_empty() {
@@ -377,5 +390,30 @@ mod tests {
             ]),
             3
         );
+    }
+
+    #[test]
+    fn merges_in_manifest_order_and_refuses_duplicates() -> Result<(), Box<dyn std::error::Error>> {
+        let dir = tempfile::tempdir()?;
+        let line = |index: usize, id: &str| {
+            format!("{{\"index\":{index},\"id\":\"{id}\",\"command\":\"convert\",\"status\":\"done\",\"outputs\":[],\"warnings\":[],\"error\":null,\"seconds\":0.1}}\n")
+        };
+        let a = dir.path().join("a.jsonl");
+        let b = dir.path().join("b.jsonl");
+        std::fs::write(&a, line(0, "x") + &line(2, "z"))?;
+        std::fs::write(&b, line(1, "y"))?;
+        let merged = merge(&[&a, &b])?;
+        let ids: Vec<&str> = merged.iter().map(|r| r.id.as_str()).collect();
+        assert_eq!(ids, ["x", "y", "z"]);
+        std::fs::write(&b, line(3, "x"))?;
+        let err = merge(&[&a, &b])
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            err.contains("b.jsonl:1: item \"x\"") && err.contains("a.jsonl:1"),
+            "{err}"
+        );
+        Ok(())
     }
 }
