@@ -1,6 +1,6 @@
 //! Resume: a sidecar per finished item records what its outputs were made from.
 //!
-//! The key is a 64-bit FNV-1a hash over the rigport version, the command, its options,
+//! The key is a 64-bit FNV-1a hash (file contents eight bytes per step) over the rigport version, the command, its options,
 //! the outputs' names, and for every input its file name and a digest of its bytes (also
 //! of every option value that names an existing file, such as `--keys k.json`). The key
 //! follows the bytes, not the modification time: `touch` alone does not redo an item,
@@ -39,6 +39,21 @@ impl Fnv {
             self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
         }
     }
+    /// Bytes eight at a time (FNV-1a's step over 64-bit words, with a rotation so that
+    /// high bits reach the low ones): about eight times faster than [`Fnv::bytes`], for
+    /// file contents, where resume's cost is hashing every input.
+    fn words(&mut self, bytes: &[u8]) {
+        let mut chunks = bytes.chunks_exact(8);
+        for chunk in &mut chunks {
+            let mut word = [0u8; 8];
+            word.copy_from_slice(chunk);
+            self.0 ^= u64::from_le_bytes(word);
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3).rotate_left(29);
+        }
+        self.bytes(chunks.remainder());
+        self.bytes(&(bytes.len() as u64).to_le_bytes());
+    }
+
     /// A length-prefixed field, so that ("ab", "c") and ("a", "bc") differ.
     fn field(&mut self, bytes: &[u8]) {
         self.bytes(&(bytes.len() as u64).to_le_bytes());
@@ -59,7 +74,7 @@ impl Digests {
             return Ok(d);
         }
         let mut h = Fnv::new();
-        h.bytes(&std::fs::read(path)?);
+        h.words(&std::fs::read(path)?);
         lock().insert(path.to_path_buf(), h.0);
         Ok(h.0)
     }
@@ -167,6 +182,11 @@ mod tests {
         assert_ne!(k1, k2);
         item.options = vec!["--fps".into(), "30".into()];
         assert_ne!(k2, k(&item, "0.1.0")?);
+        // Same length, one byte changed in a whole word.
+        std::fs::write(&input, b"0123456789abcdef")?;
+        let k3 = k(&item, "0.1.0")?;
+        std::fs::write(&input, b"0123456789abcdeF")?;
+        assert_ne!(k3, k(&item, "0.1.0")?);
         Ok(())
     }
 }
