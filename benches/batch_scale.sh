@@ -50,19 +50,21 @@ run() { # label manifest out args...
   local label=$1 manifest=$2 out=$3; shift 3
   /usr/bin/time -v "$bin" batch --quiet "$manifest" -o "$out" "$@" 2> "$work/time.txt" || {
     echo "$label: rigport batch failed:"; cat "$work/time.txt"; exit 1; }
-  local wall rss items
+  local wall rss items cpu
   wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,t,":"); s=0; for(i=1;i<=n;i++) s=s*60+t[i]; print s}' "$work/time.txt")
   rss=$(awk -F': ' '/Maximum resident set size/ {printf "%.0f", $2/1024}' "$work/time.txt")
+  cpu=$(awk -F': ' '/User time|System time/ {s+=$2} END {print s}' "$work/time.txt")
   items=$(wc -l < "$manifest")
-  printf '| %s | %d | %.2f s | %.1f | %s MiB |\n' "$label" "$items" "$wall" "$(echo "$items / $wall" | bc -l)" "$rss"
+  printf '| %s | %d | %.2f s | %.1f | %.2f s | %.1f ms | %s MiB |\n' "$label" "$items" "$wall" \
+    "$(echo "$items / $wall" | bc -l)" "$cpu" "$(echo "1000 * $cpu / $items" | bc -l)" "$rss"
 }
 
 make_manifest "$n" > "$work/m.jsonl"
 make_manifest $((n / 5)) > "$work/small.jsonl"
 echo "rigport: $("$bin" --version); $(nproc) cores; load $(cut -d' ' -f1-3 /proc/loadavg)"
 echo
-echo "| run | items | wall | items/s | peak RSS |"
-echo "| --- | ---: | ---: | ---: | ---: |"
+echo "| run | items | wall | items/s | CPU (user+sys) | CPU per item | peak RSS |"
+echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"
 run "--jobs 1" "$work/m.jsonl" "$work/out1" --jobs 1
 run "--jobs 2" "$work/m.jsonl" "$work/out2" --jobs 2
 run "--jobs 2 --resume (all skipped)" "$work/m.jsonl" "$work/out2" --jobs 2 --resume
