@@ -51,7 +51,8 @@ pub fn run(ctx: &Context, args: &BatchArgs, run_command: RunCommand) -> Result<(
         bar.set_message(format!("{} failed, {} skipped", p.failed, p.skipped));
     })?;
     bar.finish_and_clear();
-    let path = (args.report.clone()).unwrap_or_else(|| report::default_path(&args.output, shard));
+    let path = (args.report.clone())
+        .unwrap_or_else(|| rigport_batch::resume::default_report(&args.output, shard));
     finish(ctx, &records, Some(&path))
 }
 

@@ -103,13 +103,6 @@ pub fn location_of(message: &str) -> Option<String> {
         .map(str::to_string)
 }
 
-/// Where a shard's report goes unless told: `OUT/.rigport-batch/report-I-of-N.jsonl`.
-pub fn default_path(out_dir: &Path, shard: crate::Shard) -> std::path::PathBuf {
-    out_dir
-        .join(crate::resume::STATE_DIR)
-        .join(format!("report-{}-of-{}.jsonl", shard.index, shard.count))
-}
-
 /// The one-line verdict for failed records (`None` when none failed), for the exit code
 /// [`exit_code`] gives.
 pub fn verdict(records: &[Record]) -> Option<String> {

@@ -125,6 +125,13 @@ pub struct Sidecar {
     pub error: Option<crate::report::Failure>,
 }
 
+/// Where a shard's report goes unless told: `OUT/.rigport-batch/report-I-of-N.jsonl`.
+pub fn default_report(out_dir: &Path, shard: crate::Shard) -> PathBuf {
+    out_dir
+        .join(STATE_DIR)
+        .join(format!("report-{}-of-{}.jsonl", shard.index, shard.count))
+}
+
 /// Where the sidecar of the item with this id lives in `out_dir`.
 pub fn sidecar_path(out_dir: &Path, id: &str) -> PathBuf {
     let mut h = Fnv::new();
