@@ -89,6 +89,58 @@ pub enum Command {
     Render(RenderArgs),
     /// Write the built-in demo character (no input files needed).
     Demo(DemoArgs),
+    /// Run many items from a JSON Lines manifest (or every asset of a folder), in-process
+    /// on --jobs threads; shards, resume and a per-item report (docs/scale.md).
+    #[command(
+        after_help = "Manifest line: {\"id\": \"kick\", \"command\": \"convert\", \"inputs\": [\"kick.bvh\"], \"options\": [\"--fps\", \"30\"], \"outputs\": [\"kick.glb\"]}\n\
+        Exit codes: 0 every item done or skipped; 1 some items had bad input (the others finished; \
+        do not retry); 2 usage; 3 an output could not be written (retry)."
+    )]
+    Batch(BatchArgs),
+    /// Merge batch reports (the shards of one run) and print the summary table.
+    BatchReport(BatchReportArgs),
+}
+
+/// `rigport batch`.
+#[derive(Debug, Args)]
+pub struct BatchArgs {
+    /// A JSON Lines manifest, or a folder: one `convert` item per asset found in it.
+    pub manifest: PathBuf,
+    /// The output folder (item outputs are relative to it).
+    #[arg(long, short, value_name = "OUT_DIR")]
+    pub output: PathBuf,
+    /// Worker threads (default: one per core).
+    #[arg(long, short, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Run shard I of N: the items at manifest positions k with k mod N = I. Default from
+    /// JOB_COMPLETION_INDEX/JOB_COMPLETIONS (Kubernetes Indexed Job) or
+    /// SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT (Slurm array), else every item.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
+    /// Skip items whose outputs exist and whose sidecar records the same input bytes,
+    /// options and rigport version.
+    #[arg(long)]
+    pub resume: bool,
+    /// The report (default: OUT_DIR/.rigport-batch/report-I-of-N.jsonl).
+    #[arg(long, value_name = "R.jsonl")]
+    pub report: Option<PathBuf>,
+    /// For a folder: the output extension of its items (glb, gltf or usda).
+    #[arg(long, default_value = "glb", value_name = "EXT")]
+    pub to: String,
+    /// For a folder: options every item gets, split on spaces ("--fps 30").
+    #[arg(long, value_name = "ARGS", allow_hyphen_values = true)]
+    pub convert_options: Option<String>,
+}
+
+/// `rigport batch-report`.
+#[derive(Debug, Args)]
+pub struct BatchReportArgs {
+    /// The reports to merge.
+    #[arg(required = true)]
+    pub reports: Vec<PathBuf>,
+    /// Also write the merged report (manifest order) here.
+    #[arg(long, short, value_name = "R.jsonl")]
+    pub output: Option<PathBuf>,
 }
 
 /// Where a rig comes from.

@@ -12,6 +12,8 @@ pub struct Context {
     pub quiet: bool,
     /// Fail on warnings.
     pub deny_warnings: bool,
+    /// When set (`batch` items), warnings are collected here instead of printed.
+    pub captured: Option<std::sync::Arc<std::sync::Mutex<Vec<String>>>>,
 }
 
 impl Context {
@@ -19,7 +21,15 @@ impl Context {
     /// warning. Notes ([`Warning::Note`]: facts, nothing lost or repaired) never fail.
     pub fn report(&self, warnings: &[Warning]) -> Result<()> {
         let mut count = 0;
-        for w in warnings {
+        if let Some(captured) = &self.captured {
+            let mut captured = captured.lock().unwrap_or_else(|e| e.into_inner());
+            for w in warnings {
+                let note = matches!(w, Warning::Note { .. });
+                count += usize::from(!note);
+                captured.push(format!("{}: {w}", if note { "note" } else { "warning" }));
+            }
+        }
+        for w in warnings.iter().filter(|_| self.captured.is_none()) {
             if matches!(w, Warning::Note { .. }) {
                 if !self.quiet {
                     eprintln!("note: {w}");

@@ -3,6 +3,7 @@
 
 mod animate;
 pub mod bake;
+mod batch;
 mod convert;
 mod demo;
 mod eval;
@@ -26,9 +27,19 @@ pub fn run(cli: Cli) -> Result<()> {
     let ctx = Context {
         quiet: cli.quiet,
         deny_warnings: cli.deny_warnings,
+        captured: None,
     };
-    check_outputs(&cli.command)?;
     match cli.command {
+        Command::Batch(args) => batch::run(&ctx, &args, run_command),
+        Command::BatchReport(args) => batch::report(&ctx, &args),
+        command => run_command(ctx, command),
+    }
+}
+
+/// Runs one command (also each item of `batch`, with a capturing context).
+fn run_command(ctx: Context, command: Command) -> Result<()> {
+    check_outputs(&command)?;
+    match command {
         Command::Convert(args) => convert::run(&ctx, &args),
         Command::Inspect(args) => inspect::run(&ctx, &args),
         Command::Eval(args) => eval::run(&ctx, &args),
@@ -39,6 +50,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Ik(args) => ik::run(&ctx, &args),
         Command::Bake(args) => bake::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
+        Command::Batch(_) | Command::BatchReport(_) => {
+            Err(UsageError("a batch item cannot be a batch".into()).into())
+        }
     }
 }
 
@@ -52,7 +66,9 @@ fn check_outputs(command: &Command) -> Result<()> {
         all
     };
     let (out, inputs): (&Path, Vec<PathBuf>) = match command {
-        Command::Inspect(_) | Command::Demo(_) => return Ok(()),
+        Command::Inspect(_) | Command::Demo(_) | Command::Batch(_) | Command::BatchReport(_) => {
+            return Ok(())
+        }
         Command::Convert(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Animate(a) => (&a.output.output, with_files(&a.input, &[&a.keys])),
         Command::Retime(a) => (&a.output.output, with_files(&a.input, &[])),
