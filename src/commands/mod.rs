@@ -6,6 +6,7 @@ pub mod bake;
 mod convert;
 mod demo;
 mod eval;
+mod footlock;
 mod ik;
 mod inspect;
 pub mod render;
@@ -37,6 +38,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Retime(args) => retime::run(&ctx, &args),
         Command::Sequence(args) => sequence::run(&ctx, &args),
         Command::Ik(args) => ik::run(&ctx, &args),
+        Command::Footlock(args) => footlock::run(&ctx, &args),
         Command::Bake(args) => bake::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
     }
@@ -58,6 +60,7 @@ fn check_outputs(command: &Command) -> Result<()> {
         Command::Retime(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Sequence(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Ik(a) => (&a.output.output, with_files(&a.input, &[&a.handles])),
+        Command::Footlock(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Bake(a) => {
             if output::format_of(&a.output)? != output::Format::Gltf {
                 return Err(UsageError(format!(
