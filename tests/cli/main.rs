@@ -13,6 +13,7 @@ mod bad_input;
 mod common;
 mod csci520;
 mod demo;
+mod footlock;
 mod frame_limit;
 mod frames;
 mod gltf_read;
