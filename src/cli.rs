@@ -292,6 +292,10 @@ pub struct FootlockArgs {
     /// Pin each contact where it starts (default: at the joint's mean position over it).
     #[arg(long)]
     pub pin_first: bool,
+    /// How much longer a leg may grow to reach a pin, as a fraction (default 0.1; 0 keeps
+    /// bone lengths and lets such frames slide).
+    #[arg(long, value_name = "F")]
+    pub max_stretch: Option<f32>,
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,

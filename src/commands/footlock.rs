@@ -3,10 +3,7 @@
 use std::io::Write;
 
 use anyhow::{bail, Context as _, Result};
-use rigport_eval::footlock::{
-    find_feet, footlock, named_feet, up_in_model, FootlockOptions, PinAt,
-};
-use rigport_model::Warning;
+use rigport_eval::footlock::{footlock, resolve_feet, up_in_model, FootlockOptions, PinAt};
 use serde_json::json;
 
 use crate::cli::FootlockArgs;
@@ -21,6 +18,7 @@ pub fn run(ctx: &Context, args: &FootlockArgs) -> Result<()> {
         height: args.height.unwrap_or(defaults.height),
         speed: args.speed.unwrap_or(defaults.speed),
         blend: args.blend.unwrap_or(defaults.blend),
+        max_stretch: args.max_stretch.unwrap_or(defaults.max_stretch),
         pin_at: if args.pin_first {
             PinAt::First
         } else {
@@ -47,61 +45,53 @@ pub fn run(ctx: &Context, args: &FootlockArgs) -> Result<()> {
             clip_names(&asset)
         );
     };
-    let (legs, convention) = if args.feet.is_empty() {
-        let (legs, convention) =
-            find_feet(&asset.skeleton).with_context(|| plan.label().to_string())?;
-        (legs, convention.to_string())
-    } else {
-        let feet: Vec<(String, Option<String>)> = args
-            .feet
-            .iter()
-            .map(|f| match f.split_once(',') {
-                Some((a, t)) => (a.trim().to_string(), Some(t.trim().to_string())),
-                None => (f.trim().to_string(), None),
-            })
-            .collect();
-        let legs = named_feet(&asset.skeleton, &feet)
-            .with_context(|| format!("{}: --foot", plan.label()))?;
-        (legs, "--foot".to_string())
-    };
-    let up = up_in_model(&asset.frame);
+    let (legs, found_by) = resolve_feet(&asset.skeleton, &args.feet)
+        .with_context(|| format!("{}: cannot find the feet", plan.label()))?;
     let clip = &asset.clips[index];
     let locked = ctx
         .step("locking feet", || {
+            let up = up_in_model(&asset.frame);
             footlock(&asset.skeleton, clip, &legs, up, &options)
         })
         .with_context(|| format!("cannot lock the feet of clip {:?}", clip.name))?;
-    let feet: Vec<_> =
-        locked
-            .feet
-            .iter()
-            .map(|f| {
-                let contacts: Vec<_> = f.contacts.iter().map(|c| json!({
+    let mut rows = Vec::new();
+    let feet: Vec<_> = locked
+        .feet
+        .iter()
+        .map(|f| {
+            let contacts: Vec<_> = f
+                .contacts
+                .iter()
+                .map(|c| {
+                    json!({
             "joint": c.joint, "start_frame": c.start_frame, "end_frame": c.end_frame,
-            "start_time": c.start_time, "end_time": c.end_time,
-        })).collect();
-                json!({
-                    "label": f.label, "ankle": f.ankle, "toe": f.toe, "contacts": contacts,
-                    "slide_before": {"max": f.before.max, "mean": f.before.mean},
-                    "slide_after": {"max": f.after.max, "mean": f.after.mean}, "stretch": f.stretch,
+            "start_time": c.start_time, "end_time": c.end_time})
                 })
-            })
-            .collect();
-    for f in &locked.feet {
-        if f.contacts.is_empty() {
-            warnings.push(Warning::Note {
-                location: format!("clip {:?}", clip.name),
-                message: format!(
-                    "foot {} ({}) has no contact; left as it was",
-                    f.label, f.ankle
-                ),
-            });
-        }
-    }
-    let report = json!({
-        "clip": clip.name, "frames": locked.frames, "fps": locked.fps,
-        "height": locked.height, "feet_found_by": convention, "feet": feet,
-    });
+                .collect();
+            let windows: Vec<_> = f
+                .contacts
+                .iter()
+                .map(|c| format!("{} {:.3}-{:.3} s", c.joint, c.start_time, c.end_time))
+                .collect();
+            rows.push(format!(
+                "| {} | {} | {:.2e} / {:.2e} | {:.2e} / {:.2e} | {:.2}% |",
+                f.label,
+                windows.join(", "),
+                f.before.max,
+                f.before.mean,
+                f.after.max,
+                f.after.mean,
+                100.0 * f.stretch
+            ));
+            json!({"label": f.label, "ankle": f.ankle, "toe": f.toe, "contacts": contacts,
+            "slide_before": {"max": f.before.max, "mean": f.before.mean},
+            "slide_after": {"max": f.after.max, "mean": f.after.mean},
+            "stretch": f.stretch, "unreached_frames": f.unreached})
+        })
+        .collect();
+    let report = json!({"clip": clip.name, "frames": locked.frames, "fps": locked.fps,
+        "height": locked.height, "feet_found_by": found_by, "feet": feet});
+    warnings.extend(locked.warnings);
     asset.clips[index] = locked.clip;
     output::reduce_clips(&mut asset, &args.output, &mut warnings)?;
     output::write_asset(ctx, &asset, warnings, &args.output)?;
@@ -112,32 +102,18 @@ pub fn run(ctx: &Context, args: &FootlockArgs) -> Result<()> {
     } else if !ctx.quiet {
         writeln!(
             out,
-            "{} frames at {} fps, skeleton height {:.4}, feet by {convention}; slides in heights",
+            "{} frames at {} fps, skeleton height {:.4}, feet: {found_by}; slides in heights",
             locked.frames, locked.fps, locked.height
         )?;
         writeln!(
             out,
-            "| foot | contacts | slide before max / mean | slide after max / mean | stretch |"
+            "| foot | contacts | slide before max / mean | after max / mean | stretch |"
         )?;
-        writeln!(out, "| --- | --- | ---: | ---: | ---: |")?;
-        for f in &locked.feet {
-            let windows: Vec<String> = f
-                .contacts
-                .iter()
-                .map(|c| format!("{} {:.3}-{:.3} s", c.joint, c.start_time, c.end_time))
-                .collect();
-            writeln!(
-                out,
-                "| {} | {} | {:.2e} / {:.2e} | {:.2e} / {:.2e} | {:.2}% |",
-                f.label,
-                windows.join(", "),
-                f.before.max,
-                f.before.mean,
-                f.after.max,
-                f.after.mean,
-                100.0 * f.stretch
-            )?;
-        }
+        writeln!(
+            out,
+            "| --- | --- | ---: | ---: | ---: |\n{}",
+            rows.join("\n")
+        )?;
     }
     Ok(())
 }

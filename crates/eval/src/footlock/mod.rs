@@ -83,10 +83,10 @@ mod solve;
 mod tests;
 
 pub use contacts::PinAt;
-pub use names::{find_feet, leg_of, named_feet, NAMED_FEET};
+pub use names::{find_feet, leg_of, named_feet, resolve_feet, NAMED_FEET};
 
 use glam::{Mat4, Vec3};
-use rigport_model::{Clip, JointIndex, SceneFrame, Skeleton, TrackTarget, Transform};
+use rigport_model::{Clip, JointIndex, SceneFrame, Skeleton, TrackTarget, Transform, Warning};
 
 use crate::sample::{bake, rest_locals, sample_frames, ChannelMask, CompiledClip, SampleError};
 use crate::{EvalError, LocalToModelJob};
@@ -285,6 +285,9 @@ pub struct Footlocked {
     pub fps: f32,
     /// The skeleton height (asset length unit) the thresholds and slides are relative to.
     pub height: f32,
+    /// A note per foot without contacts; an [`Warning::Incomplete`] per foot with frames
+    /// short of their targets.
+    pub warnings: Vec<Warning>,
 }
 
 /// The scene's up direction in model space (unit length): the inverse of the asset's
@@ -485,7 +488,7 @@ pub fn footlock(
     });
     out.tracks.extend(baked.tracks);
 
-    let feet = plans
+    let feet: Vec<FootReport> = plans
         .iter()
         .zip(solver.stretch.iter().zip(&solver.unreached))
         .map(|(plan, (&stretch, &unreached))| FootReport {
@@ -494,9 +497,30 @@ pub fn footlock(
             ..report(skeleton, plan, &times, &before, &after, joints, height)
         })
         .collect();
+    let mut warnings = Vec::new();
+    for foot in &feet {
+        let location = format!("clip {:?}, foot {} ({})", clip.name, foot.label, foot.ankle);
+        if foot.contacts.is_empty() {
+            warnings.push(Warning::Note {
+                location,
+                message: "no contact found; left as it was".into(),
+            });
+        } else if foot.unreached > 0 {
+            warnings.push(Warning::Incomplete {
+                location,
+                message: format!(
+                    "{} frame(s) out of reach even with the leg {:.0}% longer; the foot slides {:.2e} of the height there",
+                    foot.unreached,
+                    100.0 * options.max_stretch,
+                    foot.after.max
+                ),
+            });
+        }
+    }
     Ok(Footlocked {
         clip: out,
         feet,
+        warnings,
         frames: times.len(),
         fps,
         height,

@@ -191,3 +191,26 @@ fn check_disjoint(skeleton: &Skeleton, legs: &[Leg]) -> Result<(), FootlockError
     }
     Ok(())
 }
+
+/// The legs for `specs`, each `ANKLE` or `ANKLE,TOE` (joint names, matched exactly); with
+/// no specs, the feet [`find_feet`] finds. Also returns how they were found (the naming
+/// convention, or `"named"`).
+///
+/// # Errors
+/// As [`named_feet`] and [`find_feet`].
+pub fn resolve_feet(
+    skeleton: &Skeleton,
+    specs: &[String],
+) -> Result<(Vec<Leg>, &'static str), FootlockError> {
+    if specs.is_empty() {
+        return find_feet(skeleton);
+    }
+    let feet: Vec<(String, Option<String>)> = specs
+        .iter()
+        .map(|f| match f.split_once(',') {
+            Some((a, t)) => (a.trim().to_string(), Some(t.trim().to_string())),
+            None => (f.trim().to_string(), None),
+        })
+        .collect();
+    Ok((named_feet(skeleton, &feet)?, "named"))
+}

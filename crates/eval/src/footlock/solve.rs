@@ -70,6 +70,10 @@ pub(crate) struct Solver<'a> {
 /// line; below that the direction is noise and the previous frame's is used.
 const MIN_BEND: f32 = 0.02;
 
+/// An ankle this fraction of the leg's length from its target counts as unreached (f32
+/// rounding of the solve stays near 1e-7).
+const UNREACHED: f32 = 1e-5;
+
 /// The knee's bend direction: the part of hip->knee perpendicular to hip->ankle, unit, or
 /// `None` for a (nearly) straight leg.
 fn bend_of(hip: Vec3, knee: Vec3, ankle: Vec3) -> Option<Vec3> {
@@ -195,20 +199,23 @@ impl<'a> Solver<'a> {
             job.pole = *bend;
             job.mid_axis = TwoBoneIkJob::bend_axis(hip_model, knee_model, ankle_model, *bend);
             let out = job.run()?;
-            if !out.reached {
-                *unreached += 1;
-            }
-            // World rotations after the corrections (rotation times unit scale: mocap rigs).
+            // World rotations and positions after the corrections (rotation times unit
+            // scale, as in mocap rigs).
             let (hip_q, knee_q) = (rotation(&hip_model), rotation(&knee_model));
             let new_hip_q = hip_q * out.root_correction;
             let new_knee_q = new_hip_q * (hip_q.inverse() * knee_q) * out.mid_correction;
+            let new_knee =
+                hip + (new_hip_q * hip_q.inverse()) * (knee_model.w_axis.truncate() - hip);
+            let new_ankle = new_knee
+                + (new_knee_q * knee_q.inverse())
+                    * (ankle_model.w_axis - knee_model.w_axis).truncate();
+            // The job's `reached` is false at exactly full extension, where the stretch puts
+            // targets on purpose: count the frames that really miss.
+            if (new_ankle - target).length() > UNREACHED * reach {
+                *unreached += 1;
+            }
             let mut ankle_q = rotation(&ankle_model);
             if let Some((t, toe_at, w)) = toe_target {
-                let new_knee =
-                    hip + (new_hip_q * hip_q.inverse()) * (knee_model.w_axis.truncate() - hip);
-                let new_ankle = new_knee
-                    + (new_knee_q * knee_q.inverse())
-                        * (ankle_model.w_axis - knee_model.w_axis).truncate();
                 let aim = Quat::IDENTITY.slerp(arc(t - ankle, toe_at - new_ankle), w);
                 ankle_q = (aim * ankle_q).normalize();
             }
