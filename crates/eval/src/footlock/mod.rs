@@ -5,11 +5,13 @@
 //!
 //! 1. **Detect.** The clip is sampled at its own key times. For each foot's ankle and toe
 //!    joint, a frame is in contact when the joint is both low (height above its lowest
-//!    point in the clip under [`FootlockOptions::height`] skeleton heights) and slow
+//!    point within [`GROUND_WINDOW`] seconds under [`FootlockOptions::height`] skeleton
+//!    heights) and slow
 //!    (speed under [`FootlockOptions::speed`] skeleton heights per second, central
 //!    differences). A contact lasts while height and speed stay under
 //!    [`FootlockOptions::hysteresis`] times those thresholds, and contacts shorter than
-//!    [`FootlockOptions::min_contact`] seconds are dropped. The skeleton height is the
+//!    [`FootlockOptions::min_contact`] seconds (or of one frame) are dropped. The skeleton
+//!    height is the
 //!    largest extent of the joints' rest positions; "up" is the asset's up axis in model
 //!    space ([`up_in_model`]).
 //! 2. **Pin.** Each contact gets one model-space point, held for the whole contact:
@@ -22,14 +24,19 @@
 //!    the ankle's pin, or the ankle moved with the toe onto the toe's pin. The analytic
 //!    two-bone job ([`crate::ik::two_bone`]) turns hip and knee so the ankle meets it, with
 //!    the pole taken from the input knee's direction (so the knee bends where the source's
-//!    did, never flips). The ankle keeps its input world orientation, turned just enough to
-//!    put the toe on its pin when the toe is held.
+//!    did, never flips). A target beyond the straight leg's reach lengthens thigh and shin
+//!    alike by up to [`FootlockOptions::max_stretch`] (the small bone-length change of
+//!    Kovar, Schreiner and Gleicher, "Footskate cleanup for motion capture editing", 2002;
+//!    mocap legs are often almost straight at heel strike and toe-off, so a pin a few
+//!    millimetres off needs it). The ankle keeps its input world orientation, turned just
+//!    enough to put the toe on its pin when the toe is held.
 //! 4. **Blend.** Over [`FootlockOptions::blend`] seconds before a contact and after it, the
 //!    target eases (smoothstep) from the input position to the pin and back, so the leg does
 //!    not pop.
 //!
 //! The result is the input clip with the rotation tracks of each leg's hip, knee and ankle
-//! re-keyed at the clip's key times; every other track is the input's, untouched. The
+//! re-keyed at the clip's key times (and the translation tracks of knee and ankle when
+//! the leg was lengthened); every other track is the input's, untouched. The
 //! [`FootReport`]s give each foot's contacts and its slide before and after: per contact
 //! frame, how far the ankle or toe is from where it was at the contact's first frame, in
 //! skeleton heights (largest and mean over all contact frames of the foot).
@@ -139,11 +146,14 @@ pub struct FootlockOptions {
 }
 
 impl Default for FootlockOptions {
-    /// Thresholds for human mocap (chosen on the corpus's CMU and Bandai Namco walks,
-    /// runs and dances): a planted joint stays within 2.5% of the height of its lowest point
-    /// (4 cm on a 1.7 m actor) and moves slower than 0.25 heights per second (0.4 m/s; a
-    /// swinging foot moves at 2-5 m/s); hysteresis 1.5; contacts of at least 0.05 s; blends
-    /// over 0.1 s; mean pins.
+    /// Thresholds for human mocap, chosen on the corpus's CMU (ASF/AMC and cgspeed BVH)
+    /// and Bandai Namco walks, runs, dances and kicks: a planted ankle stays within 1% of
+    /// the height of its local lowest point (1.7 cm on a 1.7 m actor; the heel rising at
+    /// toe-off passes that within a few frames) and moves slower than 0.2 heights per
+    /// second (0.34 m/s; a swinging foot moves at 2-5 m/s, a planted one at 120 fps shows
+    /// 0.02-0.1 heights per second of marker noise); hysteresis 1.5; contacts of at least
+    /// 0.03 s (a running stance lasts about 0.1 s); blends over 0.1 s; mean pins; legs may
+    /// grow by up to 10% (the corpus needs at most 6.6%).
     fn default() -> Self {
         Self {
             height: 0.01,
