@@ -226,3 +226,23 @@ impl<'a> Solver<'a> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arc_keeps_tiny_angles_that_from_rotation_arc_drops() {
+        let from = Vec3::new(0.0, -0.9, 0.0);
+        let to = Vec3::new(1e-4, -0.9, 0.0); // 1.1e-4 rad
+        assert_eq!(
+            Quat::from_rotation_arc(from.normalize(), to.normalize()),
+            Quat::IDENTITY
+        );
+        let turned = arc(from, to) * from;
+        assert!((turned - to * (from.length() / to.length())).length() < 1e-7);
+        assert_eq!(arc(Vec3::ZERO, to), Quat::IDENTITY);
+        let back = arc(Vec3::X, -Vec3::X) * Vec3::X;
+        assert!((back + Vec3::X).length() < 1e-6);
+    }
+}
