@@ -83,6 +83,14 @@ pub enum Command {
         in the joint's frame, e.g. a bone's tip. Every ancestor of a handle may rotate; each frame \
         starts from the previous frame's solution.")]
     Ik(IkArgs),
+    /// Hold mocap feet still while they touch the ground (two-bone IK on the legs).
+    #[command(
+        after_help = "Feet are found by name (CMU ASF lfoot/ltoes, cgspeed BVH and Mixamo \
+        LeftFoot/LeftToeBase, Bandai Namco Foot_L/Toes_L, Pinocchio's human template) unless \
+        --foot names them. Only the legs' hip, knee and ankle rotations change. Slides are in \
+        skeleton heights: per contact frame, the joint's distance from its touch-down position."
+    )]
+    Footlock(FootlockArgs),
     /// Bake a skinning result (DQS) into a glTF every viewer plays back exactly.
     Bake(BakeArgs),
     /// Render rigs and clips to PNG contact sheets or GIF/APNG animations (CPU, headless).
@@ -331,6 +339,42 @@ pub struct IkArgs {
     #[arg(long)]
     pub free_root: bool,
     /// Print the residual summary as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `rigport footlock`.
+#[derive(Debug, Args)]
+pub struct FootlockArgs {
+    /// The rig with its motion.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// The clip to clean (default: the first).
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// A foot: its ankle joint and, optionally, its toe joint (repeat for each foot).
+    #[arg(long = "foot", value_name = "ANKLE[,TOE]")]
+    pub feet: Vec<String>,
+    /// Contact height: above a joint's lowest point, in skeleton heights (default 0.025).
+    #[arg(long, value_name = "H")]
+    pub height: Option<f32>,
+    /// Contact speed: skeleton heights per second (default 0.25).
+    #[arg(long, value_name = "V")]
+    pub speed: Option<f32>,
+    /// Seconds over which a leg eases into and out of a contact (default 0.1).
+    #[arg(long, value_name = "S")]
+    pub blend: Option<f32>,
+    /// Pin each contact where it starts (default: at the joint's mean position over it).
+    #[arg(long)]
+    pub pin_first: bool,
+    /// How much longer a leg may grow to reach a pin, as a fraction (default 0.1; 0 keeps
+    /// bone lengths and lets such frames slide).
+    #[arg(long, value_name = "F")]
+    pub max_stretch: Option<f32>,
+    /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
     /// Where to write.

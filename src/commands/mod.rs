@@ -7,6 +7,7 @@ mod batch;
 mod convert;
 mod demo;
 mod eval;
+mod footlock;
 mod ik;
 mod inspect;
 pub mod render;
@@ -48,6 +49,7 @@ fn run_command(ctx: Context, command: Command) -> Result<()> {
         Command::Retime(args) => retime::run(&ctx, &args),
         Command::Sequence(args) => sequence::run(&ctx, &args),
         Command::Ik(args) => ik::run(&ctx, &args),
+        Command::Footlock(args) => footlock::run(&ctx, &args),
         Command::Bake(args) => bake::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
         Command::Batch(_) | Command::BatchReport(_) => {
@@ -74,6 +76,7 @@ fn check_outputs(command: &Command) -> Result<()> {
         Command::Retime(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Sequence(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Ik(a) => (&a.output.output, with_files(&a.input, &[&a.handles])),
+        Command::Footlock(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Bake(a) => {
             if output::format_of(&a.output)? != output::Format::Gltf {
                 return Err(UsageError(format!(

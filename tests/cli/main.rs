@@ -14,6 +14,7 @@ mod batch;
 mod common;
 mod csci520;
 mod demo;
+mod footlock;
 mod frame_limit;
 mod frames;
 mod gltf_read;

@@ -10,6 +10,7 @@ pub mod bake;
 pub mod bone_mesh;
 mod error;
 pub mod fk;
+pub mod footlock;
 pub mod ik;
 pub mod keyed;
 pub mod pose;

@@ -68,6 +68,7 @@ mod linalg;
 mod solver;
 #[cfg(test)]
 mod tests;
+pub mod two_bone;
 
 use glam::{Affine3A, DVec3, Mat3, Quat, Vec3};
 use rigport_model::conventions::EulerOrder;
