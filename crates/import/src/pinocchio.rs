@@ -747,6 +747,7 @@ fn assemble_from<'a>(
         clips: Vec::new(),
         meters_per_unit: None,
         ik_handles: Vec::new(),
+        ..Default::default()
     };
     if let Err(errors) = asset.validate() {
         let text: Vec<String> = errors.iter().map(ToString::to_string).collect();

@@ -259,6 +259,7 @@ impl<'a> Importer<'a> {
             meters_per_unit: Some(1.0),
             frame: Default::default(),
             ik_handles: Vec::new(),
+            ..Default::default()
         };
         asset.validate().map_err(|problems| {
             ImportError::invalid(

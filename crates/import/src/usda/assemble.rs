@@ -167,6 +167,7 @@ impl<'l> Importer<'l, '_> {
             clips,
             meters_per_unit: Some(meters_per_unit),
             ik_handles: Vec::new(),
+            ..Default::default()
         };
         asset.validate().map_err(|problems| {
             ImportError::invalid(
