@@ -14,10 +14,11 @@ pub struct Mesh {
     /// name, an OBJ `o`/`g` name), `<mesh>_<primitive>` when the source mesh had several
     /// primitives.
     pub name: String,
-    /// Name of the scene node (glTF node, USD prim) that carried the mesh in the source,
-    /// when that is not a joint of the skeleton (a skinned mesh's node); empty otherwise.
-    /// Exporters name the mesh's node after it, so apps that look a mesh up by its node's
-    /// name still find it.
+    /// Name of the scene node (glTF node, USD prim) that carried the mesh in the source;
+    /// empty when the source has no such node. When it equals the name of the joint the
+    /// mesh is [`attached_to`](Self::attached_to), the mesh sat on that node itself, and
+    /// exporters put it back there; else they name the mesh's own node after it, so apps
+    /// that look a mesh up by its node's name still find it.
     pub node_name: String,
     /// Positions: model space at bind time for skinned meshes, else the space given by
     /// `attached_to`.
