@@ -381,3 +381,79 @@ fn bandai_bvh_bone_mesh_has_no_floor_to_hips_bone() {
         "--quiet",
     ]);
 }
+
+#[test]
+fn gltf_to_usda_to_glb_keeps_base_colour_and_textures() {
+    let Some(py) = crate::usd::python() else {
+        return;
+    };
+    let dir = scratch();
+    let mut checked = 0;
+    for rel in GLTF_SAMPLES {
+        let Some(src) = corpus(rel) else { continue };
+        let (src_materials, src_images) = materials_and_images(&src);
+        if src_materials.is_empty() {
+            continue;
+        }
+        let usda = dir.path().join(format!("m{checked}.usda"));
+        rigport_ok(&["convert", s(&src), "-o", s(&usda), "--quiet"]);
+        let (ok, text) = crate::usd::check_usd(&py, &usda, None);
+        assert!(ok, "{rel}: {text}");
+        let usda_text = std::fs::read_to_string(&usda).unwrap();
+        assert!(
+            usda_text.contains("info:id = \"UsdPreviewSurface\""),
+            "{rel}"
+        );
+        assert!(usda_text.contains("rel material:binding"), "{rel}");
+        let back = dir.path().join(format!("m{checked}.glb"));
+        rigport_ok(&["convert", s(&usda), "-o", s(&back), "--quiet"]);
+        assert_valid(&back);
+        let (materials, images) = materials_and_images(&back);
+        assert_eq!(materials.len(), src_materials.len(), "{rel}");
+        for (a, b) in src_materials.iter().zip(&materials) {
+            let base = |m: &serde_json::Value| {
+                let v = &m["pbrMetallicRoughness"]["baseColorFactor"];
+                if v.is_null() {
+                    serde_json::json!([1.0, 1.0, 1.0, 1.0])
+                } else {
+                    v.clone()
+                }
+            };
+            assert_eq!(base(a), base(b), "{rel}: baseColorFactor");
+            let textured =
+                |m: &serde_json::Value| !m["pbrMetallicRoughness"]["baseColorTexture"].is_null();
+            assert_eq!(textured(a), textured(b), "{rel}: base colour texture");
+        }
+        assert_eq!(images.len(), src_images.len(), "{rel}: images");
+        for (a, b) in src_images.iter().zip(&images) {
+            assert!(pixels(a) == pixels(b), "{rel}: pixels differ");
+        }
+        checked += 1;
+    }
+    eprintln!("checked {checked} glTF -> USD -> glTF material round trips");
+}
+
+#[test]
+fn a_named_face_mesh_keeps_its_name_through_usda() {
+    let dir = scratch();
+    let src = dir.path().join("character.gltf");
+    write_named_character(&src);
+    let usda = dir.path().join("character.usda");
+    rigport_ok(&["convert", s(&src), "-o", s(&usda), "--quiet"]);
+    let text = std::fs::read_to_string(&usda).unwrap();
+    assert!(text.contains("def Mesh \"Face\""), "{text}");
+    if let Some(py) = crate::usd::python() {
+        let (ok, out) = crate::usd::check_usd(&py, &usda, None);
+        assert!(ok, "{out}");
+    }
+    let back = dir.path().join("back.glb");
+    rigport_ok(&["convert", s(&usda), "-o", s(&back), "--quiet"]);
+    assert_valid(&back);
+    let gltf = gltf::Gltf::open(&back).unwrap();
+    let holder = gltf
+        .document
+        .nodes()
+        .find(|n| n.mesh().is_some())
+        .expect("a mesh node");
+    assert_eq!(holder.name(), Some("Face"));
+}
