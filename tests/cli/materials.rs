@@ -200,6 +200,31 @@ fn obj_with_mtl_and_texture_converts_to_a_textured_glb() {
         }
     ));
 
+    // three.js (tools/three_eval.mjs, from main) binds the texture to the material's map.
+    let three = repo().join("tools/three_eval.mjs");
+    let three_ready = three.exists() && repo().join("tools/node_modules/three").exists();
+    if require(
+        "tools/three_eval.mjs with three installed",
+        three_ready.then_some(()),
+    )
+    .is_some()
+    {
+        let out = std::process::Command::new("node")
+            .arg(&three)
+            .arg(&glb)
+            .output()
+            .expect("node runs");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+        let map = &report["meshes"][0]["material"]["map"];
+        assert_eq!(map["mime_type"], "image/png", "{report:#}");
+        assert_eq!(map["texcoord"], 0);
+    }
+
     // `.gltf`: the image is written beside it.
     let split = dir.path().join("out").join("quad.gltf");
     std::fs::create_dir_all(split.parent().unwrap()).unwrap();
