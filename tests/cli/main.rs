@@ -20,6 +20,7 @@ mod frames;
 mod gltf_read;
 mod gltf_samples;
 mod ik;
+mod materials;
 mod memory;
 mod message_audit;
 mod messages;

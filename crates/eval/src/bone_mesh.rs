@@ -5,6 +5,11 @@
 //! viewers draw nothing for a skin-less node hierarchy. [`bone_mesh`] builds the shape
 //! Blender draws for a bone in its "octahedral" display: a double pyramid from the parent
 //! joint to the child joint, widest at a tenth of its length.
+//!
+//! A joint whose own translation is animated (root motion: a Bandai Namco BVH's hips under
+//! a floor-level root) is not held at a fixed distance from its parent, so [`add_bone_mesh`]
+//! gives it no shape from its parent: a rigid one would be a wedge from the floor to the
+//! hips in every frame ([`moving_joints`]).
 
 use glam::{Mat4, Vec3};
 use rigport_model::{
@@ -45,6 +50,12 @@ pub const TRIANGLES_PER_BONE: usize = 8;
 /// `None` when no bone has a non-zero length (or every such bone's parent has a singular
 /// rest matrix, which no inverse bind matrix can undo).
 pub fn bone_mesh(skeleton: &Skeleton) -> Option<(Mesh, SkinBinding)> {
+    bone_mesh_except(skeleton, &[])
+}
+
+/// As [`bone_mesh`], without the bones that end at a joint `k` with `skip[k]` (indices past
+/// the end of `skip` are kept).
+pub fn bone_mesh_except(skeleton: &Skeleton, skip: &[bool]) -> Option<(Mesh, SkinBinding)> {
     let model = skeleton.model_rest_matrices();
     let heads: Vec<Vec3> = model.iter().map(|m| m.w_axis.truncate()).collect();
     let extent = heads
@@ -63,6 +74,9 @@ pub fn bone_mesh(skeleton: &Skeleton) -> Option<(Mesh, SkinBinding)> {
         let Some(parent) = joint.parent.map(JointIndex::get) else {
             continue;
         };
+        if skip.get(child).copied().unwrap_or(false) {
+            continue;
+        }
         let (Some(&head), Some(&tail), Some(parent_model)) =
             (heads.get(parent), heads.get(child), model.get(parent))
         else {
@@ -140,6 +154,7 @@ pub fn bone_mesh(skeleton: &Skeleton) -> Option<(Mesh, SkinBinding)> {
         morph_targets: Vec::new(),
         morph_weights: Vec::new(),
         attached_to: None,
+        ..Default::default()
     };
     let skin = SkinBinding {
         method: Default::default(),
@@ -151,15 +166,70 @@ pub fn bone_mesh(skeleton: &Skeleton) -> Option<(Mesh, SkinBinding)> {
     Some((mesh, skin))
 }
 
+/// Per joint: whether some clip moves its own translation, i.e. a translation track whose
+/// keys differ from its first key by more than the tolerance that makes a bone too short to
+/// draw (the skeleton's rest size times 1e-4). Constant translation channels (a Bandai
+/// Namco BVH gives every joint position channels that repeat the offset) do not count.
+pub fn moving_joints(asset: &Asset) -> Vec<bool> {
+    let skeleton = &asset.skeleton;
+    let heads: Vec<Vec3> = skeleton
+        .model_rest_matrices()
+        .iter()
+        .map(|m| m.w_axis.truncate())
+        .collect();
+    let (lo, hi) = heads.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let extent = if heads.is_empty() {
+        0.0
+    } else {
+        (hi - lo).length().max(lo.length()).max(hi.length())
+    };
+    let tolerance = extent * MIN_RELATIVE_LENGTH;
+    let mut moving = vec![false; skeleton.len()];
+    for clip in &asset.clips {
+        for track in &clip.tracks {
+            let rigport_model::TrackTarget::Translation(j) = track.target else {
+                continue;
+            };
+            // Cubic-spline keys hold (in-tangent, value, out-tangent).
+            let (stride, offset) = match track.interpolation {
+                rigport_model::Interpolation::CubicSpline => (9, 3),
+                _ => (3, 0),
+            };
+            let key = |k: usize| {
+                let at = k * stride + offset;
+                track
+                    .values
+                    .get(at..at + 3)
+                    .map(|v| Vec3::new(v[0], v[1], v[2]))
+            };
+            let Some(first) = key(0) else {
+                continue;
+            };
+            let moves = (1..track.times.len())
+                .filter_map(key)
+                .any(|v| v.distance(first) > tolerance);
+            if let (true, Some(slot)) = (moves, moving.get_mut(j.get())) {
+                *slot = true;
+            }
+        }
+    }
+    moving
+}
+
 /// Adds the bone mesh to an asset that has no meshes; false if it already has one or the
-/// skeleton has no bone of non-zero length.
+/// skeleton has no bone of non-zero length. Joints whose translation is animated
+/// ([`moving_joints`]) get no bone from their parent.
 ///
 /// The mesh is appended with its skin binding (pointing at it); nothing else changes.
 pub fn add_bone_mesh(asset: &mut Asset) -> bool {
     if !asset.meshes.is_empty() {
         return false;
     }
-    let Some((mesh, mut skin)) = bone_mesh(&asset.skeleton) else {
+    let skip = moving_joints(asset);
+    let Some((mesh, mut skin)) = bone_mesh_except(&asset.skeleton, &skip) else {
         return false;
     };
     skin.mesh = MeshIndex(asset.meshes.len() as u32);
@@ -413,5 +483,48 @@ mod tests {
         assert!(add_bone_mesh(&mut asset));
         assert!(!add_bone_mesh(&mut asset), "already has a mesh");
         assert_eq!((asset.meshes.len(), asset.skins.len()), (1, 1));
+    }
+
+    #[test]
+    fn a_joint_with_animated_translation_gets_no_bone_from_its_parent() {
+        use rigport_model::{Clip, Interpolation, Track, TrackTarget};
+        // Floor-level root -> hips (root motion) -> spine; every joint has a translation
+        // track, only the hips' moves.
+        let joint = |name: &str, parent: Option<u32>, t: Vec3| Joint {
+            name: name.into(),
+            parent: parent.map(JointIndex),
+            rest_local: Transform {
+                translation: t,
+                ..Default::default()
+            },
+        };
+        let skeleton = Skeleton::new(vec![
+            joint("root", None, Vec3::ZERO),
+            joint("hips", Some(0), Vec3::new(0.0, 90.0, 0.0)),
+            joint("spine", Some(1), Vec3::new(0.0, 15.0, 0.0)),
+        ])
+        .expect("valid");
+        let track = |j: u32, values: Vec<f32>| Track {
+            target: TrackTarget::Translation(JointIndex(j)),
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 1.0],
+            values,
+        };
+        let mut asset = Asset {
+            skeleton,
+            clips: vec![Clip {
+                name: "walk".into(),
+                tracks: vec![
+                    track(1, vec![0.0, 90.0, 0.0, 1.0, 91.0, 5.0]),
+                    track(2, vec![0.0, 15.0, 0.0, 0.0, 15.0, 0.0]),
+                ],
+            }],
+            ..Default::default()
+        };
+        assert_eq!(moving_joints(&asset), [false, true, false]);
+        assert!(add_bone_mesh(&mut asset));
+        let mesh = &asset.meshes[0];
+        assert_eq!(mesh.vertex_count(), VERTICES_PER_BONE, "only hips -> spine");
+        assert_eq!(asset.skins[0].joints, [JointIndex(1)]);
     }
 }

@@ -49,7 +49,8 @@ mod sample;
 pub use atomic::{check_output, remove_temp_files, write_atomic, NotRegularFile};
 pub use error::{ExportError, Problem};
 pub use gltf::{
-    prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, PreparedGltf,
+    prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, ImageFile,
+    PreparedGltf,
 };
 pub use usd::{prepare_usd, to_usda, ExportedUsd, PreparedUsd, UsdOptions, UsdSkinning};
 pub use weights::gltf_influences;

@@ -96,6 +96,7 @@ pub(crate) fn cylinder(height: f32) -> Mesh {
         ],
         morph_weights: vec![0.0, 0.25],
         attached_to: None,
+        ..Default::default()
     }
 }
 
@@ -130,6 +131,7 @@ pub(crate) fn hat(joint: JointIndex) -> Mesh {
         morph_targets: Vec::new(),
         morph_weights: Vec::new(),
         attached_to: Some(joint),
+        ..Default::default()
     }
 }
 
@@ -206,6 +208,7 @@ pub(crate) fn rig() -> Asset {
         clips: vec![wave(), idle()],
         meters_per_unit: Some(1.0),
         ik_handles: Vec::new(),
+        ..Default::default()
     }
 }
 
@@ -232,6 +235,7 @@ pub(crate) fn wide_rig() -> Asset {
         clips: Vec::new(),
         meters_per_unit: None,
         ik_handles: Vec::new(),
+        ..Default::default()
     }
 }
 
@@ -296,6 +300,7 @@ pub(crate) fn two_roots() -> Asset {
         }],
         meters_per_unit: None,
         ik_handles: Vec::new(),
+        ..Default::default()
     }
 }
 
@@ -362,6 +367,7 @@ pub(crate) fn big_palette() -> Asset {
         clips: Vec::new(),
         meters_per_unit: None,
         ik_handles: Vec::new(),
+        ..Default::default()
     }
 }
 
@@ -523,6 +529,7 @@ pub(crate) fn static_props() -> Asset {
         }],
         meters_per_unit: None,
         ik_handles: Vec::new(),
+        ..Default::default()
     }
 }
 

@@ -13,6 +13,7 @@ pub mod detect;
 mod error;
 pub mod gltf;
 pub mod json;
+pub mod mtl;
 mod number;
 pub mod obj;
 pub mod pinocchio;

@@ -5,9 +5,12 @@
 //! origin), `vn` (normalized on import) and `f` (any arity, `v`, `v/vt`, `v//vn`, `v/vt/vn`
 //! corners, negative indices relative to the elements read so far, positive indices may
 //! point forwards). Polygons are triangulated as fans from their first corner, as tobj and
-//! most readers do (correct for convex polygons). `g`, `o`, `s`, `usemtl` and `mtllib` are
-//! accepted and ignored: no material library is ever opened, so a missing `.mtl` is not an
-//! error. `l`, `p` and free-form elements are skipped with a [`Warning::Note`].
+//! most readers do (correct for convex polygons). `g`, `o` and `s` are accepted and
+//! ignored. `mtllib` and `usemtl` are recorded ([`MaterialUse`]); [`import`] then loads the
+//! libraries with [`crate::mtl`] (a missing `.mtl` or texture is a warning, not an error):
+//! one material used makes it the mesh's, several split the mesh into one mesh per
+//! material (`<stem>_<material>`, each keeping [`Mesh::source_vertex`]). `l`, `p` and
+//! free-form elements are skipped with a [`Warning::Note`].
 //!
 //! # Vertex numbering
 //! Per-vertex data of other formats (Pinocchio's `attachment.out`) is keyed by the OBJ's
@@ -48,12 +51,13 @@ const NONE: u32 = u32::MAX;
 /// The file cannot be read, or [`parse`] fails.
 pub fn import(path: &Path) -> Result<Imported, ImportError> {
     let bytes = read_file(path)?;
-    let (mesh, warnings) = parse(&bytes, path)?;
-    let asset = Asset {
+    let (mesh, mut warnings, used) = parse_with_materials(&bytes, path)?;
+    let mut asset = Asset {
         name: mesh.name.clone(),
         meshes: vec![mesh],
         ..Asset::default()
     };
+    apply_materials(&mut asset, path, &used, true, &mut warnings);
     if let Err(errors) = asset.validate() {
         // Unreachable for a parse that succeeded; reported rather than trusted.
         let text: Vec<String> = errors.iter().map(ToString::to_string).collect();
@@ -81,8 +85,133 @@ pub fn import(path: &Path) -> Result<Imported, ImportError> {
 /// A file of blank and comment lines only is [`Problem::Empty`]; one without `v` lines or
 /// without `f` lines is an error at the file (`cube.obj: no faces: ...`, see [`NO_FACES`]).
 pub fn parse(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<Warning>), ImportError> {
+    parse_with_materials(bytes, path).map(|(mesh, warnings, _)| (mesh, warnings))
+}
+
+/// The materials an OBJ names: its `mtllib` files and, per triangle of the mesh [`parse`]
+/// gives, the `usemtl` in force.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct MaterialUse {
+    /// `mtllib` file names as written (relative to the OBJ's folder), in order.
+    pub libraries: Vec<String>,
+    /// Material names in order of first `usemtl`.
+    pub names: Vec<String>,
+    /// Per triangle, its index in `names`, or `u32::MAX` before any `usemtl`.
+    pub triangle_material: Vec<u32>,
+}
+
+/// As [`parse`], also returning which materials the triangles use.
+///
+/// # Errors
+/// As [`parse`].
+pub fn parse_with_materials(
+    bytes: &[u8],
+    path: &Path,
+) -> Result<(Mesh, Vec<Warning>, MaterialUse), ImportError> {
     let raw = Raw::read(bytes, path)?;
     raw.into_mesh(path)
+}
+
+/// Loads the materials `used` names (see [`crate::mtl`]) into `asset`, whose mesh 0 is the
+/// OBJ's; nothing when none of them is found in a library. One material: it becomes mesh 0's. Several: with `split`, mesh 0 is replaced by
+/// one mesh per material (triangles without `usemtl` get obj2gltf's default grey material),
+/// each compacted and keeping [`Mesh::source_vertex`]; without `split` (a skinned mesh),
+/// mesh 0 takes the material most of its triangles use, with a warning.
+pub fn apply_materials(
+    asset: &mut Asset,
+    path: &Path,
+    used: &MaterialUse,
+    split: bool,
+    warnings: &mut Vec<Warning>,
+) {
+    if used.names.is_empty() || asset.meshes.is_empty() {
+        return;
+    }
+    let mut names = used.names.clone();
+    let untagged = used.triangle_material.contains(&NONE);
+    if untagged {
+        names.push(String::new());
+    }
+    let (mut materials, images, found) =
+        crate::mtl::load(path, &used.libraries, &used.names, warnings);
+    if found == 0 {
+        // Nothing to show (no library, or none of its materials): keep the viewer's default.
+        return;
+    }
+    if untagged {
+        materials.push(crate::mtl::convert(
+            &crate::mtl::MtlMaterial::default_named(""),
+            |_| None,
+        ));
+    }
+    let slot = |m: u32| if m == NONE { names.len() as u32 - 1 } else { m };
+    let mut counts = vec![0_usize; names.len()];
+    for &m in &used.triangle_material {
+        counts[slot(m) as usize] += 1;
+    }
+    let present: Vec<u32> = (0..names.len() as u32)
+        .filter(|&k| counts[k as usize] > 0)
+        .collect();
+    asset.images = images;
+    asset.materials = materials;
+    if present.len() <= 1 || !split {
+        let best = (0..counts.len()).max_by_key(|&k| (counts[k], std::cmp::Reverse(k)));
+        if present.len() > 1 {
+            warnings.push(Warning::Note {
+                location: path.display().to_string(),
+                message: format!(
+                    "{} materials on one skinned mesh: it takes {:?}, the one most triangles use",
+                    present.len(),
+                    best.and_then(|k| names.get(k)).cloned().unwrap_or_default()
+                ),
+            });
+        }
+        asset.meshes[0].material = best.map(|k| rigport_model::MaterialIndex(k as u32));
+        return;
+    }
+    let whole = asset.meshes.remove(0);
+    let tri_slots: Vec<u32> = used.triangle_material.iter().map(|&m| slot(m)).collect();
+    for &k in &present {
+        let mut part = submesh(&whole, &tri_slots, k);
+        let suffix = names[k as usize].as_str();
+        part.name = if suffix.is_empty() {
+            whole.name.clone()
+        } else {
+            format!("{}_{suffix}", whole.name)
+        };
+        part.material = Some(rigport_model::MaterialIndex(k));
+        asset.meshes.push(part);
+    }
+}
+
+/// The triangles of `mesh` whose slot is `k`, with only the vertices they use.
+fn submesh(mesh: &Mesh, tri_slots: &[u32], k: u32) -> Mesh {
+    let mut map = vec![u32::MAX; mesh.vertex_count()];
+    let mut keep: Vec<usize> = Vec::new();
+    let mut triangles = Vec::new();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if tri_slots.get(t) != Some(&k) {
+            continue;
+        }
+        triangles.push(tri.map(|v| {
+            let slot = &mut map[v as usize];
+            if *slot == u32::MAX {
+                *slot = keep.len() as u32;
+                keep.push(v as usize);
+            }
+            *slot
+        }));
+    }
+    let pick2 = |v: &Vec<Vec2>| keep.iter().map(|&i| v[i]).collect::<Vec<_>>();
+    let pick3 = |v: &Vec<Vec3>| keep.iter().map(|&i| v[i]).collect::<Vec<_>>();
+    Mesh {
+        positions: pick3(&mesh.positions),
+        normals: mesh.normals.as_ref().map(pick3),
+        uvs: mesh.uvs.as_ref().map(pick2),
+        triangles,
+        source_vertex: keep.iter().map(|&i| mesh.source_vertex[i]).collect(),
+        ..Mesh::default()
+    }
 }
 
 /// Counts the `v` lines of an OBJ file without parsing them: the vertex count [`parse`]
@@ -131,6 +260,12 @@ struct Raw {
     skipped: usize,
     /// Any line other than blank or comment seen.
     any_content: bool,
+    /// `mtllib` names and `usemtl` names in first-use order.
+    libraries: Vec<String>,
+    material_names: Vec<String>,
+    /// The `usemtl` in force (index in `material_names`, or NONE), and per face.
+    current_material: u32,
+    face_material: Vec<u32>,
 }
 
 impl Raw {
@@ -149,6 +284,7 @@ impl Raw {
             positions: Vec::with_capacity(text.len() / 8),
             corners: Vec::with_capacity(text.len() / 2),
             faces: Vec::with_capacity(text.len() / 8),
+            current_material: NONE,
             ..Raw::default()
         };
         for (i, line) in text.split('\n').enumerate() {
@@ -213,7 +349,19 @@ impl Raw {
                 }
                 "f" => raw.read_face(rest, line_no, &at)?,
                 "l" | "p" | "curv" | "curv2" | "surf" => raw.skipped += 1,
-                // g, o, s, usemtl, mtllib, free-form attributes, unknown: ignored.
+                "mtllib" if !rest.is_empty() => raw.libraries.push(rest.trim().to_string()),
+                "usemtl" => {
+                    let name = rest.trim();
+                    let k = match raw.material_names.iter().position(|n| n == name) {
+                        Some(k) => k,
+                        None => {
+                            raw.material_names.push(name.to_string());
+                            raw.material_names.len() - 1
+                        }
+                    };
+                    raw.current_material = k as u32;
+                }
+                // g, o, s, free-form attributes, unknown: ignored.
                 _ => {}
             }
         }
@@ -283,10 +431,11 @@ impl Raw {
             start,
             end: self.corners.len(),
         });
+        self.face_material.push(self.current_material);
         Ok(())
     }
 
-    fn into_mesh(self, path: &Path) -> Result<(Mesh, Vec<Warning>), ImportError> {
+    fn into_mesh(self, path: &Path) -> Result<(Mesh, Vec<Warning>, MaterialUse), ImportError> {
         if !self.any_content {
             return Err(ImportError::new(Location::file(path), Problem::Empty));
         }
@@ -341,8 +490,12 @@ impl Raw {
             normals,
             corners,
             faces,
+            libraries,
+            material_names,
+            face_material,
             ..
         } = self;
+        let mut triangle_material = Vec::new();
         let mut out_pos = positions;
         let mut out_attr: Vec<(u32, u32)> =
             first.iter().map(|f| f.unwrap_or((NONE, NONE))).collect();
@@ -350,7 +503,7 @@ impl Raw {
         let mut splits: HashMap<Corner, u32> = HashMap::new();
         let mut triangles = Vec::with_capacity(corners.len().saturating_sub(2 * faces.len()));
         let mut face_vertices: Vec<u32> = Vec::new();
-        for face in &faces {
+        for (fi, face) in faces.iter().enumerate() {
             face_vertices.clear();
             for c in corners.get(face.start..face.end).unwrap_or_default() {
                 let out = if first.get(c.v as usize).copied().flatten() == Some((c.vt, c.vn)) {
@@ -377,10 +530,14 @@ impl Raw {
                 };
                 face_vertices.push(out);
             }
+            let material = face_material.get(fi).copied().unwrap_or(NONE);
             if let Some((&a, rest)) = face_vertices.split_first() {
                 for pair in rest.windows(2) {
                     if let &[b, c] = pair {
                         triangles.push([a, b, c]);
+                        if !material_names.is_empty() {
+                            triangle_material.push(material);
+                        }
                     }
                 }
             }
@@ -453,7 +610,12 @@ impl Raw {
                     .collect(),
             );
         }
-        Ok((mesh, warnings))
+        let used = MaterialUse {
+            libraries,
+            names: material_names,
+            triangle_material,
+        };
+        Ok((mesh, warnings, used))
     }
 }
 
@@ -898,5 +1060,49 @@ mod tests {
                 .enumerate()
                 .all(|(i, &s)| i as u32 == s));
         }
+    }
+}
+
+#[cfg(test)]
+mod material_tests {
+    use super::*;
+
+    #[test]
+    fn mtllib_and_usemtl_become_materials_and_split_meshes() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let png = b"\x89PNG\r\n\x1a\nnot really a png";
+        std::fs::write(dir.path().join("skin.png"), png).expect("png");
+        std::fs::write(
+            dir.path().join("rig.mtl"),
+            "newmtl skin\nKd 1 0 0\nmap_Kd skin.png\nnewmtl cloth\nKd 0 0 1\nNs 500\n",
+        )
+        .expect("mtl");
+        let obj = "mtllib rig.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+                   vt 1 1\nusemtl skin\nf 1/1 2/2 3/3\nusemtl cloth\nf 2/2 4/4 3/3\n";
+        let path = dir.path().join("rig.obj");
+        std::fs::write(&path, obj).expect("obj");
+        let imported = import(&path).expect("import");
+        let asset = imported.asset;
+        assert_eq!(asset.materials.len(), 2);
+        assert_eq!(asset.images.len(), 1);
+        assert_eq!(asset.images[0].mime_type, "image/png");
+        assert_eq!(asset.images[0].bytes, png);
+        assert_eq!(asset.meshes.len(), 2, "one mesh per material");
+        assert_eq!(asset.meshes[0].name, "rig_skin");
+        assert_eq!(asset.meshes[0].source_vertex, [0, 1, 2]);
+        assert_eq!(asset.meshes[1].source_vertex, [1, 3, 2]);
+        let skin = &asset.materials[0];
+        assert_eq!(skin.base_color_factor, [1.0; 4], "map_Kd: factor 1");
+        assert!(skin.base_color_texture.is_some());
+        assert_eq!(asset.materials[1].base_color_factor, [0.0, 0.0, 1.0, 1.0]);
+        assert!((asset.materials[1].roughness_factor - 0.5).abs() < 1e-6);
+        assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
+
+        // A missing library: no materials, one note.
+        std::fs::remove_file(dir.path().join("rig.mtl")).expect("rm");
+        let imported = import(&path).expect("import");
+        assert!(imported.asset.materials.is_empty());
+        assert_eq!(imported.asset.meshes.len(), 1);
+        assert!(matches!(imported.warnings[..], [Warning::Note { .. }]));
     }
 }

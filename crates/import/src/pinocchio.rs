@@ -125,9 +125,10 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
             expected_vertices,
         ))
     };
-    let (mesh_result, rig_result) = crate::join(|| obj::parse(&mesh_bytes, mesh), read_rig);
+    let (mesh_result, rig_result) =
+        crate::join(|| obj::parse_with_materials(&mesh_bytes, mesh), read_rig);
     // Errors in file order: the mesh first.
-    let (mesh_data, mut warnings) = mesh_result?;
+    let (mesh_data, mut warnings, materials_used) = mesh_result?;
     let (pino, attachment_bytes, parsed, mut influences, expected_vertices) = rig_result?;
     let vertex_count = mesh_data.source_vertex_count();
     let (weights, attachment_warnings) = if vertex_count == expected_vertices {
@@ -156,10 +157,10 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
         influences,
     )?;
     warnings.extend(imported.warnings);
-    Ok(Imported {
-        asset: imported.asset,
-        warnings,
-    })
+    let mut asset = imported.asset;
+    // The OBJ's `.mtl` materials; one skinned mesh keeps one material.
+    obj::apply_materials(&mut asset, mesh, &materials_used, false, &mut warnings);
+    Ok(Imported { asset, warnings })
 }
 
 /// Parses `skeleton.out`.
@@ -747,6 +748,7 @@ fn assemble_from<'a>(
         clips: Vec::new(),
         meters_per_unit: None,
         ik_handles: Vec::new(),
+        ..Default::default()
     };
     if let Err(errors) = asset.validate() {
         let text: Vec<String> = errors.iter().map(ToString::to_string).collect();

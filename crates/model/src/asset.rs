@@ -1,5 +1,6 @@
 use crate::{
-    Clip, Interpolation, JointIndex, Mesh, SceneFrame, Skeleton, SkinBinding, TrackTarget,
+    Clip, Image, Interpolation, JointIndex, Material, Mesh, SceneFrame, Skeleton, SkinBinding,
+    TrackTarget,
 };
 
 /// Everything rigport knows about one rig: skeleton, meshes, skin bindings and clips.
@@ -24,6 +25,10 @@ pub struct Asset {
     /// Joints the rig names as inverse-kinematics handles (end effectors), in the source's
     /// order (e.g. CSCI 520 `IKJointIDs`).
     pub ik_handles: Vec<JointIndex>,
+    /// Materials, referred to by [`Mesh::material`].
+    pub materials: Vec<Material>,
+    /// Images, referred to by the materials' textures.
+    pub images: Vec<Image>,
 }
 
 /// One thing wrong with an [`Asset`], as found by [`Asset::validate`].
@@ -113,7 +118,17 @@ impl Asset {
             if let Some(uvs) = &mesh.uvs {
                 check_len("uvs", uvs.len());
             }
+            for uvs in &mesh.extra_uvs {
+                check_len("extra uvs", uvs.len());
+            }
             check_len("source_vertex", mesh.source_vertex.len());
+            if let Some(m) = mesh.material {
+                if m.get() >= self.materials.len() {
+                    errs.push(AssetError::BadReference {
+                        what: format!("mesh {mi} {m}"),
+                    });
+                }
+            }
             for (ti, target) in mesh.morph_targets.iter().enumerate() {
                 if target.position_deltas.len() != n {
                     errs.push(AssetError::AttributeLength {
@@ -151,6 +166,21 @@ impl Asset {
                         what: format!("mesh {mi} attachment {j}"),
                     });
                 }
+            }
+        }
+        for (mi, material) in self.materials.iter().enumerate() {
+            for (role, texture) in material.textures() {
+                if texture.image.get() >= self.images.len() {
+                    errs.push(AssetError::BadReference {
+                        what: format!("material {mi} {role} texture {}", texture.image),
+                    });
+                }
+            }
+            let factors_finite = material.factors().iter().all(|f| f.is_finite());
+            if !factors_finite {
+                errs.push(AssetError::NonFinite {
+                    what: format!("material {mi} factors"),
+                });
             }
         }
         for (i, j) in self.ik_handles.iter().enumerate() {

@@ -1,4 +1,5 @@
-//! Plain rig data for rigport: skeletons, meshes, sparse skin influences and clips.
+//! Plain rig data for rigport: skeletons, meshes, sparse skin influences, clips, and the
+//! materials and images meshes are drawn with.
 //!
 //! This crate holds data and the rules that make it valid; it does no I/O. Every importer
 //! produces an [`Asset`], the evaluator reads one, every exporter writes one.
@@ -13,6 +14,7 @@ mod frame;
 mod handle;
 mod index;
 mod keyed;
+mod material;
 mod mesh;
 mod skeleton;
 mod skin;
@@ -26,6 +28,10 @@ pub use frame::{SceneFrame, SkinningMethod, UpAxis};
 pub use handle::{HandleSet, HandleTrack};
 pub use index::{JointIndex, MeshIndex};
 pub use keyed::{PoseKey, PoseKeys, RestRotation};
+pub use material::{
+    AlphaMode, Image, ImageIndex, MagFilter, Material, MaterialIndex, MinFilter, Sampler,
+    TextureRef, Wrap,
+};
 pub use mesh::{Mesh, MorphTarget};
 pub use skeleton::{parents_first_order, Joint, Skeleton, SkeletonProblem};
 pub use skin::{Influence, Influences, SkinBinding};

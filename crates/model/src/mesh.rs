@@ -1,6 +1,6 @@
 use glam::{Vec2, Vec3};
 
-use crate::JointIndex;
+use crate::{JointIndex, MaterialIndex};
 
 /// A triangle mesh. One [`Mesh`] is one glTF primitive or one USD `Mesh` prim.
 ///
@@ -10,8 +10,16 @@ use crate::JointIndex;
 /// which is the order per-vertex data such as Pinocchio weight rows refers to.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
-    /// Name (may be empty).
+    /// Name (may be empty): the source's mesh name (glTF `mesh.name`, a USD `Mesh` prim's
+    /// name, an OBJ `o`/`g` name), `<mesh>_<primitive>` when the source mesh had several
+    /// primitives.
     pub name: String,
+    /// Name of the scene node (glTF node, USD prim) that carried the mesh in the source;
+    /// empty when the source has no such node. When it equals the name of the joint the
+    /// mesh is [`attached_to`](Self::attached_to), the mesh sat on that node itself, and
+    /// exporters put it back there; else they name the mesh's own node after it, so apps
+    /// that look a mesh up by its node's name still find it.
+    pub node_name: String,
     /// Positions: model space at bind time for skinned meshes, else the space given by
     /// `attached_to`.
     pub positions: Vec<Vec3>,
@@ -19,6 +27,12 @@ pub struct Mesh {
     pub normals: Option<Vec<Vec3>>,
     /// Texture coordinates, one per vertex, glTF convention (origin top-left, v down).
     pub uvs: Option<Vec<Vec2>>,
+    /// Further texture coordinate sets, same convention as `uvs`, one per vertex each:
+    /// `extra_uvs[k - 1]` is glTF `TEXCOORD_k` (USD: the `k`-th `texCoord2f` primitive
+    /// after `st`). Empty unless `uvs` is `Some`.
+    pub extra_uvs: Vec<Vec<Vec2>>,
+    /// The material it is drawn with (`None`: the viewer's default).
+    pub material: Option<MaterialIndex>,
     /// Triangles as counter-clockwise vertex index triples.
     pub triangles: Vec<[u32; 3]>,
     /// For each vertex, its index in the source's own vertex numbering.

@@ -19,6 +19,7 @@
 pub mod camera;
 mod encode;
 pub mod raster;
+mod surface;
 
 use rayon::prelude::*;
 use rigport_eval::sample::{CompiledClip, SampleError, SampleJob};
@@ -31,6 +32,7 @@ pub use encode::{
     apng_delay_ms, contact_sheet, encode_apng, encode_gif, encode_png, gif_delay_cs, pick_evenly,
 };
 pub use raster::{Framebuffer, Rgba};
+use surface::{Look, Surfaces};
 
 /// The background colour of every picture.
 pub const BACKGROUND: Rgba = [38, 41, 48, 255];
@@ -76,10 +78,15 @@ pub fn palette() -> Vec<Rgba> {
 
 /// `base` at shading level `level` of `SHADE_LEVELS` (0 = ambient only, last = fully lit).
 fn shade(base: Rgba, level: usize) -> Rgba {
-    let lit = level as f32 / (SHADE_LEVELS - 1) as f32;
-    let k = AMBIENT + (1.0 - AMBIENT) * lit;
+    let k = light_factor(level);
     let c = |v: u8| (f32::from(v) * k).round().clamp(0.0, 255.0) as u8;
     [c(base[0]), c(base[1]), c(base[2]), 255]
+}
+
+/// The light factor of shading level `level` (0 = ambient only, last = fully lit).
+fn light_factor(level: usize) -> f32 {
+    let lit = level as f32 / (SHADE_LEVELS - 1) as f32;
+    AMBIENT + (1.0 - AMBIENT) * lit
 }
 
 /// Which skinning the meshes are drawn with.
@@ -408,6 +415,7 @@ pub fn render_frames(
         )
         .try_reduce(Bounds::default, |a, b| Ok(a.union(b)))?;
     let camera = Camera::framing_with(options.view, options.projection, bounds, w, h, MARGIN);
+    let surfaces = Surfaces::new(asset);
 
     // Pass 2: draw. Evaluating again costs less memory than keeping every frame's vertices.
     frames
@@ -423,7 +431,7 @@ pub fn render_frames(
                 for (k, &method) in methods.iter().enumerate() {
                     eval.pose(f.time, method, pose, out)?;
                     let mut panel = Framebuffer::new(w, h, BACKGROUND);
-                    draw_meshes(&mut panel, asset, &out.positions, &camera);
+                    draw_meshes(&mut panel, asset, &out.positions, &camera, &surfaces);
                     if options.skeleton {
                         draw_skeleton(&mut panel, asset, &out.joint_model, &camera);
                     }
@@ -453,11 +461,19 @@ pub fn render_frames(
 }
 
 /// Draws every mesh's triangles, flat and two-sided: the light comes from the camera's
-/// upper left, fixed in view space so every view is lit alike.
-fn draw_meshes(fb: &mut Framebuffer, asset: &Asset, positions: &[Vec<Vec3>], camera: &Camera) {
+/// upper left, fixed in view space so every view is lit alike. A mesh with a material
+/// shows its base colour (factor, and texture sampled with its UVs: see `surface.rs`); one
+/// without shows a [`MESH_COLORS`] entry.
+fn draw_meshes(
+    fb: &mut Framebuffer,
+    asset: &Asset,
+    positions: &[Vec<Vec3>],
+    camera: &Camera,
+    surfaces: &Surfaces,
+) {
     let light = Vec3::new(-0.4, 0.6, 0.7).normalize();
     for (mi, (mesh, posed)) in asset.meshes.iter().zip(positions).enumerate() {
-        let base = MESH_COLORS[mi % MESH_COLORS.len()];
+        let look = surfaces.look(asset, mi);
         for tri in &mesh.triangles {
             let (Some(&a), Some(&b), Some(&c)) = (
                 posed.get(tri[0] as usize),
@@ -470,10 +486,21 @@ fn draw_meshes(fb: &mut Framebuffer, asset: &Asset, positions: &[Vec<Vec3>], cam
             // Two-sided: a back face is lit as if it faced the viewer.
             let lit = n.dot(light).abs();
             let level = (lit * (SHADE_LEVELS - 1) as f32).round() as usize;
-            let color = shade(base, level.min(SHADE_LEVELS - 1));
+            let k = light_factor(level.min(SHADE_LEVELS - 1));
+            let flat = look.color(*tri, [1.0, 0.0, 0.0], k);
+            if let (Look::Textured { .. }, Some(pa), Some(pb), Some(pc)) = (
+                &look,
+                camera.project(a),
+                camera.project(b),
+                camera.project(c),
+            ) {
+                // Wholly in front of the near plane: textured per pixel.
+                fb.triangle_shaded([pa, pb, pc], |w| look.color(*tri, w, k));
+                continue;
+            }
             // Clipped to the near plane under perspective: 0, 1 or 2 triangles.
             for t in camera.clip_triangle([a, b, c]).triangles() {
-                fb.triangle(t, color);
+                fb.triangle(t, flat);
             }
         }
     }
@@ -1026,7 +1053,7 @@ mod tests {
         asset.meshes[0].triangles = vec![[0, 1, 2], [2, 3, 4], [0, 1, 3], [0, 3, 4]];
         let mut fb = Framebuffer::new(64, 64, BACKGROUND);
         let positions = [asset.meshes[0].positions.clone()];
-        draw_meshes(&mut fb, &asset, &positions, &camera);
+        draw_meshes(&mut fb, &asset, &positions, &camera, &Surfaces::new(&asset));
         let drawn = pixels_all(&fb).len();
         assert!(drawn > 0, "the part in front of the near plane is drawn");
         let behind = Mat4::from_translation(Vec3::new(0.0, 0.0, eye_z + 5.0));

@@ -95,17 +95,25 @@ impl Framebuffer {
     /// top and left edges only (the Direct3D / OpenGL fill rule), so two triangles sharing an
     /// edge cover each pixel once. Returns the number of pixels written.
     pub fn triangle(&mut self, p: [[f32; 3]; 3], color: Rgba) -> usize {
+        self.triangle_shaded(p, |_| color)
+    }
+
+    /// As [`Framebuffer::triangle`], colouring each covered pixel with `shader` of its
+    /// barycentric weights (one per corner of `p`, in `p`'s order, summing to 1; linear in
+    /// screen space).
+    pub fn triangle_shaded(
+        &mut self,
+        p: [[f32; 3]; 3],
+        mut shader: impl FnMut([f32; 3]) -> Rgba,
+    ) -> usize {
         let [a, b, c] = p;
         let area = edge(a, b, c[0], c[1]);
         if !area.is_finite() || area == 0.0 {
             return 0;
         }
         // Make the winding positive so one inside test serves both windings.
-        let (b, c, area) = if area < 0.0 {
-            (c, b, -area)
-        } else {
-            (b, c, area)
-        };
+        let swapped = area < 0.0;
+        let (b, c, area) = if swapped { (c, b, -area) } else { (b, c, area) };
         let w = self.width as f32;
         let h = self.height as f32;
         let min_x = a[0].min(b[0]).min(c[0]).floor().max(0.0);
@@ -141,7 +149,13 @@ impl Framebuffer {
                 if let (Some(d), Some(col)) = (self.depth.get_mut(i), self.color.get_mut(i)) {
                     if z > *d {
                         *d = z;
-                        *col = color;
+                        let (wb, wc) = (w1 * inv_area, w2 * inv_area);
+                        let weights = if swapped {
+                            [w0 * inv_area, wc, wb]
+                        } else {
+                            [w0 * inv_area, wb, wc]
+                        };
+                        *col = shader(weights);
                         written += 1;
                     }
                 }

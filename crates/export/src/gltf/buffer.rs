@@ -62,6 +62,11 @@ impl Builder {
         })
     }
 
+    /// Appends a buffer view holding `bytes` as they are (an embedded image: no target).
+    pub(crate) fn bytes_view(&mut self, bytes: &[u8]) -> Index<json::buffer::View> {
+        self.view(None, |bin| bin.extend_from_slice(bytes))
+    }
+
     /// Appends an accessor at offset 0 of `view`.
     fn accessor(
         &mut self,

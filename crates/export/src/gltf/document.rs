@@ -15,6 +15,7 @@ use rigport_model::{
 
 use super::animation;
 use super::buffer::{Bounds, Builder};
+use super::material::{self, ImagePlacement};
 use super::{quat_length, unit_quat};
 use crate::labels::{fallback_palette_index, mesh_label};
 use crate::weights::{self, SET_SLOTS};
@@ -57,7 +58,11 @@ pub(crate) struct Built {
 /// # Errors
 /// [`ExportError::MaxInfluences`] for a bad option, [`ExportError::Invalid`] with every
 /// problem found in the asset.
-pub(crate) fn build(asset: &Asset, opts: &GltfOptions) -> Result<Built, ExportError> {
+pub(crate) fn build(
+    asset: &Asset,
+    opts: &GltfOptions,
+    images: &ImagePlacement<'_>,
+) -> Result<Built, ExportError> {
     if !(1..=weights::MAX_SLOTS).contains(&opts.max_influences) {
         return Err(ExportError::MaxInfluences {
             max_influences: opts.max_influences,
@@ -123,18 +128,44 @@ pub(crate) fn build(asset: &Asset, opts: &GltfOptions) -> Result<Built, ExportEr
         None
     };
 
+    material::write_materials(&mut b, asset, images, &mut warnings);
+
     // Meshes and their nodes.
     let mut skin_of_mesh: BTreeMap<usize, usize> = BTreeMap::new();
     for (si, skin) in asset.skins.iter().enumerate() {
         skin_of_mesh.insert(skin.mesh.get(), si);
     }
+    // A mesh that sat on a joint's own node in the source (`Mesh::node_name` is the joint's
+    // name) goes back onto it, when it is the only one, so it keeps its node and name.
+    let on_joint = |mi: usize, mesh: &Mesh| match (skin_of_mesh.contains_key(&mi), mesh.attached_to)
+    {
+        (false, Some(j)) => (mesh.node_name == skeleton.joint(j).name).then_some(j.get()),
+        _ => None,
+    };
+    let mut on_joint_count = vec![0_usize; joint_count];
+    for (mi, mesh) in asset.meshes.iter().enumerate() {
+        if let Some(j) = on_joint(mi, mesh) {
+            on_joint_count[j] += 1;
+        }
+    }
     let mut mesh_nodes = Vec::with_capacity(asset.meshes.len());
     for (mi, mesh) in asset.meshes.iter().enumerate() {
         let skin = skin_of_mesh.get(&mi).map(|&si| (si, &asset.skins[si]));
         let gltf_mesh = write_mesh(&mut b, asset, mi, mesh, skin, opts, &mut warnings)?;
+        if let Some(j) = on_joint(mi, mesh).filter(|&j| on_joint_count[j] == 1) {
+            nodes[j].mesh = Some(gltf_mesh);
+            mesh_nodes.push(j);
+            continue;
+        }
         let node = nodes.len();
+        // A skinned mesh's own node (at the scene root) keeps the source node's name.
+        let node_name = if skin.is_none() || mesh.node_name.is_empty() {
+            &mesh.name
+        } else {
+            &mesh.node_name
+        };
         nodes.push(json::Node {
-            name: non_empty(&mesh.name),
+            name: non_empty(node_name),
             mesh: Some(gltf_mesh),
             skin: skin.map(|(si, _)| Index::new(si as u32)),
             ..Default::default()
@@ -299,11 +330,35 @@ fn write_mesh(
     let normals = b.floats(&flat3(&normals), Type::Vec3, array, Bounds::None);
     attributes.insert(Checked::Valid(Semantic::Normals), normals);
 
+    let mut uv_sets = 0;
     if let Some(uvs) = &mesh.uvs {
-        let flat: Vec<f32> = uvs.iter().flat_map(|t| t.to_array()).collect();
-        let acc = b.floats(&flat, Type::Vec2, array, Bounds::None);
-        attributes.insert(Checked::Valid(Semantic::TexCoords(0)), acc);
+        for set in std::iter::once(uvs).chain(&mesh.extra_uvs) {
+            let flat: Vec<f32> = set.iter().flat_map(|t| t.to_array()).collect();
+            let acc = b.floats(&flat, Type::Vec2, array, Bounds::None);
+            attributes.insert(Checked::Valid(Semantic::TexCoords(uv_sets)), acc);
+            uv_sets += 1;
+        }
     }
+    // A texture read with a UV set the mesh lacks is an error (validator
+    // MESH_PRIMITIVE_TOO_FEW_TEXCOORDS): such a mesh is written without its material.
+    let material = mesh.material.filter(|m| {
+        let needed = asset
+            .materials
+            .get(m.get())
+            .map_or(0, material::uv_sets_needed);
+        let ok = needed <= uv_sets;
+        if !ok {
+            warnings.push(Warning::Repaired {
+                location: format!("mesh {label:?}"),
+                message: format!(
+                    "its {m} reads UV set {} but the mesh has {uv_sets}; written without \
+                     the material",
+                    needed - 1
+                ),
+            });
+        }
+        ok
+    });
 
     if let Some((si, skin)) = skin {
         let fallback = fallback_palette_index(&asset.skeleton, &skin.joints);
@@ -428,7 +483,7 @@ fn write_mesh(
         extensions: None,
         extras: None,
         indices: Some(indices),
-        material: None,
+        material: material.map(|m| Index::new(m.0)),
         mode: Checked::Valid(Mode::Triangles),
         targets: (!targets.is_empty()).then_some(targets),
     };
@@ -520,8 +575,9 @@ pub(crate) fn check(asset: &Asset) -> Vec<Problem> {
         }
         if mesh
             .uvs
-            .as_ref()
-            .is_some_and(|v| v.iter().any(|x| !x.is_finite()))
+            .iter()
+            .chain(&mesh.extra_uvs)
+            .any(|v| v.iter().any(|x| !x.is_finite()))
         {
             problems.push(non_finite(format!("mesh {mi} uvs")));
         }

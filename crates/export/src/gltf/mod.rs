@@ -7,11 +7,18 @@
 //!   skin's joints have no common ancestor (glTF requires one; validator
 //!   `SKIN_NO_COMMON_ROOT`);
 //! - one mesh per model [`Mesh`](rigport_model::Mesh), one `TRIANGLES` primitive each, with
-//!   `POSITION` (min/max), unit `NORMAL` (given or computed), `TEXCOORD_0`, `JOINTS_n` /
+//!   `POSITION` (min/max), unit `NORMAL` (given or computed), `JOINTS_n` /
 //!   `WEIGHTS_n` for skinned meshes, and morph targets (`POSITION` with min/max, `NORMAL`),
 //!   target names in `mesh.extras.targetNames`;
-//! - one node per mesh: at the scene root without transform for a skinned mesh, else a
-//!   child of the joint it is attached to (or a scene root);
+//! - one node per mesh: at the scene root without transform for a skinned mesh (named
+//!   after [`Mesh::node_name`](rigport_model::Mesh::node_name) when set), else a child of
+//!   the joint it is attached to (or a scene root); except that an unskinned mesh whose
+//!   `node_name` is its joint's name goes onto that joint's node itself (when it is the
+//!   only such mesh), as it was in the source;
+//! - every material, in order, with the textures, samplers and images it uses
+//!   (`material.rs`): images in the binary buffer for `.glb`, files beside a `.gltf`;
+//! - `TEXCOORD_0..n` from [`Mesh::uvs`](rigport_model::Mesh::uvs) and
+//!   [`Mesh::extra_uvs`](rigport_model::Mesh::extra_uvs);
 //! - one skin per binding, `skeleton` = the palette's nearest common ancestor;
 //! - one animation per clip, one sampler per track.
 //!
@@ -32,6 +39,7 @@ mod animation;
 mod buffer;
 pub(crate) mod document;
 mod frame;
+pub(crate) mod material;
 #[cfg(test)]
 mod tests;
 
@@ -79,8 +87,20 @@ pub struct ExportedSplit {
     /// The buffer the JSON refers to by the `bin_uri` given (a multiple of 4 bytes long).
     /// Empty when the asset has no binary data; the JSON then declares no buffer.
     pub bin: Vec<u8>,
+    /// The image files the JSON refers to, to be written beside it (images no material
+    /// uses are not written).
+    pub images: Vec<ImageFile>,
     /// As [`Exported::warnings`].
     pub warnings: Vec<Warning>,
+}
+
+/// An image file that a `.gltf` refers to by a relative URI.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ImageFile {
+    /// The URI as written in the JSON: `<bin_uri stem>_<name>.<ext>` (see [`to_gltf`]).
+    pub uri: String,
+    /// The encoded image, as in the asset.
+    pub bytes: Vec<u8>,
 }
 
 /// Length of a quaternion `[x, y, z, w]`, in `f64`.
@@ -127,7 +147,7 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 /// [`ExportError::TooLarge`] when the data exceeds GLB's 32-bit lengths,
 /// [`ExportError::Json`] if serialization fails.
 pub fn to_glb(asset: &Asset, opts: &GltfOptions) -> Result<Exported, ExportError> {
-    let mut built = document::build(asset, opts)?;
+    let mut built = document::build(asset, opts, &material::ImagePlacement::Embedded)?;
     if !built.bin.is_empty() {
         built.root.buffers.push(buffer_entry(built.bin.len(), None));
     }
@@ -143,7 +163,9 @@ pub fn to_glb(asset: &Asset, opts: &GltfOptions) -> Result<Exported, ExportError
 ///
 /// `bin_uri` is written verbatim as the buffer's `uri`: a relative URI reference, already
 /// percent-encoded (e.g. `"walk.bin"`, `"my%20rig.bin"`). [`write_gltf`] encodes file names
-/// itself.
+/// itself. Images are referred to by URIs beside it: `<stem>_<image name>.<ext>` with
+/// `<stem>` the `bin_uri` without `.bin` and the image name reduced to `[A-Za-z0-9_-]`
+/// (`walk_skin.png`); their bytes are in [`ExportedSplit::images`].
 ///
 /// # Errors
 /// As [`to_glb`], except that there is no size limit.
@@ -152,7 +174,10 @@ pub fn to_gltf(
     opts: &GltfOptions,
     bin_uri: &str,
 ) -> Result<ExportedSplit, ExportError> {
-    let mut built = document::build(asset, opts)?;
+    let stem = bin_uri.strip_suffix(".bin").unwrap_or(bin_uri);
+    let uris = material::image_file_names(stem, asset);
+    let placement = material::ImagePlacement::Uris(&uris);
+    let mut built = document::build(asset, opts, &placement)?;
     if !built.bin.is_empty() {
         built
             .root
@@ -161,9 +186,21 @@ pub fn to_gltf(
     }
     let mut json = built.root.to_vec_pretty()?;
     json.push(b'\n');
+    let images = asset
+        .images
+        .iter()
+        .zip(uris)
+        .enumerate()
+        .filter(|(k, _)| material::image_used(asset, *k))
+        .map(|(_, (image, uri))| ImageFile {
+            uri,
+            bytes: image.bytes.clone(),
+        })
+        .collect();
     Ok(ExportedSplit {
         json,
         bin: built.bin,
+        images,
         warnings: built.warnings,
     })
 }
@@ -204,6 +241,8 @@ enum Files {
         json: Vec<u8>,
         bin: Vec<u8>,
         bin_path: PathBuf,
+        /// Image files to write beside the `.gltf`: path and bytes.
+        images: Vec<(PathBuf, Vec<u8>)>,
     },
 }
 
@@ -236,10 +275,20 @@ pub fn prepare_gltf(
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
             let out = to_gltf(asset, opts, &percent_encode(&bin_name))?;
+            let stem = bin_name.strip_suffix(".bin").unwrap_or(&bin_name);
+            let names = material::image_file_names(stem, asset);
+            let images = names
+                .into_iter()
+                .enumerate()
+                .filter(|(k, _)| material::image_used(asset, *k))
+                .map(|(_, name)| path.with_file_name(name))
+                .zip(out.images.into_iter().map(|i| i.bytes))
+                .collect();
             let files = Files::Split {
                 json: out.json,
                 bin: out.bin,
                 bin_path,
+                images,
             };
             (files, out.warnings)
         }
@@ -294,9 +343,15 @@ impl PreparedGltf {
                 json,
                 bin,
                 bin_path,
+                images,
             } => {
                 check_not_symlink(path)?;
                 let target = crate::atomic::check_output(path).map_err(io_err(path))?;
+                // Images first (each atomically), so the new `.gltf` never names a missing
+                // image; a failure later leaves them in place.
+                for (image_path, bytes) in images {
+                    crate::write_atomic(image_path, bytes).map_err(io_err(image_path))?;
+                }
                 let bin_target = if bin.is_empty() {
                     None
                 } else {

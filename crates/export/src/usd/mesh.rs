@@ -25,6 +25,8 @@ pub(super) struct MeshContext<'a> {
     pub(super) skeleton_prims: &'a [String],
     pub(super) skeleton_binds: &'a [Vec<DMat4>],
     pub(super) options: &'a UsdOptions,
+    /// Each material's prim path.
+    pub(super) material_paths: &'a [String],
 }
 
 /// Writes `decl = [..] ( interpolation = "vertex" [elementSize = n] )`.
@@ -60,11 +62,30 @@ pub(super) fn write_mesh(
 ) {
     let label = mesh_label(mi, mesh);
     let header = format!("def Mesh \"{}\"", plan.prim);
-    if matches!(plan.binding, Binding::None) {
+    let material = mesh.material.and_then(|m| ctx.material_paths.get(m.get()));
+    let mut schemas = Vec::new();
+    if material.is_some() {
+        schemas.push("\"MaterialBindingAPI\"");
+    }
+    if !matches!(plan.binding, Binding::None) {
+        schemas.push("\"SkelBindingAPI\"");
+    }
+    // The source's name, when the prim's had to differ from it.
+    let source_name = super::stage::mesh_prim_source_name(mesh);
+    let display = (!source_name.is_empty() && source_name != plan.prim).then_some(source_name);
+    if schemas.is_empty() && display.is_none() {
         doc.open(&header);
     } else {
         doc.open_meta(&header);
-        doc.line("prepend apiSchemas = [\"SkelBindingAPI\"]");
+        if !schemas.is_empty() {
+            doc.line(&format!("prepend apiSchemas = [{}]", schemas.join(", ")));
+        }
+        if let Some(name) = display {
+            let line = doc.start();
+            line.push_str("displayName = ");
+            super::text::quoted(line, name);
+            doc.end();
+        }
         doc.close_meta();
         doc.open_body();
     }
@@ -196,6 +217,24 @@ pub(super) fn write_mesh(
             None,
             "vertex",
         );
+    }
+
+    // Further UV sets: primvars:st1, st2, ... (same convention).
+    for (k, uvs) in mesh.extra_uvs.iter().enumerate() {
+        let st: Vec<Vec2> = uvs.iter().map(|uv| Vec2::new(uv.x, 1.0 - uv.y)).collect();
+        write_primvar(
+            doc,
+            &format!(
+                "texCoord2f[] primvars:{}",
+                super::material::st_name(k as u32 + 1)
+            ),
+            |s| array(s, &st, |s, v| tuple(s, &v.to_array())),
+            None,
+            "vertex",
+        );
+    }
+    if let Some(path) = material {
+        doc.line(&format!("rel material:binding = <{path}>"));
     }
 
     let mesh_path = format!("{}/{}", ctx.root_path, plan.prim);

@@ -113,6 +113,7 @@
 
 mod anim;
 mod checks;
+mod material;
 mod mesh;
 mod names;
 mod sampler;
@@ -153,6 +154,10 @@ pub struct UsdOptions {
 pub struct ExportedUsd {
     /// The complete USDA text (UTF-8, `\n` line ends, ends with a newline).
     pub text: String,
+    /// The texture files the materials refer to (`asset inputs:file = @./<uri>@`), to be
+    /// written beside the `.usda`: `<stem>_<image name>.<ext>`, `<stem>` the asset's
+    /// name ([`to_usda`]) or the output file's stem ([`prepare_usd`]).
+    pub images: Vec<crate::ImageFile>,
     /// Lossy or repairing steps taken (renamed prims and joints, dropped tracks, unbound
     /// vertices, renormalized weights, resampled tracks, half-precision scales...), in the
     /// order they happened.
@@ -168,8 +173,37 @@ pub struct ExportedUsd {
 /// # Errors
 /// [`ExportError::Invalid`] listing every problem found.
 pub fn to_usda(asset: &Asset, options: &UsdOptions) -> Result<ExportedUsd, ExportError> {
-    let (text, warnings) = stage::build(asset, options)?;
-    Ok(ExportedUsd { text, warnings })
+    let stem = if asset.name.is_empty() {
+        "rig"
+    } else {
+        &asset.name
+    };
+    to_usda_with_stem(asset, options, stem)
+}
+
+/// As [`to_usda`], the texture files named `<stem>_<image>.<ext>`.
+fn to_usda_with_stem(
+    asset: &Asset,
+    options: &UsdOptions,
+    stem: &str,
+) -> Result<ExportedUsd, ExportError> {
+    let names = crate::gltf::material::image_file_names(stem, asset);
+    let (text, warnings) = stage::build(asset, options, &names)?;
+    let images = names
+        .into_iter()
+        .zip(&asset.images)
+        .enumerate()
+        .filter(|(k, _)| crate::gltf::material::image_used(asset, *k))
+        .map(|(_, (uri, image))| crate::ImageFile {
+            uri,
+            bytes: image.bytes.clone(),
+        })
+        .collect();
+    Ok(ExportedUsd {
+        text,
+        images,
+        warnings,
+    })
 }
 
 /// An export to a `.usda` file, built in memory and not yet written, so that the caller
@@ -179,6 +213,7 @@ pub fn to_usda(asset: &Asset, options: &UsdOptions) -> Result<ExportedUsd, Expor
 pub struct PreparedUsd {
     path: PathBuf,
     text: String,
+    images: Vec<crate::ImageFile>,
     warnings: Vec<Warning>,
 }
 
@@ -203,10 +238,15 @@ pub fn prepare_usd(
             path: path.to_path_buf(),
         });
     }
-    let out = to_usda(asset, options)?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let out = to_usda_with_stem(asset, options, &stem)?;
     Ok(PreparedUsd {
         path: path.to_path_buf(),
         text: out.text,
+        images: out.images,
         warnings: out.warnings,
     })
 }
@@ -234,6 +274,12 @@ impl PreparedUsd {
     /// [`ExportError::Io`] naming the file; the target is then unchanged and no temporary
     /// file is left.
     pub fn write(self) -> Result<(), ExportError> {
+        // Textures first (each atomically), so the new `.usda` never names a missing file.
+        for image in &self.images {
+            let path = self.path.with_file_name(&image.uri);
+            crate::write_atomic(&path, &image.bytes)
+                .map_err(|source| ExportError::Io { path, source })?;
+        }
         crate::write_atomic(&self.path, self.text.as_bytes()).map_err(|source| ExportError::Io {
             path: self.path.clone(),
             source,

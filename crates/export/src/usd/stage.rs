@@ -14,6 +14,7 @@ use rigport_model::{Asset, Warning};
 
 use super::anim::{frame_rate, plan_clip, sample_times, write_animation, AnimPlan};
 use super::checks::check;
+use super::material::{material_prims, write_materials, MATERIALS};
 use super::mesh::{write_mesh, MeshContext, MeshPlan};
 use super::names::{Namespace, Renames};
 use super::skeleton::{bind_poses, joint_tokens, transform_d, SKELETON};
@@ -40,6 +41,7 @@ const FALLBACK_RESAMPLE_FPS: f64 = 30.0;
 pub(crate) fn build(
     asset: &Asset,
     options: &UsdOptions,
+    image_files: &[String],
 ) -> Result<(String, Vec<Warning>), ExportError> {
     let problems = check(asset);
     if !problems.is_empty() {
@@ -80,6 +82,9 @@ pub(crate) fn build(
     // Prim names below the root.
     let mut root_ns = Namespace::default();
     root_ns.reserve(ANIMATIONS);
+    if !asset.materials.is_empty() {
+        root_ns.reserve(MATERIALS);
+    }
     let skeleton_prims: Vec<String> = (0..skeleton_binds.len())
         .map(|k| {
             let name = if k == 0 {
@@ -100,9 +105,11 @@ pub(crate) fn build(
     let mut channel_ns = Namespace::default();
     let mut plans = Vec::with_capacity(asset.meshes.len());
     for (mi, mesh) in asset.meshes.iter().enumerate() {
-        let (prim, renamed) = root_ns.claim(&mesh.name, "mesh");
-        if renamed && !mesh.name.is_empty() {
-            mesh_renames.push(&mesh.name, &prim);
+        // The prim takes the name of the source node that held the mesh, when known.
+        let name = mesh_prim_source_name(mesh);
+        let (prim, renamed) = root_ns.claim(name, "mesh");
+        if renamed && !name.is_empty() {
+            mesh_renames.push(name, &prim);
         }
         let binding = match (skin_of_mesh.get(&mi), mesh.attached_to) {
             (Some(&si), _) => {
@@ -375,6 +382,12 @@ pub(crate) fn build(
         }
     }
 
+    let material_prims = material_prims(asset);
+    write_materials(&mut doc, asset, &root_path, &material_prims, image_files);
+    let material_paths: Vec<String> = material_prims
+        .iter()
+        .map(|p| format!("{root_path}/{MATERIALS}/{p}"))
+        .collect();
     for (mi, (mesh, plan)) in asset.meshes.iter().zip(&plans).enumerate() {
         write_mesh(
             &mut doc,
@@ -387,6 +400,7 @@ pub(crate) fn build(
                 skeleton_prims: &skeleton_prims,
                 skeleton_binds: &skeleton_binds,
                 options,
+                material_paths: &material_paths,
             },
             &mut warnings,
         );
@@ -434,4 +448,13 @@ pub(crate) fn build(
     }
     doc.close();
     Ok((doc.finish(), warnings))
+}
+
+/// The name a mesh's prim is made from: its source node's, else its own.
+pub(crate) fn mesh_prim_source_name(mesh: &rigport_model::Mesh) -> &str {
+    if mesh.node_name.is_empty() {
+        &mesh.name
+    } else {
+        &mesh.node_name
+    }
 }

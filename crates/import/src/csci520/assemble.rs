@@ -102,6 +102,7 @@ pub(super) fn assemble(
         meters_per_unit: None,
         frame: Default::default(),
         ik_handles: Vec::new(),
+        ..Default::default()
     };
     if let Err(errors) = asset.validate() {
         let text: Vec<String> = errors.iter().map(ToString::to_string).collect();

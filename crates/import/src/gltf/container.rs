@@ -339,7 +339,14 @@ pub(super) fn percent_decode(uri: &str) -> Option<String> {
     String::from_utf8(out).ok()
 }
 
-fn read_uri(uri: &str, path: &Path, at: &str) -> Result<Vec<u8>, ImportError> {
+/// The bytes a buffer or image `uri` names: a base64 `data:` URI, or a file relative to
+/// the glTF's folder. `what` (`buffer`, `image`) names it in errors.
+pub(super) fn read_uri(
+    uri: &str,
+    path: &Path,
+    at: &str,
+    what: &str,
+) -> Result<Vec<u8>, ImportError> {
     let err = |msg: String| ImportError::invalid(Location::json(path, at), msg);
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((meta, payload)) = rest.split_once(',') else {
@@ -361,7 +368,7 @@ fn read_uri(uri: &str, path: &Path, at: &str) -> Result<Vec<u8>, ImportError> {
             if let Some(colon) = scheme_end {
                 if first_slash.is_none_or(|s| colon < s) {
                     return Err(err(format!(
-                        "buffer URI {uri:?}: only data: URIs and files are supported"
+                        "{what} URI {uri:?}: only data: URIs and files are supported"
                     )));
                 }
             }
@@ -369,11 +376,11 @@ fn read_uri(uri: &str, path: &Path, at: &str) -> Result<Vec<u8>, ImportError> {
         }
     };
     let decoded = percent_decode(relative)
-        .ok_or_else(|| err(format!("buffer URI {uri:?} is not UTF-8 once decoded")))?;
+        .ok_or_else(|| err(format!("{what} URI {uri:?} is not UTF-8 once decoded")))?;
     let base = path.parent().unwrap_or(Path::new(""));
     let file: PathBuf = base.join(decoded);
     std::fs::read(&file)
-        .map_err(|e| err(format!("cannot read buffer file {}: {e}", file.display())))
+        .map_err(|e| err(format!("cannot read {what} file {}: {e}", file.display())))
 }
 
 pub(super) fn load_buffers<'b>(
@@ -392,7 +399,7 @@ pub(super) fn load_buffers<'b>(
                 )
             })?),
             ::gltf::buffer::Source::Uri(uri) => {
-                Cow::Owned(read_uri(uri, path, &format!("{at}/uri"))?)
+                Cow::Owned(read_uri(uri, path, &format!("{at}/uri"), "buffer")?)
             }
         };
         if data.len() < buffer.length() {

@@ -65,14 +65,31 @@ impl<'a> Importer<'a> {
             }
             None => None,
         };
+        let mut extra_uvs = Vec::new();
+        if uvs.is_some() {
+            for set in 1.. {
+                let Some(acc) = prim.get(&Semantic::TexCoords(set)) else {
+                    break;
+                };
+                let at = format!("{base}/attributes/TEXCOORD_{set}");
+                let more = self.read_tex_coords(&acc, &at)?;
+                count_check(self, &at, more.len())?;
+                extra_uvs.push(more);
+            }
+        }
+        let uv_sets = if uvs.is_some() {
+            1 + extra_uvs.len() as u32
+        } else {
+            0
+        };
         let ignored: Vec<String> = prim
             .attributes()
             .filter_map(|(semantic, _)| match semantic {
                 Semantic::Positions
                 | Semantic::Normals
-                | Semantic::TexCoords(0)
                 | Semantic::Joints(_)
                 | Semantic::Weights(_) => None,
+                Semantic::TexCoords(k) if k < uv_sets => None,
                 other => Some(other.to_string()),
             })
             .collect();
@@ -166,6 +183,12 @@ impl<'a> Importer<'a> {
             morph_targets,
             morph_weights: Vec::new(),
             attached_to: None,
+            extra_uvs,
+            material: prim
+                .material()
+                .index()
+                .map(|m| rigport_model::MaterialIndex(m as u32)),
+            node_name: String::new(),
         }))
     }
 

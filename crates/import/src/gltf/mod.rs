@@ -7,7 +7,9 @@
 //! |---|---|
 //! | every node of the default scene (of all scenes when `scene` is unset, of the whole file when there are no scenes) | one [`Joint`] each, parents first; the name is the node's, made unique and non-empty |
 //! | node `matrix` or TRS | [`Joint::rest_local`] |
-//! | each triangle primitive of a node's mesh | one [`Mesh`] (`<mesh>` or `<mesh>_<primitive>`), positions as stored |
+//! | each triangle primitive of a node's mesh | one [`Mesh`] (`<mesh>` or `<mesh>_<primitive>`), positions as stored, every `TEXCOORD_n`, its material |
+//! | the node holding a mesh | [`Mesh::node_name`] |
+//! | materials, textures, samplers, images | [`Asset::materials`], [`Asset::images`] (see `material.rs`) |
 //! | node with mesh and skin | a [`SkinBinding`]; the mesh is in bind space (glTF ignores the node's transform) |
 //! | node with mesh and no skin | [`Mesh::attached_to`] = that node's joint, positions in node space |
 //! | animation | one [`Clip`], one [`Track`] per channel (per primitive mesh for `weights`) |
@@ -26,6 +28,7 @@ mod accessor;
 mod animation;
 mod container;
 mod importer;
+mod material;
 mod mesh;
 mod nodes;
 mod skin;
@@ -180,6 +183,11 @@ impl<'a> Importer<'a> {
                 let Some(mut model_mesh) = built else {
                     continue;
                 };
+                model_mesh.node_name = match joint {
+                    // The joint's name is the node's, made unique and non-empty.
+                    Some(j) => skeleton.joint(j).name.clone(),
+                    None => node.name().unwrap_or_default().to_string(),
+                };
                 let (weights, weights_at) = match node.weights() {
                     Some(w) => (Some(w), format!("/nodes/{node_index}/weights")),
                     None => (mesh.weights(), format!("/meshes/{}/weights", mesh.index())),
@@ -244,6 +252,8 @@ impl<'a> Importer<'a> {
         }
 
         let clips = self.clips(&node_joint, &node_meshes, &meshes)?;
+        let images = self.images()?;
+        let materials = self.materials();
         let name = self
             .path
             .file_stem()
@@ -259,6 +269,8 @@ impl<'a> Importer<'a> {
             meters_per_unit: Some(1.0),
             frame: Default::default(),
             ik_handles: Vec::new(),
+            materials,
+            images,
         };
         asset.validate().map_err(|problems| {
             ImportError::invalid(

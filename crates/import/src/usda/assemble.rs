@@ -108,7 +108,8 @@ impl<'l> Importer<'l, '_> {
             }
         }
 
-        // Meshes.
+        // Materials (UsdPreviewSurface networks), then meshes.
+        let looks = self.materials();
         let mut meshes = Vec::new();
         let mut skins = Vec::new();
         for i in 0..self.stage.prims.len() {
@@ -135,7 +136,8 @@ impl<'l> Importer<'l, '_> {
                 (Some(_), _) => continue, // bound to another skeleton: warned above
                 (None, _) => None,
             };
-            if let Some((mesh, skin)) = self.mesh(i, skin_to)? {
+            if let Some((mut mesh, skin)) = self.mesh(i, skin_to)? {
+                mesh.material = self.stage.prims.get(i).and_then(|p| looks.bound(p));
                 let index = MeshIndex(meshes.len() as u32);
                 meshes.push(mesh);
                 if let Some(mut skin) = skin {
@@ -167,6 +169,8 @@ impl<'l> Importer<'l, '_> {
             clips,
             meters_per_unit: Some(meters_per_unit),
             ik_handles: Vec::new(),
+            materials: looks.materials,
+            images: looks.images,
         };
         asset.validate().map_err(|problems| {
             ImportError::invalid(

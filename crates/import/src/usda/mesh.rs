@@ -398,6 +398,7 @@ impl<'l> Importer<'l, '_> {
             morph_targets: Vec::new(),
             morph_weights: Vec::new(),
             attached_to: None,
+            ..Default::default()
         };
         let mut mesh = mesh;
         let skin = match skel {

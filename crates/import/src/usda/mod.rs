@@ -85,6 +85,7 @@ mod assemble;
 mod crate_file;
 mod importer;
 mod lex;
+mod material;
 mod mesh;
 mod metadata;
 mod parse;

@@ -179,6 +179,9 @@ pub(crate) enum PropKind {
         samples: Option<Vec<(f64, Value)>>,
         /// Whether the statement had `.connect` or `.spline` (those values are not kept).
         other_field: Option<&'static str>,
+        /// `.connect = <path>` (or a list): the connection target paths as written
+        /// (shading networks: `inputs:diffuseColor.connect = <.../Tex.outputs:rgb>`).
+        connect: Option<Vec<String>>,
     },
     /// A relationship: its targets as written (relative paths unresolved); `None` when
     /// declared without `=`.
@@ -550,12 +553,26 @@ impl<'a> Parser<'a> {
         let mut default = None;
         let mut samples = None;
         let mut other_field = None;
+        let mut connect = None;
         if self.is_punct('=')? {
             self.lx.next_token()?;
             match field {
                 Some("timeSamples") => samples = Some(self.time_samples()?),
                 Some(other @ ("connect" | "spline")) => {
-                    self.value()?;
+                    let value = self.value()?;
+                    if other == "connect" {
+                        connect = Some(match value {
+                            Value::Path(p) => vec![p],
+                            Value::List(items) => items
+                                .into_iter()
+                                .filter_map(|v| match v {
+                                    Value::Path(p) => Some(p),
+                                    _ => None,
+                                })
+                                .collect(),
+                            _ => Vec::new(),
+                        });
+                    }
                     other_field = Some(other);
                 }
                 _ => default = Some(self.value()?),
@@ -580,6 +597,7 @@ impl<'a> Parser<'a> {
                 default,
                 samples,
                 other_field,
+                connect,
             },
             meta,
             line: first.line,

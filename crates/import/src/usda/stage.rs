@@ -21,6 +21,8 @@ pub(crate) struct Prop<'l> {
     pub samples: Option<Vec<(f64, &'l Value)>>,
     /// Relationship targets as written.
     pub targets: Option<&'l [String]>,
+    /// Attribute connection targets as written (`.connect`).
+    pub connect: Option<&'l [String]>,
     /// Metadata, strongest first.
     pub meta: Vec<&'l Meta>,
     /// 1-based line of the strongest statement.
@@ -106,7 +108,6 @@ impl<'l> Stage<'l> {
     }
 
     /// The prim at an absolute path.
-    #[cfg(test)]
     pub fn get(&self, path: &str) -> Option<&Prim<'l>> {
         self.by_path.get(path).and_then(|&i| self.prims.get(i))
     }
@@ -342,9 +343,13 @@ fn merge_statement<'l>(site: &mut Vec<(&'l str, Prop<'l>)>, spec: &'l PropSpec) 
             type_name,
             default,
             samples,
+            connect,
             ..
         } => {
             prop.type_name = Some(type_name);
+            if let Some(c) = connect {
+                prop.connect = Some(c);
+            }
             if let Some(d) = default {
                 if prop.default.is_some() {
                     prop.rewritten += 1;
@@ -400,6 +405,9 @@ fn fill_weaker<'l>(strong: &mut Prop<'l>, weak: Prop<'l>) {
     }
     if strong.type_name.is_none() {
         strong.type_name = weak.type_name;
+    }
+    if strong.connect.is_none() {
+        strong.connect = weak.connect;
     }
     if strong.targets.is_none() {
         strong.targets = weak.targets;

@@ -298,32 +298,18 @@ impl CrateFile<'_> {
                     default,
                     samples,
                     other_field,
+                    connect: match field("connectionPaths")
+                        .map(|r| self.value(r, 0))
+                        .transpose()?
+                    {
+                        Some(Decoded::ListOp(ops)) => Some(list_op_paths(ops)),
+                        _ => None,
+                    },
                 }
             }
             spec_type::RELATIONSHIP => {
                 let targets = match field("targetPaths").map(|r| self.value(r, 0)).transpose()? {
-                    Some(Decoded::ListOp(ops)) => {
-                        let explicit = ops.iter().find(|(op, _)| *op == ListOp::Explicit);
-                        let items: Vec<Value> = match explicit {
-                            Some((_, items)) => items.clone(),
-                            None => ops
-                                .into_iter()
-                                .filter(|(op, _)| {
-                                    matches!(op, ListOp::Prepend | ListOp::Add | ListOp::Append)
-                                })
-                                .flat_map(|(_, v)| v)
-                                .collect(),
-                        };
-                        Some(
-                            items
-                                .into_iter()
-                                .filter_map(|v| match v {
-                                    Value::Path(p) => Some(p),
-                                    _ => None,
-                                })
-                                .collect(),
-                        )
-                    }
+                    Some(Decoded::ListOp(ops)) => Some(list_op_paths(ops)),
                     _ => None,
                 };
                 PropKind::Rel { targets }
@@ -380,3 +366,24 @@ impl Walk {
 
 #[cfg(test)]
 mod tests;
+
+/// The paths a path list op holds: its explicit items, else the prepended, added and
+/// appended ones (relationship targets, attribute connections).
+fn list_op_paths(ops: Vec<(ListOp, Vec<Value>)>) -> Vec<String> {
+    let explicit = ops.iter().find(|(op, _)| *op == ListOp::Explicit);
+    let items: Vec<Value> = match explicit {
+        Some((_, items)) => items.clone(),
+        None => ops
+            .into_iter()
+            .filter(|(op, _)| matches!(op, ListOp::Prepend | ListOp::Add | ListOp::Append))
+            .flat_map(|(_, v)| v)
+            .collect(),
+    };
+    items
+        .into_iter()
+        .filter_map(|v| match v {
+            Value::Path(p) => Some(p),
+            _ => None,
+        })
+        .collect()
+}
