@@ -596,7 +596,8 @@ fn hermite(v0: f32, m0: f32, v1: f32, m1: f32, u: f32) -> f32 {
         + (u3 - u2) * m1
 }
 
-fn sample_vec3(track: &Track, time: f32) -> Vec3 {
+/// A 3-component track (translation, scale) at `time`, as the sampler evaluates it.
+pub(crate) fn sample_vec3(track: &Track, time: f32) -> Vec3 {
     let span = locate(&track.times, time);
     Vec3::new(
         sample_component(track, 3, span, 0),

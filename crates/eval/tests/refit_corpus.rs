@@ -5,7 +5,7 @@
 //! `cargo test -p rigport-eval --test refit_corpus -- --nocapture` prints the figures.
 
 use std::num::NonZeroUsize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use rigport_eval::refit::{self, RefitJob};
 use rigport_eval::skinning_matrices;
@@ -13,17 +13,7 @@ use rigport_model::glam::Mat4;
 use rigport_model::{Asset, Influences};
 
 fn corpus() -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus");
-    if p.exists() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var_os("CI").is_none_or(|v| v.is_empty()),
-        "{} is missing and CI is set",
-        p.display()
-    );
-    eprintln!("SKIPPED: corpus {} is missing", p.display());
-    None
+    rigport_testkit::corpus("")
 }
 
 /// Skinning matrices of every pose for skin 0, pose after pose.

@@ -118,24 +118,16 @@ pub enum ClipSolveError {
     Bake(#[source] SampleError),
 }
 
-/// The target of `track` at time `t` (seconds): linear between keys, held before the first
-/// and after the last.
-pub fn handle_position(track: &HandleTrack, t: f32) -> Vec3 {
-    let n = track.times.len();
-    let (Some(&first), Some(&last)) = (track.positions.first(), track.positions.last()) else {
-        return Vec3::NAN;
-    };
-    if n <= 1 || t <= track.times[0] {
-        return first;
+/// A handle's target positions as a LINEAR translation track of its joint, so the clip
+/// sampler interpolates them (linear between keys, held before the first and after the
+/// last), as it does every keyframe track.
+fn position_track(track: &HandleTrack) -> rigport_model::Track {
+    rigport_model::Track {
+        target: rigport_model::TrackTarget::Translation(track.joint),
+        interpolation: rigport_model::Interpolation::Linear,
+        times: track.times.clone(),
+        values: track.positions.iter().flat_map(|p| p.to_array()).collect(),
     }
-    if t >= track.times[n - 1] {
-        return last;
-    }
-    let k = track.times.partition_point(|&x| x <= t) - 1;
-    let u = (t - track.times[k]) / (track.times[k + 1] - track.times[k]);
-    // glam's lerp (`a * (1 - u) + b * u`), not the clip sampler's `a + (b - a) * u`: the
-    // handles have always been interpolated this way, and solved clips depend on the bits.
-    track.positions[k].lerp(track.positions[k + 1], u)
 }
 
 /// The model-space targets of a handle set over time, as [`solve_clip`] solves for them
@@ -143,6 +135,9 @@ pub fn handle_position(track: &HandleTrack, t: f32) -> Vec3 {
 #[derive(Clone, Debug, PartialEq)]
 pub struct HandleTargets {
     tracks: Vec<HandleTrack>,
+    /// Per track: its positions as a sampler track ([`position_track`]); `None` when the
+    /// track has no keys or its times and positions differ in count.
+    positions: Vec<Option<rigport_model::Track>>,
     rest_effectors: Vec<Vec3>,
 }
 
@@ -157,8 +152,16 @@ impl HandleTargets {
                     .map_or(Vec3::NAN, |m| m.transform_point3(t.offset))
             })
             .collect();
+        let positions = tracks
+            .iter()
+            .map(|t| {
+                (!t.times.is_empty() && t.times.len() == t.positions.len())
+                    .then(|| position_track(t))
+            })
+            .collect();
         Self {
             tracks,
+            positions,
             rest_effectors,
         }
     }
@@ -171,9 +174,13 @@ impl HandleTargets {
     /// Track `h`'s model-space target at time `t`: its position, plus the effector's
     /// model-space rest position when the track is `relative`. NaN for a bad `h`.
     pub fn target(&self, h: usize, t: f32) -> Vec3 {
-        match (self.tracks.get(h), self.rest_effectors.get(h)) {
-            (Some(track), Some(&rest)) => {
-                let p = handle_position(track, t);
+        match (
+            self.tracks.get(h),
+            self.positions.get(h),
+            self.rest_effectors.get(h),
+        ) {
+            (Some(track), Some(Some(positions)), Some(&rest)) => {
+                let p = crate::sample::sample_vec3(positions, t);
                 if track.relative {
                     rest + p
                 } else {

@@ -8,10 +8,6 @@ use super::*;
 use crate::Problem;
 
 const FIXTURES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/asf_amc");
-const CORPUS: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/corpus/3_acclaim_asf_amc"
-);
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(FIXTURES).join(name)
@@ -19,17 +15,7 @@ fn fixture(name: &str) -> PathBuf {
 
 /// The corpus folder, or `None` (after printing SKIPPED) when it is absent outside CI.
 fn corpus(sub: &str) -> Option<PathBuf> {
-    let dir = Path::new(CORPUS).join(sub);
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var("CI").map_or(true, |v| v.is_empty()),
-        "corpus missing at {}",
-        dir.display()
-    );
-    println!("SKIPPED: no corpus at {}", dir.display());
-    None
+    rigport_testkit::corpus(&format!("3_acclaim_asf_amc/{sub}"))
 }
 
 fn rot(axis: u8, angle_rad: f64) -> DMat3 {

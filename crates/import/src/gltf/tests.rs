@@ -10,10 +10,6 @@ use super::*;
 use crate::{ImportError, Imported, Problem};
 
 const FIXTURES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/gltf/");
-const CORPUS: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/corpus/5_gltf/"
-);
 
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(FIXTURES).join(name)
@@ -660,15 +656,7 @@ fn base64_and_percent_decoding() {
 /// A corpus file, or `None` (with a message) when the corpus is absent; on CI a missing
 /// corpus is a failure.
 fn corpus(rel: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(CORPUS).join(rel);
-    if path.exists() {
-        return Some(path);
-    }
-    if std::env::var_os("CI").is_some() {
-        panic!("corpus file {} is missing", path.display());
-    }
-    eprintln!("skipping: corpus file {} is absent", path.display());
-    None
+    rigport_testkit::corpus(&format!("5_gltf/{rel}"))
 }
 
 fn import_corpus(rel: &str) -> Option<Imported> {

@@ -8,21 +8,7 @@ use super::super::{import, import_slice};
 use super::*;
 
 fn corpus(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/corpus/6_usd"
-    ))
-    .join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var_os("CI").is_none_or(|v| v.is_empty()),
-        "corpus file {} is missing and CI is set",
-        p.display()
-    );
-    eprintln!("SKIPPED: corpus file {} is missing", p.display());
-    None
+    rigport_testkit::corpus(&format!("6_usd/{rel}"))
 }
 
 fn files_with(dir: &Path, ext: &str) -> Vec<PathBuf> {

@@ -1,0 +1,67 @@
+//! What rigport's tests repeat, in one place (a dev-dependency only, never published):
+//!
+//! - [`corpus`]: a file of the shared corpus (`../shared/corpus` beside the repository),
+//!   with the one CI rule of [`require`]: skip with a printed message when it is absent,
+//!   fail when the environment variable `CI` is set (non-empty);
+//! - [`gltf_validator`]: Khronos glTF-Validator (`tools/validate_gltf.mjs`) on a file;
+//! - [`npy`]: reading `.npy` arrays and `.npz` archives (what `rigport eval` writes);
+//! - [`approx`]: approximate asserts that print both values and the difference.
+//!
+//! ```
+//! // Absent corpus files skip (None) outside CI.
+//! if std::env::var_os("CI").is_none() {
+//!     assert!(rigport_testkit::corpus("no/such/file").is_none());
+//! }
+//! rigport_testkit::approx::assert_close(1.0, 1.0 + 1e-7, 1e-6, "one");
+//! ```
+#![warn(missing_docs)]
+
+pub mod approx;
+pub mod gltf_validator;
+pub mod npy;
+
+use std::path::{Path, PathBuf};
+
+/// The repository root.
+pub fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The shared corpus folder (`../shared/corpus` beside the repository); it may not exist.
+pub fn corpus_dir() -> PathBuf {
+    repo().join("../shared/corpus")
+}
+
+/// Whether the tests run in CI (`CI` set and non-empty): optional inputs must be present.
+pub fn in_ci() -> bool {
+    std::env::var_os("CI").is_some_and(|v| !v.is_empty())
+}
+
+/// Skips (returns `None` with a printed message) when something optional is absent, but
+/// fails in CI.
+///
+/// # Panics
+/// `value` is `None` and [`in_ci`].
+pub fn require<T>(what: &str, value: Option<T>) -> Option<T> {
+    if value.is_none() {
+        assert!(
+            !in_ci(),
+            "{what} is missing and CI is set: this test must run in CI"
+        );
+        eprintln!("SKIPPED: {what} is missing");
+    }
+    value
+}
+
+/// A corpus file or folder (`../shared/corpus/<rel>`), or `None` (skip, see [`require`])
+/// when absent.
+///
+/// # Panics
+/// It is absent and [`in_ci`].
+pub fn corpus(rel: &str) -> Option<PathBuf> {
+    let p = corpus_dir().join(rel);
+    require(
+        &format!("corpus file {}", p.display()),
+        p.exists().then_some(p),
+    )
+}
