@@ -3,6 +3,7 @@
 
 use rigport_model::{Asset, MeshIndex, SceneFrame, Skeleton};
 
+use super::blend::MeshShapes;
 use super::importer::Importer;
 use super::skin::has_skin_primvars;
 use crate::ImportError;
@@ -135,8 +136,15 @@ impl<'l> Importer<'l, '_> {
                 (Some(_), _) => continue, // bound to another skeleton: warned above
                 (None, _) => None,
             };
-            if let Some((mesh, skin)) = self.mesh(i, skin_to)? {
+            if let Some((mesh, skin, channels)) = self.mesh(i, skin_to)? {
                 let index = MeshIndex(meshes.len() as u32);
+                if !channels.is_empty() {
+                    self.mesh_shapes.push(MeshShapes {
+                        mesh: index,
+                        targets: mesh.morph_targets.len(),
+                        channels,
+                    });
+                }
                 meshes.push(mesh);
                 if let Some(mut skin) = skin {
                     skin.mesh = index;

@@ -8,11 +8,15 @@ use glam::{DMat3, DMat4, DVec3};
 use rigport_model::glam::{Vec2, Vec3};
 use rigport_model::{Mesh, SkinBinding};
 
+use super::blend::{Channel, PointMap};
 use super::importer::{Importer, Interp, Primvar, SkelData};
 use super::stage::Prim;
 use super::values::{self, is_half_type, matrix, numbers, round_to_half, token, tuples};
 use super::xform::usd_matrix;
 use crate::ImportError;
+
+/// A mesh, its skin when bound, and its blend-shape channels.
+pub(super) type ImportedMesh = (Mesh, Option<SkinBinding>, Vec<Channel>);
 
 impl<'l> Importer<'l, '_> {
     /// A primvar of `N`-tuples (`N = 1` reads plain numbers) with its indices.
@@ -139,7 +143,7 @@ impl<'l> Importer<'l, '_> {
         &mut self,
         index: usize,
         skel: Option<&SkelData>,
-    ) -> Result<Option<(Mesh, Option<SkinBinding>)>, ImportError> {
+    ) -> Result<Option<ImportedMesh>, ImportError> {
         let prim = self.prim(index).clone();
         let path = prim.path.clone();
         let Some((points_value, points_prop)) = self.static_attr(&prim, "points") else {
@@ -384,10 +388,6 @@ impl<'l> Importer<'l, '_> {
                 format!("{degenerate} face(s) with fewer than 3 vertices skipped"),
             );
         }
-        if prim.prop("skel:blendShapes").is_some() || prim.prop("skel:blendShapeTargets").is_some()
-        {
-            self.incomplete(&path, "blend shapes are not imported");
-        }
         let mesh = Mesh {
             name: prim.name.to_string(),
             positions,
@@ -400,6 +400,9 @@ impl<'l> Importer<'l, '_> {
             attached_to: None,
         };
         let mut mesh = mesh;
+        // Blend-shape offsets are in the points' space: deltas take the linear part of
+        // whatever moves the points (geomBindTransform, or the static mesh's transform).
+        let mut linear = DMat3::from_mat4(geom_bind);
         let skin = match skel {
             Some(skel) => Some(self.skin(index, skel, n_points, &mesh.source_vertex)?),
             None => {
@@ -418,6 +421,7 @@ impl<'l> Importer<'l, '_> {
                     );
                 }
                 let m = self.skel_world.inverse() * world;
+                linear = DMat3::from_mat4(m);
                 if m != DMat4::IDENTITY {
                     for p in &mut mesh.positions {
                         *p = m.transform_point3(p.as_dvec3()).as_vec3();
@@ -437,7 +441,18 @@ impl<'l> Importer<'l, '_> {
                 None
             }
         };
-        Ok(Some((mesh, skin)))
+        let vertex_normals = normals.as_ref().is_some_and(|n| n.interp == Interp::Vertex);
+        let (targets, channels) = self.blend_shapes(
+            &prim,
+            &PointMap {
+                points: n_points,
+                source_vertex: &mesh.source_vertex,
+                linear,
+                vertex_normals,
+            },
+        )?;
+        mesh.morph_targets = targets;
+        Ok(Some((mesh, skin, channels)))
     }
 
     // -----------------------------------------------------------------------------------

@@ -82,6 +82,7 @@
 
 mod anim;
 mod assemble;
+mod blend;
 mod crate_file;
 mod importer;
 mod lex;
@@ -136,6 +137,7 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
         tcps: DEFAULT_TIME_CODES_PER_SECOND,
         up_axis: UpAxis::Y,
         skel_world: DMat4::IDENTITY,
+        mesh_shapes: Vec::new(),
     };
     let asset = importer.run()?;
     Ok(Imported {
