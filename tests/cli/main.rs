@@ -25,4 +25,5 @@ mod pinocchio;
 mod render;
 mod skinning;
 mod usd;
+mod usd_blendshapes;
 mod usd_import;
