@@ -27,3 +27,4 @@ mod skinning;
 mod usd;
 mod usd_blendshapes;
 mod usd_import;
+mod usd_topology;

@@ -84,7 +84,9 @@ fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 fn pixar_blend_shapes_with_normals_match_the_baseline() {
     let (Some(source), Some(baseline)) = (
         corpus(&format!("{PIXAR}/blendshapesWithNormals.usda")),
-        corpus(&format!("{PIXAR}/baseline/blendshapesWithNormals.baked.usda")),
+        corpus(&format!(
+            "{PIXAR}/baseline/blendshapesWithNormals.baked.usda"
+        )),
     ) else {
         return;
     };

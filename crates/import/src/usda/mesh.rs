@@ -369,6 +369,8 @@ impl<'l> Importer<'l, '_> {
         let mut triangles = Vec::with_capacity(n_corners);
         let mut start = 0usize;
         let mut degenerate = 0usize;
+        // Face sizes, so a USD writer can give the polygons back (triangles are their fans).
+        let mut polygons: Vec<u32> = Vec::with_capacity(n_faces);
         for &c in &counts {
             let c = c as usize;
             let face = corner_vertex.get(start..start + c).unwrap_or_default();
@@ -377,10 +379,14 @@ impl<'l> Importer<'l, '_> {
                 degenerate += 1;
                 continue;
             }
+            polygons.push(c as u32);
             for k in 1..c - 1 {
                 let (a, b, d) = (face[0], face[k], face[k + 1]);
                 triangles.push(if left_handed { [a, d, b] } else { [a, b, d] });
             }
+        }
+        if polygons.iter().all(|&c| c == 3) {
+            polygons.clear();
         }
         if degenerate > 0 {
             self.repaired(
@@ -398,6 +404,7 @@ impl<'l> Importer<'l, '_> {
             morph_targets: Vec::new(),
             morph_weights: Vec::new(),
             attached_to: None,
+            polygons,
         };
         let mut mesh = mesh;
         // Blend-shape offsets are in the points' space: deltas take the linear part of

@@ -61,8 +61,25 @@
 //!   binary16 as USD stores them.
 //! - `primvars:skel:skinningMethod` (inherited) is the skin's
 //!   [`SkinBinding::method`]; an unknown token is skinned linearly with a warning.
-//! - Blend shapes are not imported (a [`Warning::Incomplete`]); non-`Mesh` skinnable prims
-//!   (curves, points, implicit shapes) are left out with a warning.
+//! - **Blend shapes** (`skel:blendShapes` + `skel:blendShapeTargets` on a Mesh, skinned or
+//!   not): each `BlendShape` (`offsets`, `normalOffsets`, sparse `pointIndices`) is a
+//!   morph target named after its channel, its inbetweens (`inbetweens:<name>`, `weight`
+//!   metadata) further targets `<channel>_<name>`; offsets take the linear part of the
+//!   points' transform (geomBindTransform, or a static mesh's world transform; normal
+//!   offsets the same, exact for rigid transforms), and go to every vertex split from a
+//!   point. Normal offsets need per-point (`vertex`) normals, as UsdSkel's; otherwise they
+//!   are dropped with a warning. A SkelAnimation's `blendShapes` / `blendShapeWeights`
+//!   become a morph-weight track per mesh (channels matched by token, missing ones 0):
+//!   UsdSkel's sub-shape weights (null shape at 0, primary at 1, inbetweens at their
+//!   weights, linear between neighbours, the end segments extended) are computed at every
+//!   sample and at every time the linearly interpolated channel weight crosses an inner
+//!   sub-shape weight, so the LINEAR track equals UsdSkel at every time (`blend.rs`). An
+//!   animation with blend-shape weights but no joint transforms, and a Skeleton without
+//!   joints, import (the skeleton stays at rest).
+//! - Non-`Mesh` skinnable prims (curves, points, implicit shapes) are left out with a
+//!   warning.
+//! - **Polygons**: the face sizes are kept in [`Mesh::polygons`] (the triangles are their
+//!   fans), so the USD writer gives the source's faces back.
 //!
 //! # Errors
 //! Syntax errors carry `file:line:column`. UsdSkel errors name the prim path:
@@ -77,7 +94,8 @@
 //! `stage.rs` (composing one layer), `values.rs` (typed values), `xform.rs` (transforms).
 //! Building the asset: `importer.rs` (the `Importer` state and shared helpers),
 //! `assemble.rs` (`Importer::run`), `metadata.rs` (layer metadata, composition warnings),
-//! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `mesh.rs` (topology, primvars,
+//! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `blend.rs` (blend shapes and their
+//! weights), `mesh.rs` (topology, primvars,
 //! static meshes) and `anim.rs` (SkelAnimations to clips).
 
 mod anim;
