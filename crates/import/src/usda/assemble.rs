@@ -3,8 +3,8 @@
 
 use rigport_model::{Asset, MeshIndex, SceneFrame, Skeleton};
 
-use super::blend::MeshShapes;
 use super::importer::Importer;
+use super::shapes::MeshShapes;
 use super::skin::has_skin_primvars;
 use crate::ImportError;
 

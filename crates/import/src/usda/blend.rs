@@ -14,31 +14,13 @@
 
 use glam::{DMat3, DVec3};
 use rigport_model::glam::Vec3;
-use rigport_model::{Interpolation, MeshIndex, MorphTarget, Track, TrackTarget};
+use rigport_model::{Interpolation, MorphTarget, Track, TrackTarget};
 
 use super::importer::{resolve_path, Importer};
+use super::shapes::Channel;
 use super::stage::Prim;
 use super::values::{self, number, numbers, tokens, tuples};
 use crate::ImportError;
-
-/// One `skel:blendShapes` channel of a mesh.
-#[derive(Clone, Debug)]
-pub(super) struct Channel {
-    /// The token a SkelAnimation's `blendShapes` names it by.
-    pub(super) token: String,
-    /// Sub-shapes sorted by weight: the null shape (`None`) at 0, the primary at 1 and the
-    /// inbetweens, each with the index of its morph target in the mesh.
-    pub(super) knots: Vec<(f64, Option<usize>)>,
-}
-
-/// The blend-shape channels of one imported mesh.
-#[derive(Clone, Debug)]
-pub(super) struct MeshShapes {
-    pub(super) mesh: MeshIndex,
-    /// Morph targets of the mesh (channels' sub-shapes, flattened).
-    pub(super) targets: usize,
-    pub(super) channels: Vec<Channel>,
-}
 
 /// How a mesh's points map into its model vertices, for turning point offsets into
 /// per-vertex deltas.

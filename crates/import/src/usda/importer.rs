@@ -36,7 +36,7 @@ pub(super) struct Importer<'l, 'p> {
     /// without a skeleton.
     pub(super) skel_world: DMat4,
     /// Blend-shape channels of the imported meshes, for the SkelAnimations' weights.
-    pub(super) mesh_shapes: Vec<super::blend::MeshShapes>,
+    pub(super) mesh_shapes: Vec<super::shapes::MeshShapes>,
 }
 
 /// Interpolation of a primvar (`UsdGeomPrimvar`).

@@ -8,8 +8,9 @@ use glam::{DMat3, DMat4, DVec3};
 use rigport_model::glam::{Vec2, Vec3};
 use rigport_model::{Mesh, SkinBinding};
 
-use super::blend::{Channel, PointMap};
+use super::blend::PointMap;
 use super::importer::{Importer, Interp, Primvar, SkelData};
+use super::shapes::Channel;
 use super::stage::Prim;
 use super::values::{self, is_half_type, matrix, numbers, round_to_half, token, tuples};
 use super::xform::usd_matrix;

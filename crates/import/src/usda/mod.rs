@@ -94,8 +94,8 @@
 //! `stage.rs` (composing one layer), `values.rs` (typed values), `xform.rs` (transforms).
 //! Building the asset: `importer.rs` (the `Importer` state and shared helpers),
 //! `assemble.rs` (`Importer::run`), `metadata.rs` (layer metadata, composition warnings),
-//! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `blend.rs` (blend shapes and their
-//! weights), `mesh.rs` (topology, primvars,
+//! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `blend.rs` (blend shapes and their weights; `shapes.rs` the channels they share with the
+//! importer state), `mesh.rs` (topology, primvars,
 //! static meshes) and `anim.rs` (SkelAnimations to clips).
 
 mod anim;
@@ -107,6 +107,7 @@ mod lex;
 mod mesh;
 mod metadata;
 mod parse;
+mod shapes;
 mod skeleton;
 mod skin;
 mod stage;
