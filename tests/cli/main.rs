@@ -27,4 +27,5 @@ mod skinning;
 mod usd;
 mod usd_blendshapes;
 mod usd_import;
+mod usd_root_motion;
 mod usd_topology;

@@ -93,19 +93,18 @@ impl<'l> Importer<'l, '_> {
             }
             None => (Skeleton::default(), None),
         };
+        let mut root_motion: Option<(usize, String, Vec<String>)> = None;
         if let Some((s, _)) = &skel {
             let (world, animated) = self.world(*s)?;
             self.skel_world = world;
             if !animated.is_empty() {
-                let path = self.prim(*s).path.clone();
-                self.incomplete(
-                    &path,
-                    format!(
-                        "time-sampled transforms (xformOp) on {} are not imported as root \
-                         motion: their value at the default time is used",
-                        animated.join(", ")
-                    ),
-                );
+                // Named after the nearest prim whose transforms move.
+                let name = animated
+                    .first()
+                    .and_then(|p| p.trim_matches(['<', '>']).rsplit('/').next())
+                    .unwrap_or("xform")
+                    .to_string();
+                root_motion = Some((*s, name, animated));
             }
         }
 
@@ -154,10 +153,22 @@ impl<'l> Importer<'l, '_> {
         }
 
         // Clips.
-        let clips = match &skel {
+        let mut clips = match &skel {
             Some((s, data)) => self.clips(*s, data)?,
             None => Vec::new(),
         };
+        if let Some((s, name, animated)) = root_motion {
+            self.root_motion(s, &skeleton, &mut clips, &name)?;
+            let path = self.prim(s).path.clone();
+            self.note(
+                &path,
+                format!(
+                    "time-sampled transforms (xformOp) on {} are imported as root motion (the \
+                     root joints' tracks, sampled at every time code between their samples)",
+                    animated.join(", ")
+                ),
+            );
+        }
 
         let asset = Asset {
             frame: SceneFrame {

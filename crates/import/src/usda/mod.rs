@@ -37,9 +37,12 @@
 //!   see `xform.rs`) give [`SceneFrame::model_to_scene`]; the stage's `upAxis` gives
 //!   [`SceneFrame::up_axis`]. Nothing is converted: exporters place the model from the
 //!   frame. A static (unskinned) mesh's points and normals are moved from its own space to
-//!   model space through its world transform. Time-sampled ops are evaluated at the
-//!   default time (else their first sample) with a [`Warning::Incomplete`] (they are not
-//!   yet turned into root motion).
+//!   model space through its world transform. `model_to_scene` is the value at the
+//!   default time (else the first sample); time-sampled ops on the Skeleton or above it
+//!   become root motion, tracks of the root joints sampled at every time code between
+//!   the ops' samples, in every clip (a clip of their own without a SkelAnimation; see
+//!   `root_motion.rs`), with a [`Warning::Note`]. A static mesh under time-sampled ops
+//!   keeps their default-time value, with a [`Warning::Incomplete`].
 //! - **Weights** are kept as authored, as UsdSkel skins with them (it does not normalize):
 //!   zero weights are dropped, a joint listed twice for a point is merged, and rows that do
 //!   not sum to 1 get a [`Warning::Note`].
@@ -96,7 +99,8 @@
 //! `assemble.rs` (`Importer::run`), `metadata.rs` (layer metadata, composition warnings),
 //! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `blend.rs` (blend shapes and their weights; `shapes.rs` the channels they share with the
 //! importer state), `mesh.rs` (topology, primvars,
-//! static meshes) and `anim.rs` (SkelAnimations to clips).
+//! static meshes), `anim.rs` (SkelAnimations to clips) and `root_motion.rs` (animated
+//! transforms above the skeleton).
 
 mod anim;
 mod assemble;
@@ -107,6 +111,7 @@ mod lex;
 mod mesh;
 mod metadata;
 mod parse;
+mod root_motion;
 mod shapes;
 mod skeleton;
 mod skin;
