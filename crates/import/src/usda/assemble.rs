@@ -3,6 +3,7 @@
 
 use rigport_model::{Asset, MeshIndex, SceneFrame, Skeleton};
 
+use super::implicit::is_implicit;
 use super::importer::Importer;
 use super::shapes::MeshShapes;
 use super::skin::has_skin_primvars;
@@ -119,13 +120,18 @@ impl<'l> Importer<'l, '_> {
                 continue;
             }
             let binding = skinnable.iter().find(|(m, _)| *m == i).map(|&(_, s)| s);
-            let is_mesh = prim.type_name == Some("Mesh");
+            // Implicit surfaces (Cube, Sphere, Cylinder, Capsule, Cone) are tessellated.
+            let is_mesh = prim.type_name == Some("Mesh") || is_implicit(prim.type_name);
             if !is_mesh {
                 if binding.is_some() {
                     let (path, ty) = (prim.path.clone(), prim.type_name.unwrap_or("untyped"));
                     self.incomplete(
                         &path,
-                        format!("a skinnable {ty} prim is not a Mesh: not imported"),
+                        format!(
+                            "a skinnable {ty} prim has no surface rigport imports (Meshes and \
+                             the implicit Cube, Sphere, Cylinder, Capsule and Cone are): not \
+                             imported"
+                        ),
                     );
                 }
                 continue;

@@ -9,6 +9,7 @@ use rigport_model::glam::{Vec2, Vec3};
 use rigport_model::{Mesh, SkinBinding};
 
 use super::blend::PointMap;
+use super::implicit::tessellate;
 use super::importer::{Importer, Interp, Primvar, SkelData};
 use super::shapes::Channel;
 use super::stage::Prim;
@@ -147,32 +148,45 @@ impl<'l> Importer<'l, '_> {
     ) -> Result<Option<ImportedMesh>, ImportError> {
         let prim = self.prim(index).clone();
         let path = prim.path.clone();
-        let Some((points_value, points_prop)) = self.static_attr(&prim, "points") else {
-            if !self.behind_arc(index).is_empty() && skel.is_some() {
-                return Err(self.err(
-                    &path,
-                    format!("the bound Mesh has no points{}", self.behind_arc(index)),
-                ));
-            }
-            self.incomplete(&path, "a Mesh without points: not imported");
-            return Ok(None);
-        };
-        let half = points_prop.type_name.is_some_and(is_half_type);
-        let mut points = tuples::<3>(points_value)
-            .ok_or_else(|| self.err_at(points_prop.line, &path, "points must be a point3f[]"))?;
-        if half {
-            for p in &mut points {
-                for x in p.iter_mut() {
-                    *x = f64::from(round_to_half(*x as f32));
+        // An implicit surface (Cube, Sphere, ...) arrives tessellated (`implicit.rs`).
+        let surface = tessellate(&prim).map_err(|e| self.err(&path, e))?;
+        let (points, counts, indices) = match &surface {
+            Some(s) => (
+                s.points.clone(),
+                Some(s.counts.clone()),
+                Some(s.indices.clone()),
+            ),
+            None => {
+                let Some((points_value, points_prop)) = self.static_attr(&prim, "points") else {
+                    if !self.behind_arc(index).is_empty() && skel.is_some() {
+                        return Err(self.err(
+                            &path,
+                            format!("the bound Mesh has no points{}", self.behind_arc(index)),
+                        ));
+                    }
+                    self.incomplete(&path, "a Mesh without points: not imported");
+                    return Ok(None);
+                };
+                let half = points_prop.type_name.is_some_and(is_half_type);
+                let mut points = tuples::<3>(points_value).ok_or_else(|| {
+                    self.err_at(points_prop.line, &path, "points must be a point3f[]")
+                })?;
+                if half {
+                    for p in &mut points {
+                        for x in p.iter_mut() {
+                            *x = f64::from(round_to_half(*x as f32));
+                        }
+                    }
                 }
+                if points.iter().flatten().any(|x| !x.is_finite()) {
+                    return Err(self.err(&path, "points holds a non-finite value"));
+                }
+                let counts = self.int_list(&prim, "faceVertexCounts")?;
+                let indices = self.int_list(&prim, "faceVertexIndices")?;
+                (points, counts, indices)
             }
-        }
-        if points.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(self.err(&path, "points holds a non-finite value"));
-        }
+        };
         let n_points = points.len();
-        let counts = self.int_list(&prim, "faceVertexCounts")?;
-        let indices = self.int_list(&prim, "faceVertexIndices")?;
         let (counts, indices) = match (counts, indices) {
             (Some(c), Some(i)) => (c, i),
             (None, None) => (Vec::new(), Vec::new()),
@@ -229,7 +243,14 @@ impl<'l> Importer<'l, '_> {
         } else {
             Interp::Constant
         };
-        let normals = self.primvar::<3>(&prim, normals_name, normals_default)?;
+        let normals = match &surface {
+            Some(s) => Some(Primvar {
+                values: s.normals.clone(),
+                indices: None,
+                interp: Interp::Vertex,
+            }),
+            None => self.primvar::<3>(&prim, normals_name, normals_default)?,
+        };
         let uv_name = if prim.prop("primvars:st").is_some() {
             Some("primvars:st".to_string())
         } else {

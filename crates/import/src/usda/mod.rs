@@ -79,8 +79,12 @@
 //!   sub-shape weight, so the LINEAR track equals UsdSkel at every time (`blend.rs`). An
 //!   animation with blend-shape weights but no joint transforms, and a Skeleton without
 //!   joints, import (the skeleton stays at rest).
-//! - Non-`Mesh` skinnable prims (curves, points, implicit shapes) are left out with a
-//!   warning.
+//! - **Implicit surfaces** (`Cube`, `Sphere`, `Cylinder`, `Capsule`, `Cone`) are
+//!   tessellated (`implicit.rs`: the schemas' sizes and `axis`, 32 segments around, 16
+//!   rings pole to pole, flat faces with their own points) and imported like Meshes:
+//!   skinned (Pixar's bake tests bind them with constant influences, which UsdSkel applies
+//!   as a rigid transform: the tessellation follows it exactly), or static. Other
+//!   skinnable prims (`BasisCurves`, `Points`) are left out with a warning naming the prim.
 //! - **Polygons**: the face sizes are kept in [`Mesh::polygons`] (the triangles are their
 //!   fans), so the USD writer gives the source's faces back.
 //!
@@ -99,13 +103,14 @@
 //! `assemble.rs` (`Importer::run`), `metadata.rs` (layer metadata, composition warnings),
 //! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `blend.rs` (blend shapes and their weights; `shapes.rs` the channels they share with the
 //! importer state), `mesh.rs` (topology, primvars,
-//! static meshes), `anim.rs` (SkelAnimations to clips) and `root_motion.rs` (animated
-//! transforms above the skeleton).
+//! static meshes), `anim.rs` (SkelAnimations to clips), `root_motion.rs` (animated
+//! transforms above the skeleton) and `implicit.rs` (implicit surfaces as polygons).
 
 mod anim;
 mod assemble;
 mod blend;
 mod crate_file;
+mod implicit;
 mod importer;
 mod lex;
 mod mesh;
