@@ -140,6 +140,43 @@ fn usd_sources() -> Vec<PathBuf> {
     out
 }
 
+/// `source`, or a copy in `dir` with its implicit surfaces (Cube, Sphere, ...) deactivated:
+/// usd_world.py evaluates Meshes only, while rigport tessellates those prims into meshes
+/// (checked against UsdSkel in usd_topology.rs).
+fn meshes_only(py: &Path, source: &Path, dir: &Path) -> PathBuf {
+    const SCRIPT: &str = r#"
+import sys
+from pxr import Usd
+s = Usd.Stage.Open(sys.argv[1])
+n = 0
+for p in list(s.Traverse()):
+    if p.GetTypeName() in ("Cube", "Sphere", "Cylinder", "Capsule", "Cone"):
+        p.SetActive(False)
+        n += 1
+if n:
+    s.GetRootLayer().Export(sys.argv[2])
+print(n)
+"#;
+    let name = source.file_name().unwrap().to_string_lossy().into_owned();
+    let copy = dir.join(format!("meshes_only_{name}"));
+    let out = Command::new(py)
+        .args(["-c", SCRIPT])
+        .arg(source)
+        .arg(&copy)
+        .output()
+        .expect("python runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    if String::from_utf8_lossy(&out.stdout).trim() == "0" {
+        source.to_path_buf()
+    } else {
+        copy
+    }
+}
+
 /// The key times (seconds) rigport samples a source's first clip at.
 fn key_times(source: &Path, dir: &Path) -> Vec<f64> {
     let npz = dir.join("keys.npz");
@@ -176,6 +213,7 @@ fn usd_to_usda_evaluates_like_the_source_in_usdskel() {
     let mut report = Vec::new();
     for source in usd_sources() {
         let name = source.file_stem().unwrap().to_string_lossy().into_owned();
+        let source = meshes_only(&py, &source, dir.path());
         let out = dir.path().join(format!("{name}.usda"));
         rigport_ok(&["convert", s(&source), "-o", s(&out), "--quiet"]);
         let times = key_times(&source, dir.path());
@@ -199,6 +237,7 @@ fn usd_to_glb_plays_like_the_source_in_y_up_metres() {
     let mut report = Vec::new();
     for source in usd_sources() {
         let name = source.file_stem().unwrap().to_string_lossy().into_owned();
+        let source = meshes_only(&py, &source, dir.path());
         let glb = dir.path().join(format!("{name}.glb"));
         rigport_ok(&["convert", s(&source), "-o", s(&glb), "--quiet"]);
         if name == "dqs" {

@@ -32,4 +32,7 @@ mod render;
 mod skinning;
 mod three;
 mod usd;
+mod usd_blendshapes;
 mod usd_import;
+mod usd_root_motion;
+mod usd_topology;

@@ -173,9 +173,11 @@ fn matches_pixar_baseline(input: &str, baseline: &str, method: &str) {
         .iter()
         .map(|(_, s)| s.values().next().unwrap().len())
         .sum();
-    assert_eq!(
-        v, total,
-        "dumped vertices = baked points of the three meshes"
+    // The three Meshes come first (document order); rigport's tessellated Sphere, Cube and
+    // Cylinder follow (usd_topology.rs checks them against UsdSkel).
+    assert!(
+        v >= total,
+        "dumped vertices start with the baked points of the three meshes"
     );
     // timeCodesPerSecond = 24, samples at time codes 1..=30.
     assert_eq!(frames, 30);

@@ -35,6 +35,12 @@ pub struct Mesh {
     pub material: Option<MaterialIndex>,
     /// Triangles as counter-clockwise vertex index triples.
     pub triangles: Vec<[u32; 3]>,
+    /// The source's polygons, when the triangles are their fans: polygon `k` of
+    /// `polygons[k]` corners is the next `polygons[k] - 2` triangles, each sharing the
+    /// polygon's first corner (in either winding). Empty for a triangle mesh or a source
+    /// without polygons. A writer that keeps polygons (USD) rebuilds them from the fans and
+    /// writes triangles when they do not fit.
+    pub polygons: Vec<u32>,
     /// For each vertex, its index in the source's own vertex numbering.
     pub source_vertex: Vec<u32>,
     /// Morph targets (blend shapes), applied before skinning.

@@ -6,6 +6,7 @@ use rigport_model::{Asset, Mesh, Warning};
 use super::skeleton::SKELETON;
 use super::skin::{skin_rows, Binding};
 use super::text::{array, float, matrix, put, tuple, write_tokens, Usda};
+use super::topology::{topology, Topology};
 use super::{UsdOptions, UsdSkinning};
 use crate::labels::mesh_label;
 
@@ -96,38 +97,46 @@ pub(super) fn write_mesh(
         array(line, &[lo, hi], |s, v| tuple(s, &v.to_array()));
         doc.end();
     }
+    let skin = match plan.binding {
+        Binding::Skinned { skin, .. } => asset.skins.get(skin),
+        _ => None,
+    };
+    let topo = topology(mesh, skin);
     let line = doc.start();
     line.push_str("int[] faceVertexCounts = ");
-    array(line, &mesh.triangles, |s, _| s.push('3'));
+    array(line, &topo.counts, |s, c| put(s, c));
     doc.end();
-    // Triangles are counter-clockwise (glTF's and the model's rule), USD's default
+    // Faces are counter-clockwise (glTF's and the model's rule), USD's default
     // `orientation = "rightHanded"`: written as they are.
     let line = doc.start();
     line.push_str("int[] faceVertexIndices = ");
-    let flat: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    let flat: Vec<u32> = topo
+        .corners
+        .iter()
+        .map(|&v| topo.vertex_point[v as usize])
+        .collect();
     array(line, &flat, |s, i| put(s, i));
     doc.end();
 
     let normals = mesh_normals(mesh, &label, warnings);
-    write_primvar(
-        doc,
-        "normal3f[] normals",
-        |s| array(s, &normals, |s, n| tuple(s, &n.to_array())),
-        None,
-        "vertex",
-    );
+    write_vertex_data(doc, "normal3f[] normals", &topo, &normals, |s, n| {
+        tuple(s, &n.to_array())
+    });
     let line = doc.start();
     line.push_str("point3f[] points = ");
-    array(line, &mesh.positions, |s, p| tuple(s, &p.to_array()));
+    array(line, &pick(&mesh.positions, &topo.point_vertex), |s, p| {
+        tuple(s, &p.to_array())
+    });
     doc.end();
 
     // The dump of `rigport eval` lists vertices by source vertex; say how points map to
-    // them when the mesh split vertices (seams).
-    let identity = mesh
-        .source_vertex
-        .iter()
-        .enumerate()
-        .all(|(v, &s)| s as usize == v);
+    // them when the mesh split vertices (seams) that could not be merged back.
+    let identity = topo.merged
+        || mesh
+            .source_vertex
+            .iter()
+            .enumerate()
+            .all(|(v, &s)| s as usize == v);
     if !identity {
         write_primvar(
             doc,
@@ -182,7 +191,21 @@ pub(super) fn write_mesh(
             geom_bind,
         } => {
             if let Some(binding) = asset.skins.get(skin) {
-                let rows = skin_rows(asset, skin, binding, &label, warnings);
+                let mut rows = skin_rows(asset, skin, binding, &label, warnings);
+                if topo.merged {
+                    let es = rows.element_size;
+                    let row = |v: u32| (v as usize * es)..(v as usize + 1) * es;
+                    rows.indices = topo
+                        .point_vertex
+                        .iter()
+                        .flat_map(|&v| rows.indices.get(row(v)).unwrap_or_default().to_vec())
+                        .collect();
+                    rows.weights = topo
+                        .point_vertex
+                        .iter()
+                        .flat_map(|&v| rows.weights.get(row(v)).unwrap_or_default().to_vec())
+                        .collect();
+                }
                 write_geom_bind(doc, &geom_bind);
                 write_primvar(
                     doc,
@@ -210,13 +233,9 @@ pub(super) fn write_mesh(
         // The model's UVs follow glTF (origin top-left, v down); USD's st have their origin
         // bottom-left with t up.
         let st: Vec<Vec2> = uvs.iter().map(|uv| Vec2::new(uv.x, 1.0 - uv.y)).collect();
-        write_primvar(
-            doc,
-            "texCoord2f[] primvars:st",
-            |s| array(s, &st, |s, v| tuple(s, &v.to_array())),
-            None,
-            "vertex",
-        );
+        write_vertex_data(doc, "texCoord2f[] primvars:st", &topo, &st, |s, v| {
+            tuple(s, &v.to_array())
+        });
     }
 
     // Further UV sets: primvars:st1, st2, ... (same convention).
@@ -260,10 +279,48 @@ pub(super) fn write_mesh(
     if skeleton_rel.is_some() {
         for (target, shape) in mesh.morph_targets.iter().zip(&plan.shapes) {
             doc.blank();
-            write_blend_shape(doc, target, shape);
+            write_blend_shape(doc, target, shape, &topo.point_vertex);
         }
     }
     doc.close();
+}
+
+/// The values of the vertices `which` (a point's vertex), in that order.
+fn pick<T: Copy + Default>(values: &[T], which: &[u32]) -> Vec<T> {
+    which
+        .iter()
+        .map(|&v| values.get(v as usize).copied().unwrap_or_default())
+        .collect()
+}
+
+/// A per-vertex primvar: `vertex` interpolation when every point's vertices agree (bit for
+/// bit), else `faceVarying`, one value per face corner.
+fn write_vertex_data<T: Copy + Default + PartialEq>(
+    doc: &mut Usda,
+    decl: &str,
+    topo: &Topology,
+    values: &[T],
+    put_value: impl Fn(&mut String, &T) + Copy,
+) {
+    if topo.per_point(|a, b| values.get(a) == values.get(b)) {
+        let per_point = pick(values, &topo.point_vertex);
+        write_primvar(
+            doc,
+            decl,
+            |s| array(s, &per_point, put_value),
+            None,
+            "vertex",
+        );
+    } else {
+        let per_corner = pick(values, &topo.corners);
+        write_primvar(
+            doc,
+            decl,
+            |s| array(s, &per_corner, put_value),
+            None,
+            "faceVarying",
+        );
+    }
 }
 
 /// `matrix4d primvars:skel:geomBindTransform = ...`.
@@ -275,7 +332,17 @@ fn write_geom_bind(doc: &mut Usda, m: &DMat4) {
 }
 
 /// One BlendShape prim: offsets (sparse with `pointIndices` when some points do not move).
-fn write_blend_shape(doc: &mut Usda, target: &rigport_model::MorphTarget, prim: &str) {
+fn write_blend_shape(
+    doc: &mut Usda,
+    target: &rigport_model::MorphTarget,
+    prim: &str,
+    point_vertex: &[u32],
+) {
+    let target = &rigport_model::MorphTarget {
+        name: target.name.clone(),
+        position_deltas: pick(&target.position_deltas, point_vertex),
+        normal_deltas: target.normal_deltas.as_ref().map(|d| pick(d, point_vertex)),
+    };
     let moved: Vec<usize> = (0..target.position_deltas.len())
         .filter(|&v| {
             target

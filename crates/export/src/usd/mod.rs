@@ -44,13 +44,20 @@
 //!     selection is the first clip. **Other clips are reached by switching the variant**
 //!     (usdview: the prim's Variants; Python: `prim.GetVariantSet("clip").SetVariantSelection("idle")`).
 //!
-//! Each Mesh: `points`, `faceVertexCounts` / `faceVertexIndices` (the model's
-//! counter-clockwise triangles, USD's default `rightHanded` orientation), `normals`
-//! (vertex interpolation; computed when the model has none), `extent`,
-//! `subdivisionScheme = "none"`, `texCoord2f[] primvars:st` (vertex; `t = 1 - v`, since the
-//! model's UVs have glTF's top-left origin and USD's bottom-left), and
-//! `int[] primvars:rigport:sourceVertex` (vertex) when the mesh's vertices are not its
-//! source vertices one to one, so a checker can compare with `rigport eval` dumps. Bound
+//! Each Mesh: `points`, `faceVertexCounts` / `faceVertexIndices` (counter-clockwise, USD's
+//! default `rightHanded` orientation: the source's polygons rebuilt from their triangle
+//! fans when the model has them, [`Mesh::polygons`](rigport_model::Mesh::polygons), a
+//! left-handed source's corners reversed; else the model's triangles), `normals`
+//! (computed when the model has none), `extent`, `subdivisionScheme = "none"`,
+//! `texCoord2f[] primvars:st` (`t = 1 - v`, since the model's UVs have glTF's top-left
+//! origin and USD's bottom-left). Points are the source's vertices: vertices split on
+//! seams (face-varying normals or UVs) are merged back through
+//! [`Mesh::source_vertex`](rigport_model::Mesh::source_vertex) when the copies agree on
+//! position, influences and morph deltas, and normals and `st` are then `faceVarying`
+//! where a point's copies differ (else `vertex`), so a USD -> USD conversion keeps the
+//! point count and point-indexed data; when they cannot be merged, the vertices are the
+//! points and `int[] primvars:rigport:sourceVertex` (vertex) maps them to the source
+//! vertices, so a checker can compare with `rigport eval` dumps. Bound
 //! meshes apply `SkelBindingAPI` and relate `skel:skeleton`:
 //! - skinned: `primvars:skel:jointIndices` / `jointWeights`, vertex interpolation,
 //!   `elementSize` = the most influences on one point (no limit; rows zero-padded with
@@ -65,7 +72,10 @@
 //!   joint's bind matrix, so the mesh follows the joint exactly;
 //! - morph targets: `BlendShape` children (`offsets`, `normalOffsets`, `pointIndices` when
 //!   sparse), `skel:blendShapes` / `skel:blendShapeTargets`; an unskinned mesh with morph
-//!   targets is bound for its blend shapes only.
+//!   targets is bound for its blend shapes only. A USD source's inbetweens arrive as
+//!   further morph targets whose weight tracks are keyed at every inbetween crossing
+//!   (see the importer), so they are written as plain BlendShapes that UsdSkel evaluates
+//!   like the source at every time.
 //!
 //! # Time
 //! `timeCodesPerSecond` comes from the first clip's key times: when three or more keys are
@@ -123,6 +133,7 @@ mod stage;
 #[cfg(test)]
 mod tests;
 mod text;
+mod topology;
 
 use std::path::{Path, PathBuf};
 

@@ -189,6 +189,7 @@ impl<'a> Importer<'a> {
                 .index()
                 .map(|m| rigport_model::MaterialIndex(m as u32)),
             node_name: String::new(),
+            polygons: Vec::new(),
         }))
     }
 

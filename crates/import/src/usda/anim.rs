@@ -9,7 +9,7 @@ use rigport_model::{Clip, Interpolation, JointIndex, Track, TrackTarget, Warning
 use super::importer::{resolve_path, Importer, SkelData};
 use super::parse::{self, PrimSpec, Value};
 use super::stage::{Prim, Stage};
-use super::values::{self, is_half_type, round_to_half, tokens, tuples};
+use super::values::{self, is_half_type, numbers, round_to_half, tokens, tuples};
 use crate::ImportError;
 
 /// An animation attribute: sample times (time codes; `None` for a default value) and
@@ -17,6 +17,16 @@ use crate::ImportError;
 struct AnimAttr<const N: usize> {
     times: Option<Vec<f64>>,
     values: Vec<Vec<[f64; N]>>,
+}
+
+impl<const N: usize> AnimAttr<N> {
+    /// No value: the joints keep their rest transforms (no tracks).
+    fn empty() -> Self {
+        Self {
+            times: None,
+            values: Vec::new(),
+        }
+    }
 }
 
 /// Drops keys whose `f32` time equals the previous one (distinct time codes that round to
@@ -212,41 +222,56 @@ impl<'l> Importer<'l, '_> {
     /// One SkelAnimation as a clip; `None` (with a warning) when UsdSkel would ignore it.
     fn clip(&mut self, prim: &Prim<'l>, skel: &SkelData) -> Result<Option<Clip>, ImportError> {
         let path = prim.path.clone();
-        let Some((joints_value, joints_prop)) = self.static_attr(prim, "joints") else {
-            self.incomplete(&path, "a SkelAnimation without joints: no clip");
-            return Ok(None);
+        let weights = self.blend_weights(prim)?;
+        let anim_tokens: Vec<&str> = match self.static_attr(prim, "joints") {
+            Some((joints_value, joints_prop)) => tokens(joints_value)
+                .ok_or_else(|| self.err_at(joints_prop.line, &path, "joints must be a token[]"))?,
+            None if weights.is_some() => Vec::new(),
+            None => {
+                self.incomplete(&path, "a SkelAnimation without joints: no clip");
+                return Ok(None);
+            }
         };
-        let anim_tokens = tokens(joints_value)
-            .ok_or_else(|| self.err_at(joints_prop.line, &path, "joints must be a token[]"))?;
         let n = anim_tokens.len();
         let translations = self.anim_attr::<3>(prim, "translations", n)?;
         let rotations = self.anim_attr::<4>(prim, "rotations", n)?;
         let scales = self.anim_attr::<3>(prim, "scales", n)?;
-        let (Some(translations), Some(rotations), Some(scales)) = (translations, rotations, scales)
-        else {
-            let missing: Vec<&str> = [
-                ("translations", prim.prop("translations")),
-                ("rotations", prim.prop("rotations")),
-                ("scales", prim.prop("scales")),
-            ]
-            .iter()
-            .filter(|(_, p)| p.and_then(values::static_value).is_none())
-            .map(|(n, _)| *n)
-            .collect();
-            self.incomplete(
-                &path,
-                format!(
-                    "no {}: UsdSkel ignores a SkelAnimation without translations, rotations and \
-                     scales, so it is not imported{}",
-                    missing.join(" or "),
-                    self.behind_arc_path(&format!("{path}/x"))
-                ),
-            );
-            return Ok(None);
+        let (translations, rotations, scales) = match (translations, rotations, scales) {
+            (Some(t), Some(r), Some(s)) => (t, r, s),
+            // Blend-shape weights alone: the skeleton stays at rest.
+            _ if weights.is_some() && n == 0 => {
+                (AnimAttr::empty(), AnimAttr::empty(), AnimAttr::empty())
+            }
+            _ => {
+                let missing: Vec<&str> = [
+                    ("translations", prim.prop("translations")),
+                    ("rotations", prim.prop("rotations")),
+                    ("scales", prim.prop("scales")),
+                ]
+                .iter()
+                .filter(|(_, p)| p.and_then(values::static_value).is_none())
+                .map(|(n, _)| *n)
+                .collect();
+                self.incomplete(
+                    &path,
+                    format!(
+                        "no {}: UsdSkel ignores a SkelAnimation without translations, rotations \
+                         and scales, so {}{}",
+                        missing.join(" or "),
+                        if weights.is_some() {
+                            "only its blend-shape weights are imported"
+                        } else {
+                            "it is not imported"
+                        },
+                        self.behind_arc_path(&format!("{path}/x"))
+                    ),
+                );
+                if weights.is_none() {
+                    return Ok(None);
+                }
+                (AnimAttr::empty(), AnimAttr::empty(), AnimAttr::empty())
+            }
         };
-        if prim.prop("blendShapeWeights").is_some() {
-            self.incomplete(&path, "blendShapeWeights are not imported");
-        }
         let map: Vec<Option<usize>> = anim_tokens
             .iter()
             .map(|t| skel.tokens.iter().position(|s| s == t))
@@ -269,12 +294,18 @@ impl<'l> Importer<'l, '_> {
             );
         }
         // Key times: constant attributes get one key at the first sampled time.
-        let first = [&translations.times, &rotations.times, &scales.times]
-            .iter()
-            .filter_map(|t| t.as_ref()?.first().copied())
-            .fold(None, |acc: Option<f64>, t| {
-                Some(acc.map_or(t, |a| a.min(t)))
-            });
+        let weight_times = weights.as_ref().and_then(|(_, w)| w.times.clone());
+        let first = [
+            &translations.times,
+            &rotations.times,
+            &scales.times,
+            &weight_times,
+        ]
+        .iter()
+        .filter_map(|t| t.as_ref()?.first().copied())
+        .fold(None, |acc: Option<f64>, t| {
+            Some(acc.map_or(t, |a| a.min(t)))
+        });
         let start = first.unwrap_or(0.0);
         let shift = if start < 0.0 { -start } else { 0.0 };
         if shift > 0.0 {
@@ -294,7 +325,9 @@ impl<'l> Importer<'l, '_> {
             }
         };
         let mut tracks = Vec::new();
-        for (a, joint) in map.iter().enumerate() {
+        // Without transforms (a blend-shape-only animation) the joints stay at rest.
+        let joint_tracks = !translations.values.is_empty();
+        for (a, joint) in map.iter().enumerate().filter(|_| joint_tracks) {
             let Some(j) = joint.map(|j| JointIndex(j as u32)) else {
                 continue;
             };
@@ -348,10 +381,48 @@ impl<'l> Importer<'l, '_> {
                 });
             }
         }
+        if let Some((shape_tokens, w)) = &weights {
+            let rows: Vec<Vec<f64>> = w
+                .values
+                .iter()
+                .map(|s| s.iter().map(|x| x[0]).collect())
+                .collect();
+            tracks.extend(self.weight_tracks(
+                shape_tokens,
+                w.times.as_deref(),
+                &rows,
+                start,
+                &seconds,
+            ));
+        }
         Ok(Some(Clip {
             name: prim.name.to_string(),
             tracks,
         }))
+    }
+
+    /// The SkelAnimation's `blendShapes` and `blendShapeWeights` (one value per shape per
+    /// sample); `None` when it animates no blend shapes.
+    fn blend_weights(
+        &mut self,
+        prim: &Prim<'l>,
+    ) -> Result<Option<(Vec<&'l str>, AnimAttr<1>)>, ImportError> {
+        let Some((v, prop)) = self.static_attr(prim, "blendShapes") else {
+            if prim.prop("blendShapeWeights").is_some() {
+                let path = prim.path.clone();
+                self.incomplete(
+                    &path,
+                    "blendShapeWeights without blendShapes: UsdSkel applies none of them",
+                );
+            }
+            return Ok(None);
+        };
+        let shapes = tokens(v)
+            .ok_or_else(|| self.err_at(prop.line, &prim.path, "blendShapes must be a token[]"))?;
+        let Some(w) = self.anim_attr::<1>(prim, "blendShapeWeights", shapes.len())? else {
+            return Ok(None);
+        };
+        Ok(Some((shapes, w)))
     }
 
     /// A SkelAnimation array attribute: its samples (each `n` long) or its default.
@@ -368,7 +439,23 @@ impl<'l> Importer<'l, '_> {
         let half = prop.type_name.is_some_and(is_half_type);
         let read = |v: &Value, at: Option<f64>| -> Result<Vec<[f64; N]>, ImportError> {
             let when = at.map_or(String::new(), |t| format!(" at time {t}"));
-            let mut vals = tuples::<N>(v).ok_or_else(|| {
+            let read = if N == 1 {
+                // Plain numbers (`float[] blendShapeWeights`).
+                numbers(v).map(|xs| {
+                    xs.into_iter()
+                        .map(|x| {
+                            let mut a = [0.0; N];
+                            if let Some(s) = a.first_mut() {
+                                *s = x;
+                            }
+                            a
+                        })
+                        .collect()
+                })
+            } else {
+                tuples::<N>(v)
+            };
+            let mut vals: Vec<[f64; N]> = read.ok_or_else(|| {
                 self.err_at(
                     prop.line,
                     &prim.path,

@@ -3,7 +3,9 @@
 
 use rigport_model::{Asset, MeshIndex, SceneFrame, Skeleton};
 
+use super::implicit::is_implicit;
 use super::importer::Importer;
+use super::shapes::MeshShapes;
 use super::skin::has_skin_primvars;
 use crate::ImportError;
 
@@ -92,19 +94,18 @@ impl<'l> Importer<'l, '_> {
             }
             None => (Skeleton::default(), None),
         };
+        let mut root_motion: Option<(usize, String, Vec<String>)> = None;
         if let Some((s, _)) = &skel {
             let (world, animated) = self.world(*s)?;
             self.skel_world = world;
             if !animated.is_empty() {
-                let path = self.prim(*s).path.clone();
-                self.incomplete(
-                    &path,
-                    format!(
-                        "time-sampled transforms (xformOp) on {} are not imported as root \
-                         motion: their value at the default time is used",
-                        animated.join(", ")
-                    ),
-                );
+                // Named after the nearest prim whose transforms move.
+                let name = animated
+                    .first()
+                    .and_then(|p| p.trim_matches(['<', '>']).rsplit('/').next())
+                    .unwrap_or("xform")
+                    .to_string();
+                root_motion = Some((*s, name, animated));
             }
         }
 
@@ -120,13 +121,18 @@ impl<'l> Importer<'l, '_> {
                 continue;
             }
             let binding = skinnable.iter().find(|(m, _)| *m == i).map(|&(_, s)| s);
-            let is_mesh = prim.type_name == Some("Mesh");
+            // Implicit surfaces (Cube, Sphere, Cylinder, Capsule, Cone) are tessellated.
+            let is_mesh = prim.type_name == Some("Mesh") || is_implicit(prim.type_name);
             if !is_mesh {
                 if binding.is_some() {
                     let (path, ty) = (prim.path.clone(), prim.type_name.unwrap_or("untyped"));
                     self.incomplete(
                         &path,
-                        format!("a skinnable {ty} prim is not a Mesh: not imported"),
+                        format!(
+                            "a skinnable {ty} prim has no surface rigport imports (Meshes and \
+                             the implicit Cube, Sphere, Cylinder, Capsule and Cone are): not \
+                             imported"
+                        ),
                     );
                 }
                 continue;
@@ -136,9 +142,16 @@ impl<'l> Importer<'l, '_> {
                 (Some(_), _) => continue, // bound to another skeleton: warned above
                 (None, _) => None,
             };
-            if let Some((mut mesh, skin)) = self.mesh(i, skin_to)? {
+            if let Some((mut mesh, skin, channels)) = self.mesh(i, skin_to)? {
                 mesh.material = self.stage.prims.get(i).and_then(|p| looks.bound(p));
                 let index = MeshIndex(meshes.len() as u32);
+                if !channels.is_empty() {
+                    self.mesh_shapes.push(MeshShapes {
+                        mesh: index,
+                        targets: mesh.morph_targets.len(),
+                        channels,
+                    });
+                }
                 meshes.push(mesh);
                 if let Some(mut skin) = skin {
                     skin.mesh = index;
@@ -148,10 +161,22 @@ impl<'l> Importer<'l, '_> {
         }
 
         // Clips.
-        let clips = match &skel {
+        let mut clips = match &skel {
             Some((s, data)) => self.clips(*s, data)?,
             None => Vec::new(),
         };
+        if let Some((s, name, animated)) = root_motion {
+            self.root_motion(s, &skeleton, &mut clips, &name)?;
+            let path = self.prim(s).path.clone();
+            self.note(
+                &path,
+                format!(
+                    "time-sampled transforms (xformOp) on {} are imported as root motion (the \
+                     root joints' tracks, sampled at every time code between their samples)",
+                    animated.join(", ")
+                ),
+            );
+        }
 
         let asset = Asset {
             frame: SceneFrame {

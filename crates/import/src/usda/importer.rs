@@ -35,6 +35,8 @@ pub(super) struct Importer<'l, 'p> {
     /// World transform of the imported Skeleton prim (model space -> stage), identity
     /// without a skeleton.
     pub(super) skel_world: DMat4,
+    /// Blend-shape channels of the imported meshes, for the SkelAnimations' weights.
+    pub(super) mesh_shapes: Vec<super::shapes::MeshShapes>,
 }
 
 /// Interpolation of a primvar (`UsdGeomPrimvar`).

@@ -8,11 +8,17 @@ use glam::{DMat3, DMat4, DVec3};
 use rigport_model::glam::{Vec2, Vec3};
 use rigport_model::{Mesh, SkinBinding};
 
+use super::blend::PointMap;
+use super::implicit::tessellate;
 use super::importer::{Importer, Interp, Primvar, SkelData};
+use super::shapes::Channel;
 use super::stage::Prim;
 use super::values::{self, is_half_type, matrix, numbers, round_to_half, token, tuples};
 use super::xform::usd_matrix;
 use crate::ImportError;
+
+/// A mesh, its skin when bound, and its blend-shape channels.
+pub(super) type ImportedMesh = (Mesh, Option<SkinBinding>, Vec<Channel>);
 
 impl<'l> Importer<'l, '_> {
     /// A primvar of `N`-tuples (`N = 1` reads plain numbers) with its indices.
@@ -139,35 +145,48 @@ impl<'l> Importer<'l, '_> {
         &mut self,
         index: usize,
         skel: Option<&SkelData>,
-    ) -> Result<Option<(Mesh, Option<SkinBinding>)>, ImportError> {
+    ) -> Result<Option<ImportedMesh>, ImportError> {
         let prim = self.prim(index).clone();
         let path = prim.path.clone();
-        let Some((points_value, points_prop)) = self.static_attr(&prim, "points") else {
-            if !self.behind_arc(index).is_empty() && skel.is_some() {
-                return Err(self.err(
-                    &path,
-                    format!("the bound Mesh has no points{}", self.behind_arc(index)),
-                ));
-            }
-            self.incomplete(&path, "a Mesh without points: not imported");
-            return Ok(None);
-        };
-        let half = points_prop.type_name.is_some_and(is_half_type);
-        let mut points = tuples::<3>(points_value)
-            .ok_or_else(|| self.err_at(points_prop.line, &path, "points must be a point3f[]"))?;
-        if half {
-            for p in &mut points {
-                for x in p.iter_mut() {
-                    *x = f64::from(round_to_half(*x as f32));
+        // An implicit surface (Cube, Sphere, ...) arrives tessellated (`implicit.rs`).
+        let surface = tessellate(&prim).map_err(|e| self.err(&path, e))?;
+        let (points, counts, indices) = match &surface {
+            Some(s) => (
+                s.points.clone(),
+                Some(s.counts.clone()),
+                Some(s.indices.clone()),
+            ),
+            None => {
+                let Some((points_value, points_prop)) = self.static_attr(&prim, "points") else {
+                    if !self.behind_arc(index).is_empty() && skel.is_some() {
+                        return Err(self.err(
+                            &path,
+                            format!("the bound Mesh has no points{}", self.behind_arc(index)),
+                        ));
+                    }
+                    self.incomplete(&path, "a Mesh without points: not imported");
+                    return Ok(None);
+                };
+                let half = points_prop.type_name.is_some_and(is_half_type);
+                let mut points = tuples::<3>(points_value).ok_or_else(|| {
+                    self.err_at(points_prop.line, &path, "points must be a point3f[]")
+                })?;
+                if half {
+                    for p in &mut points {
+                        for x in p.iter_mut() {
+                            *x = f64::from(round_to_half(*x as f32));
+                        }
+                    }
                 }
+                if points.iter().flatten().any(|x| !x.is_finite()) {
+                    return Err(self.err(&path, "points holds a non-finite value"));
+                }
+                let counts = self.int_list(&prim, "faceVertexCounts")?;
+                let indices = self.int_list(&prim, "faceVertexIndices")?;
+                (points, counts, indices)
             }
-        }
-        if points.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(self.err(&path, "points holds a non-finite value"));
-        }
+        };
         let n_points = points.len();
-        let counts = self.int_list(&prim, "faceVertexCounts")?;
-        let indices = self.int_list(&prim, "faceVertexIndices")?;
         let (counts, indices) = match (counts, indices) {
             (Some(c), Some(i)) => (c, i),
             (None, None) => (Vec::new(), Vec::new()),
@@ -224,7 +243,14 @@ impl<'l> Importer<'l, '_> {
         } else {
             Interp::Constant
         };
-        let normals = self.primvar::<3>(&prim, normals_name, normals_default)?;
+        let normals = match &surface {
+            Some(s) => Some(Primvar {
+                values: s.normals.clone(),
+                indices: None,
+                interp: Interp::Vertex,
+            }),
+            None => self.primvar::<3>(&prim, normals_name, normals_default)?,
+        };
         let uv_name = if prim.prop("primvars:st").is_some() {
             Some("primvars:st".to_string())
         } else {
@@ -365,6 +391,8 @@ impl<'l> Importer<'l, '_> {
         let mut triangles = Vec::with_capacity(n_corners);
         let mut start = 0usize;
         let mut degenerate = 0usize;
+        // Face sizes, so a USD writer can give the polygons back (triangles are their fans).
+        let mut polygons: Vec<u32> = Vec::with_capacity(n_faces);
         for &c in &counts {
             let c = c as usize;
             let face = corner_vertex.get(start..start + c).unwrap_or_default();
@@ -373,20 +401,20 @@ impl<'l> Importer<'l, '_> {
                 degenerate += 1;
                 continue;
             }
+            polygons.push(c as u32);
             for k in 1..c - 1 {
                 let (a, b, d) = (face[0], face[k], face[k + 1]);
                 triangles.push(if left_handed { [a, d, b] } else { [a, b, d] });
             }
+        }
+        if polygons.iter().all(|&c| c == 3) {
+            polygons.clear();
         }
         if degenerate > 0 {
             self.repaired(
                 &path,
                 format!("{degenerate} face(s) with fewer than 3 vertices skipped"),
             );
-        }
-        if prim.prop("skel:blendShapes").is_some() || prim.prop("skel:blendShapeTargets").is_some()
-        {
-            self.incomplete(&path, "blend shapes are not imported");
         }
         let mesh = Mesh {
             name: prim.name.to_string(),
@@ -398,9 +426,13 @@ impl<'l> Importer<'l, '_> {
             morph_targets: Vec::new(),
             morph_weights: Vec::new(),
             attached_to: None,
+            polygons,
             ..Default::default()
         };
         let mut mesh = mesh;
+        // Blend-shape offsets are in the points' space: deltas take the linear part of
+        // whatever moves the points (geomBindTransform, or the static mesh's transform).
+        let mut linear = DMat3::from_mat4(geom_bind);
         let skin = match skel {
             Some(skel) => Some(self.skin(index, skel, n_points, &mesh.source_vertex)?),
             None => {
@@ -419,6 +451,7 @@ impl<'l> Importer<'l, '_> {
                     );
                 }
                 let m = self.skel_world.inverse() * world;
+                linear = DMat3::from_mat4(m);
                 if m != DMat4::IDENTITY {
                     for p in &mut mesh.positions {
                         *p = m.transform_point3(p.as_dvec3()).as_vec3();
@@ -438,7 +471,18 @@ impl<'l> Importer<'l, '_> {
                 None
             }
         };
-        Ok(Some((mesh, skin)))
+        let vertex_normals = normals.as_ref().is_some_and(|n| n.interp == Interp::Vertex);
+        let (targets, channels) = self.blend_shapes(
+            &prim,
+            &PointMap {
+                points: n_points,
+                source_vertex: &mesh.source_vertex,
+                linear,
+                vertex_normals,
+            },
+        )?;
+        mesh.morph_targets = targets;
+        Ok(Some((mesh, skin, channels)))
     }
 
     // -----------------------------------------------------------------------------------

@@ -37,9 +37,12 @@
 //!   see `xform.rs`) give [`SceneFrame::model_to_scene`]; the stage's `upAxis` gives
 //!   [`SceneFrame::up_axis`]. Nothing is converted: exporters place the model from the
 //!   frame. A static (unskinned) mesh's points and normals are moved from its own space to
-//!   model space through its world transform. Time-sampled ops are evaluated at the
-//!   default time (else their first sample) with a [`Warning::Incomplete`] (they are not
-//!   yet turned into root motion).
+//!   model space through its world transform. `model_to_scene` is the value at the
+//!   default time (else the first sample); time-sampled ops on the Skeleton or above it
+//!   become root motion, tracks of the root joints sampled at every time code between
+//!   the ops' samples, in every clip (a clip of their own without a SkelAnimation; see
+//!   `root_motion.rs`), with a [`Warning::Note`]. A static mesh under time-sampled ops
+//!   keeps their default-time value, with a [`Warning::Incomplete`].
 //! - **Weights** are kept as authored, as UsdSkel skins with them (it does not normalize):
 //!   zero weights are dropped, a joint listed twice for a point is merged, and rows that do
 //!   not sum to 1 get a [`Warning::Note`].
@@ -61,8 +64,29 @@
 //!   binary16 as USD stores them.
 //! - `primvars:skel:skinningMethod` (inherited) is the skin's
 //!   [`SkinBinding::method`]; an unknown token is skinned linearly with a warning.
-//! - Blend shapes are not imported (a [`Warning::Incomplete`]); non-`Mesh` skinnable prims
-//!   (curves, points, implicit shapes) are left out with a warning.
+//! - **Blend shapes** (`skel:blendShapes` + `skel:blendShapeTargets` on a Mesh, skinned or
+//!   not): each `BlendShape` (`offsets`, `normalOffsets`, sparse `pointIndices`) is a
+//!   morph target named after its channel, its inbetweens (`inbetweens:<name>`, `weight`
+//!   metadata) further targets `<channel>_<name>`; offsets take the linear part of the
+//!   points' transform (geomBindTransform, or a static mesh's world transform; normal
+//!   offsets the same, exact for rigid transforms), and go to every vertex split from a
+//!   point. Normal offsets need per-point (`vertex`) normals, as UsdSkel's; otherwise they
+//!   are dropped with a warning. A SkelAnimation's `blendShapes` / `blendShapeWeights`
+//!   become a morph-weight track per mesh (channels matched by token, missing ones 0):
+//!   UsdSkel's sub-shape weights (null shape at 0, primary at 1, inbetweens at their
+//!   weights, linear between neighbours, the end segments extended) are computed at every
+//!   sample and at every time the linearly interpolated channel weight crosses an inner
+//!   sub-shape weight, so the LINEAR track equals UsdSkel at every time (`blend.rs`). An
+//!   animation with blend-shape weights but no joint transforms, and a Skeleton without
+//!   joints, import (the skeleton stays at rest).
+//! - **Implicit surfaces** (`Cube`, `Sphere`, `Cylinder`, `Capsule`, `Cone`) are
+//!   tessellated (`implicit.rs`: the schemas' sizes and `axis`, 32 segments around, 16
+//!   rings pole to pole, flat faces with their own points) and imported like Meshes:
+//!   skinned (Pixar's bake tests bind them with constant influences, which UsdSkel applies
+//!   as a rigid transform: the tessellation follows it exactly), or static. Other
+//!   skinnable prims (`BasisCurves`, `Points`) are left out with a warning naming the prim.
+//! - **Polygons**: the face sizes are kept in [`Mesh::polygons`] (the triangles are their
+//!   fans), so the USD writer gives the source's faces back.
 //!
 //! # Errors
 //! Syntax errors carry `file:line:column`. UsdSkel errors name the prim path:
@@ -77,18 +101,24 @@
 //! `stage.rs` (composing one layer), `values.rs` (typed values), `xform.rs` (transforms).
 //! Building the asset: `importer.rs` (the `Importer` state and shared helpers),
 //! `assemble.rs` (`Importer::run`), `metadata.rs` (layer metadata, composition warnings),
-//! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `mesh.rs` (topology, primvars,
-//! static meshes) and `anim.rs` (SkelAnimations to clips).
+//! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `blend.rs` (blend shapes and their weights; `shapes.rs` the channels they share with the
+//! importer state), `mesh.rs` (topology, primvars,
+//! static meshes), `anim.rs` (SkelAnimations to clips), `root_motion.rs` (animated
+//! transforms above the skeleton) and `implicit.rs` (implicit surfaces as polygons).
 
 mod anim;
 mod assemble;
+mod blend;
 mod crate_file;
+mod implicit;
 mod importer;
 mod lex;
 mod material;
 mod mesh;
 mod metadata;
 mod parse;
+mod root_motion;
+mod shapes;
 mod skeleton;
 mod skin;
 mod stage;
@@ -137,6 +167,7 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
         tcps: DEFAULT_TIME_CODES_PER_SECOND,
         up_axis: UpAxis::Y,
         skel_world: DMat4::IDENTITY,
+        mesh_shapes: Vec::new(),
     };
     let asset = importer.run()?;
     Ok(Imported {

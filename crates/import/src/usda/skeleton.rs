@@ -105,6 +105,8 @@ impl<'l> Importer<'l, '_> {
         };
         let rest_local: Vec<DMat4> = match self.static_attr(&prim, "restTransforms") {
             Some((v, prop)) => self.matrix_list(v, &prop, &path, "restTransforms", n)?,
+            // No joints, nothing to place (a blend-shape-only Skeleton).
+            None if n == 0 => Vec::new(),
             None => {
                 let Some(bind) = &bind else {
                     return Err(self.err(
