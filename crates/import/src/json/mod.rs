@@ -330,7 +330,7 @@ mod tests {
                 "c.json: at /handles/0/pole: the pole is at the chain's root joint, so it defines no plane",
             ),
             (
-                format!(r#"{{"handles": [{{"joint": "hand", "solver": "two_bone", "keys": [{{"time": 0, "position": [0, 0, 0], "pole": [0, 0, 0]}}]}}]}}"#),
+                r#"{"handles": [{"joint": "hand", "solver": "two_bone", "keys": [{"time": 0, "position": [0, 0, 0], "pole": [0, 0, 0]}]}]}"#.to_string(),
                 "c.json: at /handles/0/keys/0/pole: the pole is at the chain's root joint, so it defines no plane",
             ),
             (one(r#""pole": [0, 1, 0],"#), "c.json: at /handles/0/pole: this field needs \"solver\": \"two_bone\""),
@@ -345,7 +345,7 @@ mod tests {
             (one(r#""orient": true,"#), "c.json: at /handles/0/orient: \"orient\" needs \"pin\": true"),
             (one(r#""pin": true,"#), "c.json: at /handles/0/keys: keys needs no \"pin\""),
             (
-                format!(r#"{{"handles": [{{"joint": "hand", "keys": [{{"time": 0, "position": [0, 0, 0], "rotation": [0, 0, 0, 0]}}]}}]}}"#),
+                r#"{"handles": [{"joint": "hand", "keys": [{"time": 0, "position": [0, 0, 0], "rotation": [0, 0, 0, 0]}]}]}"#.to_string(),
                 "c.json: at /handles/0/keys/0/rotation: quaternion [0.0, 0.0, 0.0, 0.0] is zero or not finite",
             ),
             (
