@@ -18,6 +18,7 @@ mod frames;
 mod gltf_read;
 mod gltf_samples;
 mod ik;
+mod ik_chains;
 mod messages;
 mod motion;
 mod outputs;
