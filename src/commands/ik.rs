@@ -152,25 +152,8 @@ pub fn run(ctx: &Context, args: &IkArgs) -> Result<()> {
                 h.frames_over_tolerance
             )?;
         }
-        for h in &summary.handles {
-            if let Some(r) = &h.reached {
-                let missed: Vec<String> = (0..r.len())
-                    .filter(|&f| !r[f])
-                    .map(|f| f.to_string())
-                    .collect();
-                let list = if missed.is_empty() {
-                    "none".to_string()
-                } else {
-                    missed.join(" ")
-                };
-                writeln!(
-                    out,
-                    "two-bone {}: reached in {}/{} frames; not reached in frames: {list}",
-                    h.joint,
-                    r.len() - missed.len(),
-                    r.len()
-                )?;
-            }
+        for line in solved.handles.iter().filter_map(|h| h.reached_summary()) {
+            writeln!(out, "{line}")?;
         }
     }
     Ok(())

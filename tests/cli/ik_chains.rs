@@ -274,3 +274,102 @@ fn bad_chain_fields_name_their_json_path() {
         assert!(!glb.exists(), "{name}: wrote output");
     }
 }
+
+/// The demo's reach (issue 16 acceptance): only the left arm moves. Feet and toes stay
+/// within 1e-3 of the height, the hips do not rotate, the free hand stays within 1% of the
+/// height, and the reaching fingertip meets its targets (within twice the solve tolerance,
+/// 1e-4 of the height, as `rigport ik`'s own test allows).
+#[test]
+fn demo_reach_moves_only_the_reaching_arm() {
+    let dir = scratch();
+    let p = |n: &str| dir.path().join(n);
+    rigport_ok(&["demo", "-o", s(dir.path()), "--quiet"]);
+    assert_valid(&p("demo.glb"));
+    let scene = gltf_read::read(&p("demo.glb"));
+    let by_name = scene.node_by_name();
+    let a = scene
+        .animations
+        .iter()
+        .position(|a| a.name == "reach")
+        .unwrap();
+    let anim = &scene.animations[a];
+    let rest = scene.world(&Default::default());
+    let height = {
+        let lo = rest
+            .iter()
+            .fold(Vec3::MAX, |m, w| m.min(w.w_axis.truncate()));
+        let hi = rest
+            .iter()
+            .fold(Vec3::MIN, |m, w| m.max(w.w_axis.truncate()));
+        (hi - lo).max_element()
+    };
+    // The handles file the demo solved, as written beside it.
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("reach.handles.json")).unwrap()).unwrap();
+    let reach = &v["handles"][0];
+    let hand = by_name[reach["joint"].as_str().unwrap()];
+    let f3 = |x: &serde_json::Value| {
+        Vec3::from_slice(
+            &x.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap() as f32)
+                .collect::<Vec<_>>(),
+        )
+    };
+    let offset = f3(&reach["offset"]);
+    let keys: Vec<(f32, Vec3)> = reach["keys"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|k| (k["time"].as_f64().unwrap() as f32, f3(&k["position"])))
+        .collect();
+    let rest_effector = rest[hand].transform_point3(offset);
+    let frames = anim.channels.iter().map(|c| c.times.len()).max().unwrap();
+    let (mut feet, mut free, mut miss, mut hips) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    for f in 0..frames {
+        let t = f as f32 / 30.0;
+        let mut deltas = std::collections::HashMap::new();
+        for ch in anim.channels.iter().filter(|c| c.path == "Rotation") {
+            let q = rigport_model::glam::Quat::from_slice(&sample_channel(ch, t));
+            deltas.insert(ch.node, scene.local[ch.node].1.inverse() * q);
+        }
+        assert!(
+            anim.channels
+                .iter()
+                .all(|c| c.node != by_name["hips"] || c.path == "Rotation"),
+            "the hips do not translate"
+        );
+        if let Some(d) = deltas.get(&by_name["hips"]) {
+            hips = hips.max(d.to_axis_angle().1.abs());
+        }
+        let world = scene.world(&deltas);
+        let moved = |n: &str| {
+            let i = by_name[n];
+            world[i]
+                .w_axis
+                .truncate()
+                .distance(rest[i].w_axis.truncate())
+        };
+        for n in ["foot_l", "foot_r", "toe_l", "toe_r"] {
+            feet = feet.max(moved(n));
+        }
+        for n in ["hand_r", "fingertip_r"] {
+            free = free.max(moved(n));
+        }
+        let k = keys.partition_point(|k| k.0 <= t).clamp(1, keys.len() - 1);
+        let (a, b) = (keys[k - 1], keys[k]);
+        let target = rest_effector + a.1.lerp(b.1, ((t - a.0) / (b.0 - a.0)).clamp(0.0, 1.0));
+        miss = miss.max(world[hand].transform_point3(offset).distance(target));
+    }
+    eprintln!(
+        "demo reach: feet/toes moved {:.2e}, free hand {:.2e}, reaching miss {:.2e} (of the height {height:.3}); hips turned {hips:.2e} rad",
+        feet / height,
+        free / height,
+        miss / height
+    );
+    assert!(feet <= 1e-3 * height, "feet moved {feet}");
+    assert!(free <= 1e-2 * height, "free hand moved {free}");
+    assert!(hips <= 1e-6, "hips turned {hips} rad");
+    assert!(miss <= 2e-4 * height, "reaching hand missed by {miss}");
+}

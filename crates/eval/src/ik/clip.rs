@@ -68,6 +68,29 @@ pub struct HandleResidual {
     pub reached: Option<Vec<bool>>,
 }
 
+impl HandleResidual {
+    /// For a two-bone handle, one line: `two-bone hand_l: reached in 58/61 frames; not
+    /// reached in frames: 30 31 32` (`none` when every frame reached).
+    pub fn reached_summary(&self) -> Option<String> {
+        let r = self.reached.as_ref()?;
+        let missed: Vec<String> = (0..r.len())
+            .filter(|&f| !r[f])
+            .map(|f| f.to_string())
+            .collect();
+        let list = if missed.is_empty() {
+            "none".to_string()
+        } else {
+            missed.join(" ")
+        };
+        Some(format!(
+            "two-bone {}: reached in {}/{} frames; not reached in frames: {list}",
+            self.joint,
+            r.len() - missed.len(),
+            r.len()
+        ))
+    }
+}
+
 /// A solved clip and how well it fits.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolvedClip {
