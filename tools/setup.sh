@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Install the external tools rigport's tests shell out to, into folders of this
 # repo that git ignores:
-#   tools/node_modules  Khronos glTF-Validator (npm gltf-validator, pinned in
-#                       tools/package.json + tools/package-lock.json, `npm ci`)
+#   tools/node_modules  Khronos glTF-Validator (npm gltf-validator) and three.js
+#                       (npm three, for tools/three_eval.mjs), pinned in
+#                       tools/package.json + tools/package-lock.json, `npm ci`
 #   tools/.venv         Python >= 3.11 venv with usd-core + numpy, pinned in
 #                       tools/requirements.txt
 #
@@ -103,15 +104,15 @@ fi
 # ------------------------------------------------------------ glTF-Validator
 npm_hash="$(hash_of "$TOOLS_DIR/package.json" "$TOOLS_DIR/package-lock.json" "node-major=$node_major")"
 if [[ "$force" != 1 && -f "$NPM_STAMP" && "$(cat "$NPM_STAMP")" == "$npm_hash" \
-      && -f "$NODE_MODULES/gltf-validator/package.json" ]]; then
-  say "glTF-Validator: up to date in tools/node_modules (stamp matches package-lock.json)"
+      && -f "$NODE_MODULES/gltf-validator/package.json" && -f "$NODE_MODULES/three/package.json" ]]; then
+  say "glTF-Validator + three.js: up to date in tools/node_modules (stamp matches package-lock.json)"
 else
-  say "glTF-Validator: npm ci in tools/ with npm $(npm --version 2>/dev/null) (exact versions from tools/package-lock.json)"
+  say "glTF-Validator + three.js: npm ci in tools/ with npm $(npm --version 2>/dev/null) (exact versions from tools/package-lock.json)"
   t0=$SECONDS
   ( cd "$TOOLS_DIR" && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error ) \
     || die "npm ci failed in tools/ (is the npm registry reachable?)"
   printf '%s\n' "$npm_hash" > "$NPM_STAMP"
-  say "glTF-Validator: installed in $((SECONDS - t0))s"
+  say "glTF-Validator + three.js: installed in $((SECONDS - t0))s"
 fi
 gv_version="$(cd "$TOOLS_DIR" && node -p 'require("gltf-validator/package.json").version')" \
   || die "tools/node_modules/gltf-validator is broken; re-run: bash tools/setup.sh --force"

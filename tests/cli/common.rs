@@ -173,6 +173,11 @@ pub fn read_npz(path: &Path) -> std::collections::BTreeMap<String, NpyArray> {
     out
 }
 
+/// Reads one `.npy` file.
+pub fn read_npy(path: &Path) -> NpyArray {
+    parse_npy(&std::fs::read(path).expect("npy exists"))
+}
+
 /// One `.npy` array.
 #[derive(Debug)]
 pub struct NpyArray {

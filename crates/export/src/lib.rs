@@ -35,8 +35,11 @@
 
 mod atomic;
 mod error;
+pub mod estimate;
 mod gltf;
 mod labels;
+pub mod npz;
+pub mod report;
 mod usd;
 mod weights;
 

@@ -1,4 +1,5 @@
-//! A minimal `.npz` writer (a zip of `.npy` arrays, as `numpy.savez` writes) for `eval` dumps.
+//! A minimal `.npz` writer (a zip of `.npy` arrays, as `numpy.savez` writes), and the
+//! arrays of a `rigport eval` dump ([`EvalDump`]).
 //!
 //! NPY format 1.0: magic, version, a little-endian u16 header length, a Python-literal
 //! header dict padded with spaces to a multiple of 64 bytes and ending in `\n`, then the raw
@@ -6,7 +7,12 @@
 
 use std::io::{Cursor, Write};
 
+mod dump;
+
+pub use dump::EvalDump;
+
 /// One array's element type and bytes.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Data {
     /// little-endian f32
     F32(Vec<f32>),
@@ -18,7 +24,18 @@ pub enum Data {
 
 /// Builds an `.npz` file in memory; arrays are stored uncompressed, in insertion order,
 /// with a fixed timestamp so the bytes are deterministic.
-#[derive(Default)]
+///
+/// ```
+/// use rigport_export::npz::{Data, NpzWriter};
+///
+/// let mut npz = NpzWriter::default();
+/// npz.add("times", &[2], Data::F32(vec![0.0, 0.5]));
+/// npz.add("names", &[1], Data::Str(vec!["hips".into()]));
+/// let bytes = npz.finish()?;
+/// assert_eq!(&bytes[..4], b"PK\x03\x04");
+/// # Ok::<(), std::io::Error>(())
+/// ```
+#[derive(Debug, Default)]
 pub struct NpzWriter {
     arrays: Vec<(String, Vec<usize>, Data)>,
 }
@@ -31,6 +48,9 @@ impl NpzWriter {
     }
 
     /// The `.npz` bytes.
+    ///
+    /// # Errors
+    /// The zip writer fails (in memory: only for an archive too large for zip64).
     pub fn finish(self) -> std::io::Result<Vec<u8>> {
         let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
         let opts = zip::write::SimpleFileOptions::default()
@@ -48,6 +68,7 @@ impl NpzWriter {
     }
 }
 
+/// One `.npy` file: header and C-order data.
 fn npy(shape: &[usize], data: &Data) -> Vec<u8> {
     let (descr, body) = match data {
         Data::F32(v) => (

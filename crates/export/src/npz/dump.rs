@@ -1,0 +1,178 @@
+//! The arrays of a `rigport eval` dump.
+
+use glam::{Mat4, Vec3};
+use rigport_model::Asset;
+
+use super::{Data, NpzWriter};
+
+/// Row-major 4x4 (numpy's C order) of a column-vector matrix, so `M[j] @ p` works in numpy.
+fn push_row_major(out: &mut Vec<f32>, m: &Mat4) {
+    out.extend_from_slice(&m.transpose().to_cols_array());
+}
+
+/// The arrays of a `rigport eval` dump, filled frame by frame: `times` (with frames),
+/// `positions` (`[F,] V, 3`, model space), `rest_positions` (`V, 3`), `joint_names` (`J`),
+/// `joint_world` and `skin_matrices` (`[F,] J, 4, 4`, row-major so `M[j] @ p` works in
+/// numpy), `influence_joints` and `influence_weights` (`V, K`, zero-padded) and `skinning`
+/// (`"lbs"` or `"dqs"`).
+///
+/// Vertices are listed mesh by mesh, each mesh in its source vertex order (for OBJ-based
+/// rigs: the `v` line order), taking the first output vertex made from each source vertex.
+/// `skin_matrices[j]` uses the inverse bind matrix of the first skin whose palette has
+/// joint `j`, or the inverse of its rest model matrix when no skin uses it.
+#[derive(Clone, Debug)]
+pub struct EvalDump {
+    /// Per dumped vertex: (mesh, mesh vertex).
+    vertices: Vec<(usize, usize)>,
+    rest_positions: Vec<f32>,
+    influence_joints: Vec<i32>,
+    influence_weights: Vec<f32>,
+    max_influences: usize,
+    inv_bind: Vec<Mat4>,
+    names: Vec<String>,
+    skinning: &'static str,
+    times: Vec<f32>,
+    positions: Vec<f32>,
+    joint_world: Vec<f32>,
+    skin_matrices: Vec<f32>,
+}
+
+impl EvalDump {
+    /// The frame-independent arrays of `asset`, skinned with `skinning` (`"lbs"` or
+    /// `"dqs"`); `skin_of_mesh(m)` is the skin binding that deforms mesh `m`, if any (the
+    /// evaluator's `Rig::skin_of_mesh`).
+    pub fn new(
+        asset: &Asset,
+        skin_of_mesh: impl Fn(usize) -> Option<usize>,
+        skinning: &'static str,
+    ) -> Self {
+        let rest = asset.skeleton.model_rest_matrices();
+        let joint_count = asset.skeleton.len();
+        let mut inv_bind: Vec<Option<Mat4>> = vec![None; joint_count];
+        for skin in &asset.skins {
+            for (p, j) in skin.joints.iter().enumerate() {
+                inv_bind[j.get()].get_or_insert(skin.inv_bind[p]);
+            }
+        }
+        let inv_bind = inv_bind
+            .iter()
+            .zip(&rest)
+            .map(|(ib, r)| ib.unwrap_or_else(|| r.inverse()))
+            .collect();
+        let mut vertices = Vec::new();
+        let mut rest_positions = Vec::new();
+        let mut rows: Vec<Vec<(i32, f32)>> = Vec::new();
+        for (mi, mesh) in asset.meshes.iter().enumerate() {
+            let skin = skin_of_mesh(mi).and_then(|s| asset.skins.get(s));
+            for &v in &mesh.first_vertex_of_source() {
+                let Some(v) = (v != u32::MAX).then_some(v as usize) else {
+                    continue;
+                };
+                vertices.push((mi, v));
+                rest_positions.extend_from_slice(&mesh.positions[v].to_array());
+                rows.push(match (skin, mesh.attached_to) {
+                    (Some(skin), _) => skin
+                        .influences
+                        .vertex(v)
+                        .iter()
+                        .map(|i| (skin.joints[i.joint as usize].0 as i32, i.weight))
+                        .collect(),
+                    (None, Some(j)) => vec![(j.0 as i32, 1.0)],
+                    (None, None) => Vec::new(),
+                });
+            }
+        }
+        let k = rows.iter().map(Vec::len).max().unwrap_or(0);
+        let mut influence_joints = Vec::with_capacity(rows.len() * k);
+        let mut influence_weights = Vec::with_capacity(rows.len() * k);
+        for row in &rows {
+            for slot in 0..k {
+                let (j, w) = row.get(slot).copied().unwrap_or((0, 0.0));
+                influence_joints.push(j);
+                influence_weights.push(w);
+            }
+        }
+        Self {
+            vertices,
+            rest_positions,
+            influence_joints,
+            influence_weights,
+            max_influences: k,
+            inv_bind,
+            names: asset
+                .skeleton
+                .joints()
+                .iter()
+                .map(|j| j.name.clone())
+                .collect(),
+            skinning,
+            times: Vec::new(),
+            positions: Vec::new(),
+            joint_world: Vec::new(),
+            skin_matrices: Vec::new(),
+        }
+    }
+
+    /// Appends one evaluated frame at `time` seconds: `joint_model` has one model-space
+    /// matrix per joint, `positions[m]` the posed model-space positions of mesh `m` (the
+    /// evaluator's `RigOutput`).
+    ///
+    /// # Panics
+    /// If the sizes do not match the asset given to [`EvalDump::new`] (a caller bug).
+    pub fn push(&mut self, time: f32, joint_model: &[Mat4], positions: &[Vec<Vec3>]) {
+        self.times.push(time);
+        for (j, ib) in self.inv_bind.iter().enumerate() {
+            push_row_major(&mut self.joint_world, &joint_model[j]);
+            push_row_major(&mut self.skin_matrices, &(joint_model[j] * *ib));
+        }
+        for &(m, v) in &self.vertices {
+            self.positions
+                .extend_from_slice(&positions[m][v].to_array());
+        }
+    }
+
+    /// The `.npz` arrays; with `frames`, the per-frame arrays get a leading frame axis and
+    /// `times` is written.
+    pub fn finish(self, frames: bool) -> NpzWriter {
+        let v = self.vertices.len();
+        let j = self.names.len();
+        let f = self.times.len();
+        let lead = |shape: &[usize]| -> Vec<usize> {
+            if frames {
+                std::iter::once(f).chain(shape.iter().copied()).collect()
+            } else {
+                shape.to_vec()
+            }
+        };
+        let mut npz = NpzWriter::default();
+        if frames {
+            npz.add("times", &[f], Data::F32(self.times));
+        }
+        npz.add("positions", &lead(&[v, 3]), Data::F32(self.positions));
+        npz.add("rest_positions", &[v, 3], Data::F32(self.rest_positions));
+        npz.add("joint_names", &[j], Data::Str(self.names));
+        npz.add(
+            "joint_world",
+            &lead(&[j, 4, 4]),
+            Data::F32(self.joint_world),
+        );
+        npz.add(
+            "skin_matrices",
+            &lead(&[j, 4, 4]),
+            Data::F32(self.skin_matrices),
+        );
+        let k = self.max_influences;
+        npz.add(
+            "influence_joints",
+            &[v, k],
+            Data::I32(self.influence_joints),
+        );
+        npz.add(
+            "influence_weights",
+            &[v, k],
+            Data::F32(self.influence_weights),
+        );
+        npz.add("skinning", &[1], Data::Str(vec![self.skinning.to_string()]));
+        npz
+    }
+}
