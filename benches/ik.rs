@@ -16,7 +16,12 @@ use rigport_eval::ik::{IkMethod, IkProblem, IkReport, IkScratch, IkSolveJob};
 #[path = "../examples/ik_bench.rs"]
 mod ik_bench;
 
-use ik_bench::{chain_joints, k_chain, load_rigs, rest, solvers, target_sets};
+use ik_bench::{chain_joints, k_chain, load_rigs, rest, solvers, target_sets, Rng};
+use rigport_eval::ik::chains::ChainSolver;
+use rigport_eval::ik::two_bone::TwoBoneIkJob;
+use rigport_eval::ik::IkSettings;
+use rigport_model::glam::{Mat4, Quat, Vec3};
+use rigport_model::{HandleSet, HandleSolver, HandleTrack, RootMotion};
 
 /// Target sets per rig; each benchmark iteration solves the next one.
 const SETS: usize = 100;
@@ -132,11 +137,135 @@ fn rigport_vs_k_on_chains(c: &mut Criterion) {
     }
 }
 
+/// One analytic two-bone solve (issue 16: target < 0.5 µs): an arm with bent, rotated
+/// joints, cycling through 100 reachable targets and poles.
+fn two_bone_job(c: &mut Criterion) {
+    let mut rng = Rng(16);
+    let unit = |rng: &mut Rng| {
+        Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize_or(Vec3::X)
+    };
+    let root =
+        Mat4::from_rotation_translation(Quat::from_rotation_y(0.3), Vec3::new(0.2, 1.4, 0.0));
+    let mid = root * Mat4::from_rotation_translation(Quat::from_rotation_z(0.4), Vec3::X * 0.3);
+    let tip = mid * Mat4::from_translation(Vec3::X * 0.28);
+    let jobs: Vec<TwoBoneIkJob> = (0..SETS)
+        .map(|_| {
+            let target = root.w_axis.truncate() + unit(&mut rng) * rng.range(0.1, 0.55);
+            let mut job = TwoBoneIkJob::new(root, mid, tip, target);
+            job.pole = unit(&mut rng);
+            job.mid_axis = TwoBoneIkJob::bend_axis(root, mid, tip, job.pole);
+            job.soften = 0.05;
+            job
+        })
+        .collect();
+    let mut next = 0;
+    c.bench_function("two_bone/solve", |b| {
+        b.iter(|| {
+            let job = &jobs[next % jobs.len()];
+            next += 1;
+            black_box(black_box(job).run())
+        })
+    });
+}
+
+/// One frame of a full-body solve on the CSCI 520 armadillo (issue 16: target < 50 µs
+/// median): 4 keyed effectors (hands 15 and 19, head 21, elbow 13; DLS) and 2 pinned feet
+/// (4 and 8), free root, from the rest pose; targets cycle through 100 random poses.
+fn pinned_full_body_frame(c: &mut Criterion) {
+    let Some(rig) = load_rigs()
+        .into_iter()
+        .find(|r| r.name.contains("armadillo"))
+    else {
+        eprintln!("SKIPPED ik_chains: no armadillo");
+        return;
+    };
+    let skeleton = &rig.skeleton;
+    let joint = |i: u32| skeleton.find(&format!("joint_{i}"));
+    let (Some(h15), Some(h19), Some(h21), Some(h13), Some(f4), Some(f8)) = (
+        joint(15),
+        joint(19),
+        joint(21),
+        joint(13),
+        joint(4),
+        joint(8),
+    ) else {
+        eprintln!("SKIPPED ik_chains: armadillo joints missing");
+        return;
+    };
+    let start = rest(skeleton);
+    let mut rng = Rng(160);
+    let effectors = [h15, h19, h21, h13];
+    let mut positions = vec![Vec::new(); effectors.len()];
+    for _ in 0..SETS {
+        let mut pose = rigport_eval::Pose::rest(skeleton);
+        for l in pose.local.iter_mut().skip(1) {
+            let a = |rng: &mut Rng| rng.range(-0.4, 0.4);
+            let q = Quat::from_euler(
+                rigport_model::glam::EulerRot::XYZ,
+                a(&mut rng),
+                a(&mut rng),
+                a(&mut rng),
+            );
+            l.rotation = (l.rotation * q).normalize();
+        }
+        let Ok(model) = pose.model_matrices(skeleton) else {
+            return;
+        };
+        for (list, e) in positions.iter_mut().zip(effectors) {
+            list.push(model[e.get()].w_axis.truncate());
+        }
+    }
+    let times: Vec<f32> = (0..SETS).map(|k| k as f32).collect();
+    let mut tracks: Vec<HandleTrack> = effectors
+        .iter()
+        .zip(positions)
+        .map(|(&j, p)| HandleTrack::keyed(j, "e", times.clone(), p))
+        .collect();
+    for foot in [f4, f8] {
+        let mut pin = HandleTrack::keyed(foot, "pin", Vec::new(), Vec::new());
+        pin.pin = true;
+        pin.solver = HandleSolver::Iterative;
+        tracks.push(pin);
+    }
+    let handles = HandleSet {
+        fps: None,
+        tracks,
+        base: None,
+        root_motion: Some(RootMotion::Free),
+        limits: Vec::new(),
+    };
+    let settings = IkSettings {
+        tolerance: 1e-4 * rig.height,
+        free_root_translation: true,
+        ..IkSettings::default()
+    };
+    let Ok(mut solver) = ChainSolver::new(skeleton, &handles, &settings, &start) else {
+        eprintln!("SKIPPED ik_chains: setup failed");
+        return;
+    };
+    let mut report = solver.report();
+    let mut pose = start.clone();
+    let mut next = 0usize;
+    c.bench_function("ik_chains/armadillo_4_effectors_2_pins", |b| {
+        b.iter(|| {
+            pose.copy_from_slice(&start);
+            let t = (next % SETS) as f32;
+            next += 1;
+            black_box(solver.solve_frame(t, &mut pose, &mut report))
+        })
+    });
+}
+
 criterion_group! {
     name = ik;
     config = Criterion::default()
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(3));
-    targets = solvers_on_rigs, rigport_vs_k_on_chains
+    targets = solvers_on_rigs, rigport_vs_k_on_chains, two_bone_job, pinned_full_body_frame
 }
 criterion_main!(ik);

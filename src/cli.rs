@@ -81,7 +81,14 @@ pub enum Command {
         Targets are model-space positions in the rig's length unit (\"relative\": offsets from the \
         effector's rest position), linear between keys. \"offset\" (optional) is the effector point \
         in the joint's frame, e.g. a bone's tip. Every ancestor of a handle may rotate; each frame \
-        starts from the previous frame's solution.")]
+        starts from the previous frame's solution.\n\
+        Chain-aware fields (any of them: only the handles' chains move, each frame starts from the \
+        input pose, the root is locked unless \"root_motion\": \"free\"): per handle \"root\", \
+        \"pin\": true (no keys; \"orient\": true keeps the rotation too), \"solver\": \"two_bone\" \
+        with \"pole\" [x,y,z] (also per key), \"twist_deg\", \"soften\" 0-1 and \"weight\" 0-1; per key \
+        \"rotation\" [x,y,z,w] (model space); top level \"base\": \"<clip>\", \"root_motion\", \
+        \"limits\": {\"joint\": {\"x\": [min_deg, max_deg], \"order\": \"xyz\"}} (rest frame; ASF \
+        dof/limits apply too). Limits are clamps of Euler angles relative to rest.")]
     Ik(IkArgs),
     /// Hold mocap feet still while they touch the ground (two-bone IK on the legs).
     #[command(
@@ -335,7 +342,8 @@ pub struct IkArgs {
     /// Split target moves longer than D into sub-steps.
     #[arg(long, value_name = "D")]
     pub substep: Option<f32>,
-    /// Let the root translate too (Jacobian solvers).
+    /// Let the root translate too (Jacobian solvers); the same as `"root_motion": "free"`
+    /// in the handles file.
     #[arg(long)]
     pub free_root: bool,
     /// Print the residual summary as JSON on stdout.

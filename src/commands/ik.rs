@@ -3,7 +3,7 @@
 use std::io::Write;
 
 use anyhow::{bail, Result};
-use rigport_eval::ik::clip::{solve_clip, ClipSolveOptions};
+use rigport_eval::ik::clip::{solve_clip_on, ClipSolveOptions};
 use rigport_eval::ik::{IkMethod, Lambda};
 use serde::Serialize;
 
@@ -20,6 +20,8 @@ pub struct HandleSummary {
     worst_frame: usize,
     worst_time: f32,
     frames_over_tolerance: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reached: Option<Vec<bool>>,
 }
 
 /// The whole report (`--json`).
@@ -80,14 +82,17 @@ pub fn run(ctx: &Context, args: &IkArgs) -> Result<()> {
     let mut asset = imported.asset;
     let mut warnings = imported.warnings;
     let handles = rigport_import::json::handles::read(&args.handles, &asset.skeleton)?;
+    let clip_names: Vec<&str> = asset.clips.iter().map(|c| c.name.as_str()).collect();
+    rigport_import::json::handles::check_base(&args.handles, &handles, &clip_names)?;
     let name = args
         .handles
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "ik".into());
     let solved = ctx.step("solving", || {
-        solve_clip(
+        solve_clip_on(
             &asset.skeleton,
+            &asset.clips,
             &handles,
             &opts,
             &name,
@@ -112,6 +117,7 @@ pub fn run(ctx: &Context, args: &IkArgs) -> Result<()> {
                 worst_frame: h.worst_frame,
                 worst_time: h.worst_time,
                 frames_over_tolerance: h.frames_over_tolerance,
+                reached: h.reached.clone(),
             })
             .collect(),
     };
@@ -145,6 +151,9 @@ pub fn run(ctx: &Context, args: &IkArgs) -> Result<()> {
                 h.worst_time,
                 h.frames_over_tolerance
             )?;
+        }
+        for line in solved.handles.iter().filter_map(|h| h.reached_summary()) {
+            writeln!(out, "{line}")?;
         }
     }
     Ok(())

@@ -20,6 +20,7 @@ mod frames;
 mod gltf_read;
 mod gltf_samples;
 mod ik;
+mod ik_chains;
 mod materials;
 mod memory;
 mod message_audit;

@@ -46,10 +46,12 @@ pub const TWIST_KEYS_JSON: &str = r#"{
 pub const REACH_HANDLES_JSON: &str = r#"{
   "fps": 30,
   "handles": [
-    {"joint": "fingertip_l", "relative": true, "offset": [0.16, 0, 0],
+    {"joint": "fingertip_l", "root": "shoulder_l", "relative": true, "offset": [0.16, 0, 0],
      "keys": [{"time": 0, "position": [0, 0, 0]},
               {"time": 1, "position": [-0.35, 0.15, 0.35]},
-              {"time": 2, "position": [0, 0, 0]}]}
+              {"time": 2, "position": [0, 0, 0]}]},
+    {"joint": "toe_l", "pin": true, "orient": true, "root": "thigh_l"},
+    {"joint": "toe_r", "pin": true, "orient": true, "root": "thigh_r"}
   ]
 }
 "#;
@@ -182,22 +184,35 @@ pub fn twist_keys(skeleton: &Skeleton) -> Result<PoseKeys, DemoError> {
 
 /// The IK handles of clip `reach`: the left fingertip (bone `fingertip_l` turns about the
 /// wrist; the 0.16 m offset along +X puts the effector at the finger's tip) reaches forward
-/// and up (offsets from its rest position, metres), then returns. 2 s.
+/// and up (offsets from its rest position, metres), then returns, 2 s, moving only the arm
+/// (`root`: `shoulder_l`); both toes are pinned (position and rotation), the root stays.
 ///
 /// # Errors
 /// [`DemoError::UnknownJoint`] for a skeleton other than the demo's.
 pub fn reach_handles(skeleton: &Skeleton) -> Result<HandleSet, DemoError> {
+    let mut reach = HandleTrack::keyed(
+        find(skeleton, "fingertip_l")?,
+        "fingertip_l",
+        vec![0.0, 1.0, 2.0],
+        vec![Vec3::ZERO, Vec3::new(-0.35, 0.15, 0.35), Vec3::ZERO],
+    );
+    reach.offset = Vec3::new(0.16, 0.0, 0.0);
+    reach.relative = true;
+    reach.root = Some(find(skeleton, "shoulder_l")?);
+    let mut tracks = vec![reach];
+    for (toe, thigh) in [("toe_l", "thigh_l"), ("toe_r", "thigh_r")] {
+        let mut pin = HandleTrack::keyed(find(skeleton, toe)?, toe, Vec::new(), Vec::new());
+        pin.pin = true;
+        pin.orient = true;
+        pin.root = Some(find(skeleton, thigh)?);
+        tracks.push(pin);
+    }
     Ok(HandleSet {
         fps: Some(KEY_FPS),
-        tracks: vec![HandleTrack {
-            joint: find(skeleton, "fingertip_l")?,
-            name: "fingertip_l".to_owned(),
-            offset: Vec3::new(0.16, 0.0, 0.0),
-            weight: 1.0,
-            relative: true,
-            times: vec![0.0, 1.0, 2.0],
-            positions: vec![Vec3::ZERO, Vec3::new(-0.35, 0.15, 0.35), Vec3::ZERO],
-        }],
+        tracks,
+        base: None,
+        root_motion: None,
+        limits: Vec::new(),
     })
 }
 

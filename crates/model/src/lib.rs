@@ -25,7 +25,7 @@ pub use asset::{Asset, AssetError};
 pub use budget::{MemoryBudget, OverBudget};
 pub use clip::{Clip, Interpolation, Track, TrackTarget};
 pub use frame::{SceneFrame, SkinningMethod, UpAxis};
-pub use handle::{HandleSet, HandleTrack};
+pub use handle::{HandleSet, HandleSolver, HandleTrack, RootMotion, RotationLimit};
 pub use index::{JointIndex, MeshIndex};
 pub use keyed::{PoseKey, PoseKeys, RestRotation};
 pub use material::{

@@ -3,6 +3,7 @@ use std::fmt;
 
 use glam::Mat4;
 
+use crate::RotationLimit;
 use crate::{JointIndex, Transform};
 
 /// One joint of a [`Skeleton`].
@@ -22,6 +23,8 @@ pub struct Joint {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Skeleton {
     joints: Vec<Joint>,
+    /// Rotation limits the source states (ASF `dof`/`limits`); IK honours them.
+    limits: Vec<RotationLimit>,
 }
 
 /// One thing wrong with a joint list, as found by [`Skeleton::new`] or [`parents_first_order`].
@@ -127,10 +130,32 @@ impl Skeleton {
             }
         }
         if problems.is_empty() {
-            Ok(Self { joints })
+            Ok(Self {
+                joints,
+                limits: Vec::new(),
+            })
         } else {
             Err(problems)
         }
+    }
+
+    /// The rotation limits the source rig states (an ASF's `dof` and `limits`), at most one
+    /// per joint, ascending by joint. Only IK reads them; exporters ignore them.
+    pub fn limits(&self) -> &[RotationLimit] {
+        &self.limits
+    }
+
+    /// Sets the rotation limits, keeping those of joints of this skeleton (the last for a
+    /// joint given twice), sorted by joint.
+    pub fn set_limits(&mut self, limits: impl IntoIterator<Item = RotationLimit>) {
+        let n = self.joints.len();
+        let mut by_joint: Vec<Option<RotationLimit>> = vec![None; n];
+        for l in limits {
+            if let Some(slot) = by_joint.get_mut(l.joint.get()) {
+                *slot = Some(l);
+            }
+        }
+        self.limits = by_joint.into_iter().flatten().collect();
     }
 
     /// The joints, parents first.

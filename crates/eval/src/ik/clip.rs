@@ -62,6 +62,33 @@ pub struct HandleResidual {
     pub worst_time: f32,
     /// Frames that end farther than the tolerance.
     pub frames_over_tolerance: usize,
+    /// Largest angle to the rotation target over all frames, degrees (0 without one).
+    pub max_orientation_residual_deg: f32,
+    /// Two-bone handles: per frame, whether the analytic solve reached the target.
+    pub reached: Option<Vec<bool>>,
+}
+
+impl HandleResidual {
+    /// For a two-bone handle, one line: `two-bone hand_l: reached in 58/61 frames; not
+    /// reached in frames: 30 31 32` (`none` when every frame reached).
+    pub fn reached_summary(&self) -> Option<String> {
+        let r = self.reached.as_ref()?;
+        let missed: Vec<String> = (0..r.len())
+            .filter(|&f| !r[f])
+            .map(|f| f.to_string())
+            .collect();
+        let list = if missed.is_empty() {
+            "none".to_string()
+        } else {
+            missed.join(" ")
+        };
+        Some(format!(
+            "two-bone {}: reached in {}/{} frames; not reached in frames: {list}",
+            self.joint,
+            r.len() - missed.len(),
+            r.len()
+        ))
+    }
 }
 
 /// A solved clip and how well it fits.
@@ -116,6 +143,12 @@ pub enum ClipSolveError {
     /// The solved poses could not be baked.
     #[error("cannot bake the solved poses")]
     Bake(#[source] SampleError),
+    /// The handles' `base` clip is not among the input's clips.
+    #[error("the input has no clip named {0:?} (the handles' base)")]
+    UnknownBase(String),
+    /// The base clip does not fit the skeleton.
+    #[error("cannot sample the base clip")]
+    Base(#[source] SampleError),
 }
 
 /// A handle's target positions as a LINEAR translation track of its joint, so the clip
@@ -128,6 +161,32 @@ fn position_track(track: &HandleTrack) -> rigport_model::Track {
         times: track.times.clone(),
         values: track.positions.iter().flat_map(|p| p.to_array()).collect(),
     }
+}
+
+/// The target of `track` at time `t` (seconds): linear between keys, held before the first
+/// and after the last.
+pub fn handle_position(track: &HandleTrack, t: f32) -> Vec3 {
+    lerp_keys(&track.times, &track.positions, t)
+}
+
+/// Keys `values` at `times` (strictly increasing, same length) at time `t`: linear between
+/// keys, held before the first and after the last; NaN without keys.
+pub(crate) fn lerp_keys(times: &[f32], values: &[Vec3], t: f32) -> Vec3 {
+    let n = times.len().min(values.len());
+    let (Some(&first), Some(&last)) = (values.first(), values.get(n.wrapping_sub(1))) else {
+        return Vec3::NAN;
+    };
+    if n <= 1 || t <= times[0] {
+        return first;
+    }
+    if t >= times[n - 1] {
+        return last;
+    }
+    let k = times.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
+    let u = (t - times[k]) / (times[k + 1] - times[k]);
+    // glam's lerp (`a * (1 - u) + b * u`), not the clip sampler's `a + (b - a) * u`: the
+    // handles have always been interpolated this way, and solved clips depend on the bits.
+    values[k].lerp(values[k + 1], u)
 }
 
 /// The model-space targets of a handle set over time, as [`solve_clip`] solves for them
@@ -222,18 +281,9 @@ impl HandleTargets {
 /// )?
 /// .asset;
 /// let hand = asset.skeleton.find("fingertip_l").expect("the demo has a left hand");
-/// let handles = HandleSet {
-///     fps: Some(10.0),
-///     tracks: vec![HandleTrack {
-///         joint: hand,
-///         name: "fingertip_l".into(),
-///         offset: Vec3::ZERO,
-///         weight: 1.0,
-///         relative: true,
-///         times: vec![0.0, 1.0],
-///         positions: vec![Vec3::ZERO, Vec3::new(-0.1, 0.1, 0.1)],
-///     }],
-/// };
+/// let mut track = HandleTrack::keyed(hand, "fingertip_l", vec![0.0, 1.0], vec![Vec3::ZERO, Vec3::new(-0.1, 0.1, 0.1)]);
+/// track.relative = true;
+/// let handles = HandleSet { fps: Some(10.0), tracks: vec![track], base: None, root_motion: None, limits: vec![] };
 /// let solved = solve_clip(&asset.skeleton, &handles, &ClipSolveOptions::default(), "reach", "doc")?;
 /// assert_eq!(solved.frames, 11);
 /// assert_eq!(solved.clip.duration(), 1.0);
@@ -247,6 +297,30 @@ pub fn solve_clip(
     name: &str,
     label: &str,
 ) -> Result<SolvedClip, ClipSolveError> {
+    solve_clip_on(skeleton, &[], handles, options, name, label)
+}
+
+/// As [`solve_clip`], with the input's clips for a handle set that names a `base` clip.
+/// A handle set that uses any chain-aware field ([`HandleSet::uses_chains`]) is solved by
+/// [`super::chains::ChainSolver`] frame by frame from the input pose (the base clip's
+/// sample at each frame time, or rest), on the grid from 0 to the last key or the base
+/// clip's end, at `options.fps`, else the handles' rate, else the base clip's, else 30;
+/// the output clip animates the base clip's channels plus the rotations of the joints the
+/// chains move. Other handle sets solve exactly as before.
+///
+/// # Errors
+/// As [`solve_clip`]; [`ClipSolveError::UnknownBase`], [`ClipSolveError::Base`].
+pub fn solve_clip_on(
+    skeleton: &Skeleton,
+    clips: &[Clip],
+    handles: &HandleSet,
+    options: &ClipSolveOptions,
+    name: &str,
+    label: &str,
+) -> Result<SolvedClip, ClipSolveError> {
+    if handles.uses_chains() {
+        return super::chains::solve_chains(skeleton, clips, handles, options, name, label);
+    }
     let fps = options.fps.or(handles.fps).unwrap_or(30.0);
     if !(fps.is_finite() && fps > 0.0) {
         return Err(ClipSolveError::Fps(fps));
@@ -351,6 +425,8 @@ pub fn solve_clip(
                 worst_frame,
                 worst_time: times.get(worst_frame).copied().unwrap_or(0.0),
                 frames_over_tolerance: r.iter().filter(|&&v| v > tolerance).count(),
+                max_orientation_residual_deg: 0.0,
+                reached: None,
             }
         })
         .collect();

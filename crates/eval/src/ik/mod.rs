@@ -63,6 +63,7 @@
 //! start, and it is never NaN for finite input. The solver is deterministic: no randomness,
 //! no hashing, fixed visiting orders.
 
+pub mod chains;
 pub mod clip;
 mod linalg;
 mod solver;
@@ -223,11 +224,45 @@ pub enum JointLimit {
         /// Upper bounds `[x, y, z]`, radians.
         max_rad: Vec3,
     },
+    /// As [`JointLimit::Euler`], with the angles those of `frame⁻¹ · delta · frame`: axes of
+    /// another frame than the rest frame (an ASF bone's `axis` frame; see
+    /// [`rigport_model::RotationLimit`]).
+    EulerInFrame {
+        /// The frame the angles are read in, relative to the rest frame (unit).
+        frame: Quat,
+        /// The axis order the angles are read in.
+        order: EulerOrder,
+        /// Lower bounds `[x, y, z]`, radians.
+        min_rad: Vec3,
+        /// Upper bounds `[x, y, z]`, radians.
+        max_rad: Vec3,
+    },
+}
+
+impl From<&rigport_model::RotationLimit> for JointLimit {
+    fn from(l: &rigport_model::RotationLimit) -> Self {
+        if l.frame == Quat::IDENTITY {
+            JointLimit::Euler {
+                order: l.order,
+                min_rad: l.min_rad,
+                max_rad: l.max_rad,
+            }
+        } else {
+            JointLimit::EulerInFrame {
+                frame: l.frame,
+                order: l.order,
+                min_rad: l.min_rad,
+                max_rad: l.max_rad,
+            }
+        }
+    }
 }
 
 impl JointLimit {
-    /// Projects `delta` (relative to rest) into the limit.
-    fn project(&self, delta: Quat) -> Quat {
+    /// Projects `delta` (the rotation relative to rest) into the limit: the angle cut for
+    /// [`JointLimit::Angle`], each Euler angle clamped after decomposition for the Euler
+    /// variants (a clamp, not the nearest rotation within the limit).
+    pub fn project(&self, delta: Quat) -> Quat {
         match *self {
             JointLimit::Angle { max_rad } => {
                 let (axis, angle) = axis_angle(delta);
@@ -246,6 +281,47 @@ impl JointLimit {
                 let clamped = Vec3::from(angles).clamp(min_rad, max_rad);
                 order.to_quat(clamped.to_array())
             }
+            JointLimit::EulerInFrame {
+                frame,
+                order,
+                min_rad,
+                max_rad,
+            } => {
+                let inner = JointLimit::Euler {
+                    order,
+                    min_rad,
+                    max_rad,
+                };
+                (frame * inner.project(frame.conjugate() * delta * frame) * frame.conjugate())
+                    .normalize()
+            }
+        }
+    }
+
+    /// How far `delta` (the rotation relative to rest) is outside the limit, radians: the
+    /// largest Euler angle excess (Euler variants) or angle excess ([`JointLimit::Angle`]).
+    pub fn excess_rad(&self, delta: Quat) -> f32 {
+        match *self {
+            JointLimit::Angle { max_rad } => (axis_angle(delta).1 - max_rad).max(0.0),
+            JointLimit::Euler {
+                order,
+                min_rad,
+                max_rad,
+            } => {
+                let a = Vec3::from(euler_angles(order, delta));
+                (min_rad - a).max(a - max_rad).max_element().max(0.0)
+            }
+            JointLimit::EulerInFrame {
+                frame,
+                order,
+                min_rad,
+                max_rad,
+            } => JointLimit::Euler {
+                order,
+                min_rad,
+                max_rad,
+            }
+            .excess_rad(frame.conjugate() * delta * frame),
         }
     }
 
@@ -257,7 +333,13 @@ impl JointLimit {
                     return bad("max_rad must be within 0..=pi");
                 }
             }
+            JointLimit::EulerInFrame { frame, .. } if !frame.is_finite() => {
+                return bad("frame must be finite");
+            }
             JointLimit::Euler {
+                min_rad, max_rad, ..
+            }
+            | JointLimit::EulerInFrame {
                 min_rad, max_rad, ..
             } => {
                 if !min_rad.is_finite() || !max_rad.is_finite() {

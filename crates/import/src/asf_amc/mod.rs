@@ -188,7 +188,9 @@ pub fn to_asset(
             });
         }
     }
-    let rig = build_skeleton(asf)?;
+    let mut rig = build_skeleton(asf)?;
+    let limits: Vec<_> = rotation_limits(asf, &rig).collect();
+    rig.skeleton.set_limits(limits);
     let mut clips = Vec::with_capacity(motions.len());
     for (clip_name, amc) in motions {
         clips.push(build_clip(asf, &rig, clip_name, amc, fps, &mut warnings)?);
@@ -208,4 +210,65 @@ pub fn to_asset(
         )
     })?;
     Ok(Imported { asset, warnings })
+}
+
+/// The bones' rotation limits for IK: per bone, Euler angles of `M` (the frame rotation of
+/// `W = W_parent · C · M · C⁻¹`, read in the bone's `axis` frame `C`) in dof order, each
+/// listed rotational dof within its `limits` pair (unbounded without `limits`; infinite or
+/// wider bounds cut to ±180°), each rotation axis the bone does not list locked at 0 (ASF:
+/// a bone turns only about its dofs). The root is not limited.
+fn rotation_limits<'a>(
+    asf: &'a Asf,
+    rig: &'a skeleton::Rig,
+) -> impl Iterator<Item = rigport_model::RotationLimit> + 'a {
+    use rigport_model::conventions::EulerOrder;
+    use rigport_model::glam::Vec3;
+    let pi = std::f64::consts::PI;
+    asf.bones.iter().enumerate().filter_map(move |(b, bone)| {
+        let joint = *rig.node_joint.get(b + 1)?;
+        let mut order = String::new();
+        let mut min = [0.0f64; 3];
+        let mut max = [0.0f64; 3];
+        for (k, dof) in bone.dofs.iter().enumerate() {
+            let axis = match dof {
+                Dof::Rx => 0,
+                Dof::Ry => 1,
+                Dof::Rz => 2,
+                _ => continue,
+            };
+            order.push(['x', 'y', 'z'][axis]);
+            let (lo, hi) = bone.limits.get(k).copied().unwrap_or((-pi, pi));
+            let to_rad = |v: f64| asf.units.angle.to_radians(v);
+            min[axis] = if lo.is_finite() {
+                to_rad(lo).max(-pi)
+            } else {
+                -pi
+            };
+            max[axis] = if hi.is_finite() {
+                to_rad(hi).min(pi)
+            } else {
+                pi
+            }
+            .max(min[axis]);
+        }
+        for axis in ['x', 'y', 'z'] {
+            if !order.contains(axis) {
+                order.push(axis);
+            }
+        }
+        let order = EulerOrder::parse(&order)?;
+        let frame = skeleton::euler(
+            bone.axis_order,
+            rigport_model::glam::DVec3::from_array(
+                bone.axis.to_array().map(|a| asf.units.angle.to_radians(a)),
+            ),
+        );
+        Some(rigport_model::RotationLimit {
+            joint,
+            frame: frame.as_quat(),
+            order,
+            min_rad: Vec3::from(min.map(|v| v as f32)),
+            max_rad: Vec3::from(max.map(|v| v as f32)),
+        })
+    })
 }

@@ -302,6 +302,37 @@ fn chain_skeleton_and_units() {
         .joints()
         .iter()
         .all(|j| j.rest_local.rotation == Quat::IDENTITY));
+    // The bones' dof/limits as IK limits: shin `dof rz rx`, `limits (-90 90) (-10 170)` in
+    // its `axis` frame, y locked; foot's infinite limits become ±180°.
+    let limit = |name: &str| {
+        let j = s.find(name).unwrap();
+        *s.limits().iter().find(|l| l.joint == j).unwrap()
+    };
+    let shin_l = limit("shin");
+    assert_eq!(shin_l.order, EulerOrder::Zxy);
+    let deg = |v: Vec3| v * std::f32::consts::PI / 180.0;
+    assert!(
+        (shin_l.min_rad - deg(Vec3::new(-10.0, 0.0, -90.0)))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    assert!(
+        (shin_l.max_rad - deg(Vec3::new(170.0, 0.0, 90.0)))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    let c = super::skeleton::euler(
+        EulerOrder::Zxy,
+        DVec3::new(-35.0, 15.0, 50.0) * std::f64::consts::PI / 180.0,
+    );
+    assert!(shin_l.frame.angle_between(c.as_quat()) < 1e-6);
+    let foot_l = limit("foot");
+    assert_eq!(foot_l.min_rad.y, -std::f32::consts::PI);
+    assert_eq!(foot_l.max_rad.y, std::f32::consts::PI);
+    // `hip` lists no dof: fully locked.
+    assert_eq!(limit("hip").max_rad, Vec3::ZERO);
 }
 
 #[test]

@@ -78,6 +78,45 @@ pub enum JsonProblem {
     /// A handle weight that is not finite and positive.
     #[error("{0} must be > 0")]
     BadWeight(f32),
+    /// A word that is not one of the allowed ones.
+    #[error("unknown value {found:?}; expected {expected}")]
+    UnknownWord {
+        /// The word given.
+        found: String,
+        /// The allowed ones.
+        expected: &'static str,
+    },
+    /// A handle's `root` that is not an ancestor of its joint.
+    #[error("{root:?} is not an ancestor of {joint:?}")]
+    NotAncestor {
+        /// The root given.
+        root: String,
+        /// The handle joint.
+        joint: String,
+    },
+    /// A two-bone handle whose chain does not fit.
+    #[error("two-bone chain: {0}")]
+    TwoBoneChain(String),
+    /// A field that needs another one.
+    #[error("{0} needs {1}")]
+    Needs(&'static str, &'static str),
+    /// A value that must be within 0..=1.
+    #[error("{0} must be within 0..=1")]
+    OutOfUnit(f32),
+    /// A pole target on the chain's root joint.
+    #[error("the pole is at the chain's root joint, so it defines no plane")]
+    PoleAtRoot,
+    /// A limit pair that is not `[min, max]` in degrees within ±180 with min <= max.
+    #[error("limit {0:?}: expected [min_deg, max_deg], finite, within -180..=180, min <= max")]
+    BadLimit([f32; 2]),
+    /// A clip name the input does not have.
+    #[error("the input has no clip named {name:?} (it has: {known})")]
+    UnknownClip {
+        /// The name given.
+        name: String,
+        /// The input's clip names.
+        known: String,
+    },
 }
 
 /// A JSON input that could not be read: where, and what is wrong.
@@ -272,6 +311,102 @@ mod tests {
                 message("h.json", &text, handles)
             );
         }
+    }
+
+    #[test]
+    fn chain_fields_errors_name_the_json_path() {
+        let key = r#"{"time": 0, "position": [0, 0, 0]}"#;
+        let one = |fields: &str| {
+            format!(r#"{{"handles": [{{"joint": "hand", {fields} "keys": [{key}]}}]}}"#)
+        };
+        for (text, expected) in [
+            (one(r#""root": "nope","#), "c.json: at /handles/0/root: the rig has no joint named \"nope\""),
+            (
+                format!(r#"{{"handles": [{{"joint": "arm", "root": "hand", "keys": [{key}]}}]}}"#),
+                "c.json: at /handles/0/root: \"hand\" is not an ancestor of \"arm\"",
+            ),
+            (
+                one(r#""solver": "two_bone", "pole": [0, 0, 0],"#),
+                "c.json: at /handles/0/pole: the pole is at the chain's root joint, so it defines no plane",
+            ),
+            (
+                r#"{"handles": [{"joint": "hand", "solver": "two_bone", "keys": [{"time": 0, "position": [0, 0, 0], "pole": [0, 0, 0]}]}]}"#.to_string(),
+                "c.json: at /handles/0/keys/0/pole: the pole is at the chain's root joint, so it defines no plane",
+            ),
+            (one(r#""pole": [0, 1, 0],"#), "c.json: at /handles/0/pole: this field needs \"solver\": \"two_bone\""),
+            (one(r#""solver": "three_bone","#), "c.json: at /handles/0/solver: unknown value \"three_bone\"; expected \"two_bone\" or \"iterative\""),
+            (one(r#""solver": "two_bone", "soften": 2,"#), "c.json: at /handles/0/soften: 2 must be within 0..=1"),
+            (one(r#""solver": "two_bone", "weight": 1.5,"#), "c.json: at /handles/0/weight: 1.5 must be within 0..=1"),
+            (one(r#""solver": "two_bone", "root": "arm","#), "c.json: at /handles/0/root: two-bone chain: a two-bone chain's root is the grandparent of \"hand\", \"root\""),
+            (
+                format!(r#"{{"handles": [{{"joint": "arm", "solver": "two_bone", "keys": [{key}]}}]}}"#),
+                "c.json: at /handles/0/solver: two-bone chain: \"arm\" needs a parent and a grandparent",
+            ),
+            (one(r#""orient": true,"#), "c.json: at /handles/0/orient: \"orient\" needs \"pin\": true"),
+            (one(r#""pin": true,"#), "c.json: at /handles/0/keys: keys needs no \"pin\""),
+            (
+                r#"{"handles": [{"joint": "hand", "keys": [{"time": 0, "position": [0, 0, 0], "rotation": [0, 0, 0, 0]}]}]}"#.to_string(),
+                "c.json: at /handles/0/keys/0/rotation: quaternion [0.0, 0.0, 0.0, 0.0] is zero or not finite",
+            ),
+            (
+                format!(r#"{{"root_motion": "wobbly", "handles": [{{"joint": "hand", "keys": [{key}]}}]}}"#),
+                "c.json: at /root_motion: unknown value \"wobbly\"; expected \"locked\" or \"free\"",
+            ),
+            (
+                format!(r#"{{"limits": {{"arm": {{"x": [10, -10]}}}}, "handles": [{{"joint": "hand", "keys": [{key}]}}]}}"#),
+                "c.json: at /limits/arm/x: limit [10.0, -10.0]: expected [min_deg, max_deg], finite, within -180..=180, min <= max",
+            ),
+            (
+                format!(r#"{{"limits": {{"arm": {{"z": [-200, 10]}}}}, "handles": [{{"joint": "hand", "keys": [{key}]}}]}}"#),
+                "c.json: at /limits/arm/z: limit [-200.0, 10.0]: expected [min_deg, max_deg], finite, within -180..=180, min <= max",
+            ),
+            (
+                format!(r#"{{"limits": {{"nope": {{"x": [0, 10]}}}}, "handles": [{{"joint": "hand", "keys": [{key}]}}]}}"#),
+                "c.json: at /limits/nope: the rig has no joint named \"nope\"",
+            ),
+            (
+                format!(r#"{{"limits": {{"arm": {{"x": [0, 10], "order": "abc"}}}}, "handles": [{{"joint": "hand", "keys": [{key}]}}]}}"#),
+                "c.json: at /limits/arm/order: unknown order \"abc\"; expected one of xyz, yzx, zxy, xzy, yxz, zyx",
+            ),
+        ] {
+            let got = message("c.json", &text, handles);
+            assert!(got.ends_with(expected), "{text}: {got}");
+        }
+    }
+
+    #[test]
+    fn chain_fields_parse() {
+        let dir = std::env::temp_dir().join(format!("rigport-json-{}-chain", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("scratch folder");
+        let path = dir.join("h.json");
+        std::fs::write(&path, r#"{"base": "walk", "root_motion": "free", "limits": {"arm": {"y": [-10, 20]}},
+            "handles": [{"joint": "hand", "solver": "two_bone", "pole": [0, 1, 0], "twist_deg": 5, "soften": 0.1, "weight": 0.5,
+                         "keys": [{"time": 0, "position": [1, 0, 0], "rotation": [0, 0, 0, 2]}, {"time": 1, "position": [1, 1, 0], "pole": [0, 0, 1]}]},
+                        {"joint": "arm", "pin": true, "orient": true, "root": "root"}]}"#).expect("write");
+        let h = super::handles::read(&path, &skeleton()).expect("valid handles");
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(h.base.as_deref(), Some("walk"));
+        assert_eq!(h.root_motion, Some(rigport_model::RootMotion::Free));
+        assert_eq!(h.limits.len(), 1);
+        assert!((h.limits[0].max_rad.y - 20f32.to_radians()).abs() < 1e-6);
+        assert!((h.limits[0].max_rad.x - std::f32::consts::PI).abs() < 1e-6);
+        let t = &h.tracks[0];
+        assert_eq!(t.solver, rigport_model::HandleSolver::TwoBone);
+        assert_eq!(
+            t.poles,
+            [rigport_model::glam::Vec3::Y, rigport_model::glam::Vec3::Z]
+        );
+        assert_eq!(t.rotations[0], Some(rigport_model::glam::Quat::IDENTITY));
+        assert_eq!(t.rotations[1], None);
+        assert!(h.tracks[1].pin && h.tracks[1].orient && h.tracks[1].times.is_empty());
+        assert_eq!(h.tracks[1].root, Some(JointIndex(0)));
+        assert!(super::handles::check_base(&path, &h, &["walk"]).is_ok());
+        let e = super::handles::check_base(&path, &h, &["run", "jump"]).expect_err("no such clip");
+        assert!(
+            e.to_string()
+                .ends_with("at /base: the input has no clip named \"walk\" (it has: run, jump)"),
+            "{e}"
+        );
     }
 
     #[test]
