@@ -61,7 +61,13 @@ fn relative_max_deviation(a: &NpyArray, b: &[f64]) -> f64 {
 #[test]
 fn three_plays_the_demo_as_rigport_evaluates_it() {
     let dir = common::scratch();
-    common::rigport_ok(&["demo", "-q", "--no-corpus", "-o", dir.path().to_str().unwrap()]);
+    common::rigport_ok(&[
+        "demo",
+        "-q",
+        "--no-corpus",
+        "-o",
+        dir.path().to_str().unwrap(),
+    ]);
     let glb = dir.path().join("demo.glb");
     let Some((report, three)) = three_eval(&glb, &["--clip", "wave", "--fps", "10"]) else {
         return;
@@ -84,7 +90,10 @@ fn three_plays_the_demo_as_rigport_evaluates_it() {
     assert_eq!(three.shape, ours.shape, "frames x vertices x 3");
     let dev = relative_max_deviation(&three, &ours.numbers);
     eprintln!("demo wave: three.js vs rigport eval: {dev:.2e} of the diagonal");
-    assert!(dev <= 1e-5, "three.js and rigport differ by {dev:e} of the diagonal");
+    assert!(
+        dev <= 1e-5,
+        "three.js and rigport differ by {dev:e} of the diagonal"
+    );
 }
 
 /// three.js plays rigport's glb as it plays the source glTF. (bevy's SimpleSkin.gltf is
@@ -103,7 +112,13 @@ fn three_plays_our_glb_as_it_plays_the_source_gltf() {
         };
         let dir = common::scratch();
         let glb = dir.path().join("out.glb");
-        common::rigport_ok(&["convert", "-q", src.to_str().unwrap(), "-o", glb.to_str().unwrap()]);
+        common::rigport_ok(&[
+            "convert",
+            "-q",
+            src.to_str().unwrap(),
+            "-o",
+            glb.to_str().unwrap(),
+        ]);
         let args = ["--clip-index", "0", "--fps", "7"];
         let Some((_, theirs)) = three_eval(&src, &args) else {
             return;

@@ -140,6 +140,7 @@ pub fn bone_mesh(skeleton: &Skeleton) -> Option<(Mesh, SkinBinding)> {
         morph_targets: Vec::new(),
         morph_weights: Vec::new(),
         attached_to: None,
+        vertex_values: Vec::new(),
     };
     let skin = SkinBinding {
         method: Default::default(),

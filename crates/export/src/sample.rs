@@ -96,6 +96,7 @@ pub(crate) fn cylinder(height: f32) -> Mesh {
         ],
         morph_weights: vec![0.0, 0.25],
         attached_to: None,
+        vertex_values: Vec::new(),
     }
 }
 
@@ -130,6 +131,7 @@ pub(crate) fn hat(joint: JointIndex) -> Mesh {
         morph_targets: Vec::new(),
         morph_weights: Vec::new(),
         attached_to: Some(joint),
+        vertex_values: Vec::new(),
     }
 }
 

@@ -166,6 +166,7 @@ impl<'a> Importer<'a> {
             morph_targets,
             morph_weights: Vec::new(),
             attached_to: None,
+            vertex_values: Vec::new(),
         }))
     }
 
