@@ -3,6 +3,7 @@
 
 mod animate;
 pub mod bake;
+mod cloth;
 mod convert;
 mod demo;
 mod eval;
@@ -38,6 +39,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sequence(args) => sequence::run(&ctx, &args),
         Command::Ik(args) => ik::run(&ctx, &args),
         Command::Bake(args) => bake::run(&ctx, &args),
+        Command::Cloth(args) => cloth::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
     }
 }
@@ -67,6 +69,11 @@ fn check_outputs(command: &Command) -> Result<()> {
                 .into());
             }
             (&a.output, with_files(&a.input, &[]))
+        }
+        Command::Cloth(a) => {
+            let garment = PathBuf::from(&a.garment);
+            let files: Vec<&PathBuf> = garment.is_file().then_some(&garment).into_iter().collect();
+            (&a.output, with_files(&a.input, &files))
         }
         Command::Eval(a) => {
             output::require_npz(&a.output)?;

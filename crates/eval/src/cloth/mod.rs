@@ -60,6 +60,7 @@ pub mod attach;
 pub mod collide;
 mod garment;
 mod output;
+pub mod pipeline;
 mod solver;
 
 use glam::{DVec3, Vec3};
@@ -134,6 +135,14 @@ pub enum ClothError {
         value: f32,
         /// What it must be.
         expected: &'static str,
+    },
+    /// The input has no unskinned mesh of that name.
+    #[error("no unskinned mesh named {name:?} to use as the garment; unskinned meshes: {meshes}")]
+    NoGarment {
+        /// The name asked for.
+        name: String,
+        /// The unskinned meshes there are, quoted, or empty.
+        meshes: String,
     },
     /// No skinned mesh to collide with and pin to.
     #[error("the rig has no skinned mesh to put the garment on")]

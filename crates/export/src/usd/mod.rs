@@ -65,7 +65,8 @@
 //!   joint's bind matrix, so the mesh follows the joint exactly;
 //! - morph targets: `BlendShape` children (`offsets`, `normalOffsets`, `pointIndices` when
 //!   sparse), `skel:blendShapes` / `skel:blendShapeTargets`; an unskinned mesh with morph
-//!   targets is bound for its blend shapes only.
+//!   targets is bound for its blend shapes only, or, with [`UsdOptions::morphs_as_points`],
+//!   written as `points.timeSamples` (no binding).
 //!
 //! # Time
 //! `timeCodesPerSecond` comes from the first clip's key times: when three or more keys are
@@ -146,6 +147,11 @@ pub struct UsdOptions {
     /// The stage's `metersPerUnit`; `None` keeps the asset's (1 when it states none).
     /// Lengths are converted by the root prim's transform, not in the data.
     pub meters_per_unit: Option<f64>,
+    /// Write unskinned meshes that are attached to no joint and have morph targets as a
+    /// point cache: `points.timeSamples` (the rest points plus the targets weighted by the
+    /// first clip's morph-weight track of the mesh, at every time code of that clip)
+    /// instead of BlendShapes, e.g. a simulated garment (`rigport cloth`).
+    pub morphs_as_points: bool,
 }
 
 /// A `.usda` file in memory.
