@@ -8,9 +8,10 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use rigport_demo as demo;
 use rigport_eval::{Pose, Rig, RigOutput};
 use rigport_export::{to_glb, GltfOptions};
-use rigport_import::{demo, pinocchio};
+use rigport_import::pinocchio;
 use rigport_model::glam::Quat;
 
 fn model1() -> Option<[PathBuf; 3]> {

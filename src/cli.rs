@@ -19,6 +19,17 @@ pub struct Cli {
     /// Treat every warning as an error (exit code 4, no output written).
     #[arg(long, global = true)]
     pub deny_warnings: bool,
+    /// The most memory a run may plan to use (e.g. 2G, 500M, 1.5GiB); requests estimated
+    /// above it are refused before they allocate (exit 1). Default: 3/4 of the machine's
+    /// memory (of its cgroup or `ulimit -v` limit when lower).
+    #[arg(long, global = true, value_name = "SIZE", value_parser = parse_memory_size)]
+    pub max_memory: Option<u64>,
+}
+
+/// `--max-memory`'s value.
+fn parse_memory_size(text: &str) -> Result<u64, String> {
+    rigport_model::budget::parse_bytes(text)
+        .ok_or_else(|| format!("expected a size such as 2G, 500M or 1.5GiB, not {text:?}"))
 }
 
 /// The subcommands.

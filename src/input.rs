@@ -40,8 +40,9 @@ pub fn single_plan(args: &InputArgs) -> Result<Plan> {
 /// mesh (noted in the warnings) so viewers show its motion.
 ///
 /// # Errors
-/// As the importer.
+/// Over the memory budget; as the importer.
 pub fn load(plan: &Plan, args: &InputArgs) -> Result<Imported> {
+    crate::memory::check_import(plan)?;
     let mut imported = plan.import()?;
     if !args.no_bone_mesh && rigport_eval::bone_mesh::add_bone_mesh(&mut imported.asset) {
         imported.warnings.push(rigport_model::Warning::Note {

@@ -10,6 +10,7 @@ mod context;
 mod exit;
 mod input;
 mod keys;
+mod memory;
 mod npz;
 mod output;
 mod signals;
@@ -21,6 +22,7 @@ use clap::Parser;
 fn main() -> ExitCode {
     raise_malloc_mmap_threshold();
     let cli = cli::Cli::parse();
+    memory::set(cli.max_memory);
     if !matches!(cli.command, cli::Command::Inspect(_)) {
         signals::remove_temp_files_on_interrupt();
     }

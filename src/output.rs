@@ -213,6 +213,27 @@ pub fn reduce_clips(
 ///
 /// # Errors
 /// Export failures, denied warnings, or an unwritable output (exit code 3).
+/// Checks that writing `asset` as `format` fits the memory budget.
+fn check_memory(asset: &Asset, path: &Path, format: Format) -> Result<()> {
+    use rigport_export::estimate;
+    let (needed, as_what) = match format {
+        Format::Gltf => (estimate::gltf_memory(asset), "glTF"),
+        Format::Usda => (estimate::usd_memory(asset), "USD text"),
+    };
+    let what = format!(
+        "{}: writing {} joints x {} samples and {} vertices as {as_what}",
+        path.display(),
+        asset.skeleton.len(),
+        estimate::max_clip_samples(asset),
+        asset
+            .meshes
+            .iter()
+            .map(|m| m.positions.len())
+            .sum::<usize>()
+    );
+    Ok(crate::memory::budget().check(what, needed)?)
+}
+
 pub fn write_asset(
     ctx: &Context,
     asset: &Asset,
@@ -236,6 +257,7 @@ pub fn write_asset_with(
 ) -> Result<()> {
     let path = &args.output;
     let format = format_of(path)?;
+    check_memory(asset, path, format)?;
     match format {
         Format::Gltf => {
             if args.skinning == Some(Skinning::Dqs) {

@@ -12,6 +12,10 @@
 #                            hash as recorded in tools/output_hashes.txt)
 #  9. module circles         tools/module_cycles.py (no file of a crate imports one that
 #                            imports it back)
+# 10. fuzz (short)           fuzz/run.sh --seconds RIGPORT_FUZZ_SECONDS (default 20) per
+#                            target, when cargo-fuzz and a nightly toolchain are installed
+#                            (skipped otherwise; the kept fuzz corpus is always replayed by
+#                            the Rust tests, fuzz/tests/regressions.rs)
 # then a summary. Steps 3-8 all run even if one fails; the exit status is 0
 # only if every step passed.
 #
@@ -268,5 +272,20 @@ if python3 tools/module_cycles.py; then
   record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
 else
   record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "files that import each other (listed above)"
+fi
+
+# ------------------------------------------------------------- 10 fuzz (short)
+CURRENT_STEP="fuzz (fuzz/run.sh, short)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+fuzz_seconds="${RIGPORT_FUZZ_SECONDS:-20}"
+if ! cargo fuzz --version >/dev/null 2>&1 || ! cargo +nightly --version >/dev/null 2>&1; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))" "skipped: cargo-fuzz or nightly not installed"
+elif [[ "$fuzz_seconds" == 0 ]]; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))" "skipped: RIGPORT_FUZZ_SECONDS=0"
+elif bash fuzz/run.sh --seconds "$fuzz_seconds"; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))" "${fuzz_seconds} s per target, no crash"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "a target crashed (fuzz/artifacts)"
 fi
 # The EXIT trap prints the summary and sets the exit status.

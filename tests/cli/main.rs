@@ -18,6 +18,8 @@ mod frames;
 mod gltf_read;
 mod gltf_samples;
 mod ik;
+mod memory;
+mod message_audit;
 mod messages;
 mod motion;
 mod outputs;

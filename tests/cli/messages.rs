@@ -131,3 +131,45 @@ fn a_csci520_weight_too_small_to_renormalize_names_the_weights_line() {
     assert!(!stderr.contains("jointRestTransforms"), "{stderr}");
     assert!(!out.exists());
 }
+
+/// A quaternion of length ~1.4e38 (finite in f32, but its f32 length overflows) is a
+/// rotation like any other: `[1e38, 0, 0, 1e38]` is 90 degrees about x, in POSE.json and in
+/// KEYS.json alike.
+#[test]
+fn a_huge_but_finite_quaternion_is_normalized_not_refused() {
+    let dir = scratch();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let skel = repo().join("fixtures/bvh/end_sites.bvh");
+    let mut npz = Vec::new();
+    for (name, quat) in [
+        ("huge", "[1e38, 0, 0, 1e38]"),
+        ("unit", "[0.70710678, 0, 0, 0.70710678]"),
+    ] {
+        let pose = dir.path().join(format!("{name}.json"));
+        std::fs::write(&pose, format!(r#"{{"Head": {{"quat": {quat}}}}}"#)).unwrap();
+        let out = dir.path().join(format!("{name}.npz"));
+        rigport_ok(&["eval", &s(&skel), "--pose", &s(&pose), "--out", &s(&out)]);
+        npz.push(read_npz(&out)["joint_world"].numbers.clone());
+
+        let keys = dir.path().join(format!("{name}.keys.json"));
+        std::fs::write(
+            &keys,
+            format!(
+                r#"{{"name": "bend", "keys": [{{"time": 0, "pose": {{"Head": {{"quat": {quat}}}}}}}, {{"time": 1, "pose": {{}}}}]}}"#
+            ),
+        )
+        .unwrap();
+        let glb = dir.path().join(format!("{name}.glb"));
+        rigport_ok(&["animate", &s(&skel), "--keys", &s(&keys), "-o", &s(&glb)]);
+        assert_valid(&glb);
+    }
+    let max = npz[0]
+        .iter()
+        .zip(&npz[1])
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        max < 1e-6,
+        "the huge quaternion poses like the unit one: {max:e}"
+    );
+}

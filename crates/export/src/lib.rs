@@ -35,6 +35,7 @@
 
 mod atomic;
 mod error;
+pub mod estimate;
 mod gltf;
 mod labels;
 mod usd;

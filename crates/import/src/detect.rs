@@ -95,6 +95,35 @@ impl Source {
         }
     }
 
+    /// The files the import reads (for a CSCI 520 rig: the config and the files beside it).
+    pub fn files(&self) -> Vec<PathBuf> {
+        match self {
+            Source::Gltf(p) | Source::Obj(p) | Source::Bvh(p) | Source::Usda(p) => vec![p.clone()],
+            Source::Csci520(config) => {
+                let mut files = vec![config.clone()];
+                if let Some(Ok(entries)) = config.parent().map(std::fs::read_dir) {
+                    files.extend(
+                        entries
+                            .filter_map(Result::ok)
+                            .map(|e| e.path())
+                            .filter(|p| p != config && p.is_file()),
+                    );
+                }
+                files
+            }
+            Source::Pinocchio {
+                mesh,
+                skeleton,
+                attachment,
+            } => vec![mesh.clone(), skeleton.clone(), attachment.clone()],
+            Source::AsfAmc { asf, motions, .. } => {
+                let mut files = vec![asf.clone()];
+                files.extend(motions.iter().cloned());
+                files
+            }
+        }
+    }
+
     /// Imports the asset with its format's importer.
     ///
     /// # Errors

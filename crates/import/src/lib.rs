@@ -9,7 +9,6 @@
 pub mod asf_amc;
 pub mod bvh;
 pub mod csci520;
-pub mod demo;
 pub mod detect;
 mod error;
 pub mod gltf;

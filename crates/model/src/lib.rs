@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 mod asset;
+pub mod budget;
 mod clip;
 pub mod conventions;
 mod frame;
@@ -19,6 +20,7 @@ mod transform;
 mod warning;
 
 pub use asset::{Asset, AssetError};
+pub use budget::{MemoryBudget, OverBudget};
 pub use clip::{Clip, Interpolation, Track, TrackTarget};
 pub use frame::{SceneFrame, SkinningMethod, UpAxis};
 pub use handle::{HandleSet, HandleTrack};

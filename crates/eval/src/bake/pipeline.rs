@@ -175,7 +175,7 @@ struct MeshBake {
 /// use rigport_model::glam::Quat;
 /// use rigport_model::{Clip, PoseKey, PoseKeys, RestRotation};
 ///
-/// let rig = rigport_import::demo::character(1);
+/// let rig = rigport_demo::character(1);
 /// let skeleton = rigport_import::pinocchio::PinocchioSkeleton {
 ///     positions: rig.joint_positions.clone(),
 ///     parents: rig.joint_parents.clone(),

@@ -205,7 +205,7 @@ impl HandleTargets {
 /// use rigport_model::glam::Vec3;
 /// use rigport_model::{HandleSet, HandleTrack};
 ///
-/// let rig = rigport_import::demo::character(1);
+/// let rig = rigport_demo::character(1);
 /// let skeleton = rigport_import::pinocchio::PinocchioSkeleton {
 ///     positions: rig.joint_positions.clone(),
 ///     parents: rig.joint_parents.clone(),

@@ -72,14 +72,18 @@ pub(crate) fn entries_of(
         let entry: Entry = from_value(value, path, &at)?;
         let rotation = match (entry.quat, entry.euler_deg) {
             (Some(q), None) => {
-                let q = Quat::from_array(q);
-                if !q.is_finite() || q.length() < 1e-6 {
-                    return Err(err("/quat", JsonProblem::BadQuaternion(q.to_array())));
+                // The length in f64: an f32 length of [1e38, 0, 0, 1e38] overflows to
+                // infinity and would normalize to zero.
+                let q64 = glam::DVec4::from_array(q.map(f64::from));
+                let length = q64.length();
+                if !q64.is_finite() || length < 1e-6 {
+                    return Err(err("/quat", JsonProblem::BadQuaternion(q)));
                 }
                 if entry.order.is_some() {
                     return Err(err("/order", JsonProblem::OrderWithQuat));
                 }
-                q.normalize()
+                let unit = (q64 / length).as_vec4();
+                Quat::from_vec4(unit).normalize()
             }
             (None, Some(angles)) => {
                 if angles.iter().any(|a| !a.is_finite()) {
