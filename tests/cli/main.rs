@@ -10,6 +10,7 @@
 )]
 
 mod bad_input;
+mod cloth;
 mod common;
 mod csci520;
 mod demo;

@@ -159,6 +159,9 @@ fn the_default_budget_follows_an_address_space_limit() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("limit of 150.0 MB (default: 3/4"), "{stderr}");
+    assert!(
+        stderr.contains("limit of 150.0 MB (default: 3/4"),
+        "{stderr}"
+    );
     assert!(!usda.exists());
 }

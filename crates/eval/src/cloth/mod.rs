@@ -497,6 +497,14 @@ pub fn simulate(
             false,
         ),
     };
+    // The grid ends on the clip's end even off the grid; an end within a thousandth of a
+    // frame of the last grid time (f32 noise) is the same frame.
+    let mut times = times;
+    if let [.., a, b] = times.as_slice() {
+        if (b - a) * fps < 1e-3 {
+            times.pop();
+        }
+    }
     let clip_time = |t: f32| {
         if looping && duration > 0.0 {
             start + (t - start).rem_euclid(duration)
@@ -601,7 +609,6 @@ pub fn simulate(
     let mut stats = Vec::with_capacity(frames);
     let mut looped_poses = looping.then(|| Vec::with_capacity(frames * joints));
     let mut previous: Option<FrameBody> = None;
-    let h = 1.0 / (f64::from(fps) * f64::from(substeps));
     let mut pin_targets = vec![DVec3::ZERO; pins.len()];
     let mut caps = vec![Capsule::default(); capsules.len()];
     for (batch_index, batch) in times.chunks(BATCH).enumerate() {
@@ -620,6 +627,9 @@ pub fn simulate(
                     solver.collide(&fb.capsules, params.thickness);
                 }
                 Some(prev) => {
+                    // The frame's own span: the last frame may end off the grid.
+                    let span = f64::from(times[f]) - f64::from(times[f - 1]);
+                    let h = span / f64::from(substeps);
                     for s in 1..=substeps {
                         let a = f64::from(s) / f64::from(substeps);
                         for ((dst, p0), p1) in pin_targets.iter_mut().zip(&prev.pins).zip(&fb.pins)
