@@ -12,12 +12,13 @@ pub const WAIST_Y: f32 = 1.0;
 const LENGTH: f32 = 0.42;
 
 /// How far the hem flares out beyond the waist, metres.
-const FLARE: f32 = 0.16;
+const FLARE: f32 = 0.22;
 
 /// A skirt of `rings` rings of `segments` vertices around the demo body's waist: ring 0
 /// (the first `segments` vertices, the ones to pin) lies on the body's cross-section at
 /// [`WAIST_Y`] (per direction, the farthest body vertex within 2 cm of that height and 35
-/// cm of the axis, so arms do not count), the others flare out linearly to the hem. Needs
+/// cm of the axis, so arms do not count), the others flare out (as the square root of
+/// the distance down) to the hem. Needs
 /// `rings >= 2` and `segments >= 3` (smaller values are raised to them). Triangles are
 /// counter-clockwise seen from outside.
 ///
@@ -58,7 +59,9 @@ pub fn skirt(asset: &Asset, rings: u32, segments: u32) -> Mesh {
         let t = r as f32 / (rings - 1) as f32;
         for (s, &r0) in radius.iter().enumerate() {
             let a = std::f32::consts::TAU * s as f32 / segments as f32;
-            let rad = r0 + FLARE * t;
+            // A bell: out from the hips quickly (clear of the hip and thigh
+            // colliders), then nearly straight down.
+            let rad = r0 + FLARE * t.sqrt();
             positions.push(Vec3::new(
                 rad * a.cos(),
                 WAIST_Y - LENGTH * t,

@@ -203,6 +203,20 @@ impl Solver {
         }
     }
 
+    /// Makes the starting shape consistent without moving in time: `iterations` rounds of
+    /// the stretch and bending projections (fully stiff) and the collision push, so a
+    /// garment pushed out of the body at the start spreads the push over its edges instead
+    /// of starting stretched. Velocities stay zero.
+    pub(crate) fn relax(&mut self, capsules: &[Capsule], thickness: f64, iterations: u32) {
+        self.collide(capsules, thickness);
+        for _ in 0..iterations {
+            project(&mut self.x, &self.inv_mass, &self.stretch, 0.0);
+            self.collide(capsules, thickness);
+        }
+        self.prev.copy_from_slice(&self.x);
+        self.v.iter_mut().for_each(|v| *v = Vec3::ZERO);
+    }
+
     /// Pushes free particles out of every capsule grown by `thickness`; repeated (at most
     /// 8 passes) while a push moved a particle into another capsule.
     pub(crate) fn collide(&mut self, capsules: &[Capsule], thickness: f64) {
