@@ -214,17 +214,6 @@ fn demo_skirt_for_10_seconds_at_60_fps_is_stable() {
         clip: Some("wave"),
         fps: Some(60.0),
         seconds: Some(10.0),
-        substeps: std::env::var("CLOTH_SUBSTEPS")
-            .ok()
-            .and_then(|s| s.parse().ok()),
-        iterations: std::env::var("CLOTH_ITER")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(1),
-        damping: std::env::var("CLOTH_DAMP")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(1.0),
         ..ClothOptions::default()
     };
     let sim = simulate(&asset, &garment, &opts, &mut warnings, |_, _| {}).unwrap();
