@@ -100,6 +100,8 @@ pub enum Command {
     Footlock(FootlockArgs),
     /// Bake a skinning result (DQS) into a glTF every viewer plays back exactly.
     Bake(BakeArgs),
+    /// Simulate a garment (XPBD cloth) on the animated body and bake it into the file.
+    Cloth(ClothArgs),
     /// Render rigs and clips to PNG contact sheets or GIF/APNG animations (CPU, headless).
     Render(RenderArgs),
     /// Write the built-in demo character (no input files needed).
@@ -507,6 +509,57 @@ pub struct BakeArgs {
     /// Influences kept per vertex in the glTF (1 to 8), and used for the DQS being baked.
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=8))]
     pub max_influences: u8,
+}
+
+/// `rigport cloth` arguments.
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "The garment is a mesh of the input by name (e.g. the `Grid` of the USTC \
+course's arm_with_cloth.usda, whose primvars:ControlPoints mark the pinned vertices) or an \
+.obj in the rig's model space. Each pinned vertex is bound at rest to the nearest point of \
+the skinned body and follows it exactly; the others are simulated (XPBD: inextensible edges, \
+bending, gravity down the scene's up axis, damping, substeps) and collide with capsules \
+fitted to the bones. glTF gets the garment as its own mesh animated by morph targets (one \
+per frame, or --targets K shared ones) and a weights track; USD gets its points as time \
+samples beside the UsdSkel body. Only the simulated clip is written."
+)]
+pub struct ClothArgs {
+    /// The rig, with at least one clip.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// The garment: the name of an unskinned mesh of the input, or an .obj file.
+    #[arg(long, value_name = "GARMENT")]
+    pub garment: String,
+    /// Output file: .glb, .gltf (+ .bin) or .usda.
+    #[arg(long, short, value_name = "OUT")]
+    pub output: PathBuf,
+    /// The clip to simulate (default: the first).
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// Pin these garment vertices (source numbering, comma-separated).
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub pin_vertices: Vec<u32>,
+    /// Pin the garment vertices at or below height H (scene up axis and units).
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub pin_below: Option<f32>,
+    /// Pin the garment vertices at or above height H.
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub pin_above: Option<f32>,
+    /// Output frames per second (default: the clip's key rate when 24 or more, else 30).
+    #[arg(long, value_name = "F")]
+    pub fps: Option<f32>,
+    /// Simulate S seconds, looping the clip (default: the clip once).
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f32>,
+    /// Substeps per frame (default: 1200 per second).
+    #[arg(long, value_name = "N")]
+    pub substeps: Option<u32>,
+    /// Collision thickness in model units (default: 1% of the body's diagonal).
+    #[arg(long, value_name = "D")]
+    pub thickness: Option<f32>,
+    /// Compress the per-frame targets to K shared ones (PCA), as `bake --correctives`.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
+    pub targets: Option<u32>,
 }
 
 /// `rigport render` arguments.

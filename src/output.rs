@@ -292,8 +292,23 @@ fn fit_influences(
 pub fn write_asset(
     ctx: &Context,
     asset: &Asset,
+    warnings: Vec<Warning>,
+    args: &OutputArgs,
+) -> Result<()> {
+    write_asset_with(ctx, asset, warnings, args, false)
+}
+
+/// [`write_asset`]; with `usd_point_caches`, a .usda writes unskinned morph-animated meshes
+/// as `points.timeSamples` ([`UsdOptions::morphs_as_points`]).
+///
+/// # Errors
+/// As [`write_asset`].
+pub fn write_asset_with(
+    ctx: &Context,
+    asset: &Asset,
     mut warnings: Vec<Warning>,
     args: &OutputArgs,
+    usd_point_caches: bool,
 ) -> Result<()> {
     let path = &args.output;
     let format = format_of(path)?;
@@ -328,6 +343,7 @@ pub fn write_asset(
                     crate::cli::UpAxisArg::Z => rigport_model::UpAxis::Z,
                 }),
                 meters_per_unit: args.meters_per_unit,
+                morphs_as_points: usd_point_caches,
             };
             let prepared = ctx
                 .step("building USD", || {

@@ -4,6 +4,7 @@
 mod animate;
 pub mod bake;
 mod batch;
+mod cloth;
 mod convert;
 mod demo;
 mod eval;
@@ -51,6 +52,7 @@ fn run_command(ctx: Context, command: Command) -> Result<()> {
         Command::Ik(args) => ik::run(&ctx, &args),
         Command::Footlock(args) => footlock::run(&ctx, &args),
         Command::Bake(args) => bake::run(&ctx, &args),
+        Command::Cloth(args) => cloth::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
         Command::Batch(_) | Command::BatchReport(_) => {
             Err(UsageError("a batch item cannot be a batch".into()).into())
@@ -86,6 +88,11 @@ fn check_outputs(command: &Command) -> Result<()> {
                 .into());
             }
             (&a.output, with_files(&a.input, &[]))
+        }
+        Command::Cloth(a) => {
+            let garment = PathBuf::from(&a.garment);
+            let files: Vec<&PathBuf> = garment.is_file().then_some(&garment).into_iter().collect();
+            (&a.output, with_files(&a.input, &files))
         }
         Command::Eval(a) => {
             output::require_npz(&a.output)?;

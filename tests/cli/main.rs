@@ -11,6 +11,7 @@
 
 mod bad_input;
 mod batch;
+mod cloth;
 mod common;
 mod csci520;
 mod demo;

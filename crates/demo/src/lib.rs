@@ -63,6 +63,7 @@ pub mod corpus;
 pub mod pictures;
 mod sdf;
 mod skeleton;
+pub mod skirt;
 mod surface_nets;
 mod weights;
 

@@ -8,6 +8,7 @@
 
 pub mod bake;
 pub mod bone_mesh;
+pub mod cloth;
 mod error;
 pub mod fk;
 pub mod footlock;

@@ -50,6 +50,11 @@ pub struct Mesh {
     /// For an unskinned mesh: the joint it moves rigidly with (positions are then in that
     /// joint's space); `None` means model space.
     pub attached_to: Option<JointIndex>,
+    /// Extra per-vertex numbers the source names, kept for tools that use them (USD `float[]`
+    /// primvars with vertex interpolation, by name without `primvars:`, e.g. the
+    /// `ControlPoints` that mark a garment's pinned vertices), one value per vertex.
+    /// Writers do not export them.
+    pub vertex_values: Vec<(String, Vec<f32>)>,
 }
 
 /// One morph target: per-vertex displacements.

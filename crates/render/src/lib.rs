@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use rigport_eval::sample::{CompiledClip, SampleError, SampleJob};
 use rigport_eval::{EvalError, Pose, Rig, RigOutput, SkinningMethod};
 use rigport_model::glam::{Mat4, Vec3};
-use rigport_model::{Asset, Clip};
+use rigport_model::{Asset, Clip, TrackTarget};
 
 pub use camera::{Bounds, Camera, ClippedPolygon, Lens, Projection, View};
 pub use encode::{
@@ -338,7 +338,43 @@ impl Evaluator<'_> {
             .run()?;
         }
         self.rig.evaluate_with(pose, method, out)?;
+        if let Some(clip) = self.clip {
+            self.morph_unskinned(clip, time, out);
+        }
         Ok(())
+    }
+
+    /// Unskinned meshes attached to no joint whose morph weights the clip animates (a
+    /// garment baked by `rigport cloth`): rest positions plus the weighted targets at
+    /// `time`. Skinned meshes keep their rest shape (morphing before skinning is not drawn).
+    fn morph_unskinned(&self, clip: &CompiledClip<'_>, time: f32, out: &mut RigOutput) {
+        let asset = self.rig.asset();
+        for track in clip.weight_tracks() {
+            let TrackTarget::MorphWeights(m) = track.target else {
+                continue;
+            };
+            let mi = m.get();
+            let Some(mesh) = asset.meshes.get(mi) else {
+                continue;
+            };
+            if self.rig.skin_of_mesh(mi).is_some() || mesh.attached_to.is_some() {
+                continue;
+            }
+            let mut weights = vec![0.0; track.components()];
+            if rigport_eval::sample::sample_weights(track, time, &mut weights).is_err() {
+                continue;
+            }
+            let Some(dst) = out.positions.get_mut(mi) else {
+                continue;
+            };
+            for (target, &w) in mesh.morph_targets.iter().zip(&weights) {
+                if w != 0.0 {
+                    for (p, d) in dst.iter_mut().zip(&target.position_deltas) {
+                        *p += *d * w;
+                    }
+                }
+            }
+        }
     }
 }
 

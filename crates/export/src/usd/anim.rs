@@ -87,6 +87,11 @@ pub(super) fn plan_clip(
             }
             TrackTarget::MorphWeights(m) => {
                 let mi = m.get();
+                if plans.get(mi).is_some_and(|p| p.points_cache) {
+                    // Written as the mesh's points.timeSamples; its times are the clip's.
+                    times.extend_from_slice(&track.times);
+                    continue;
+                }
                 let targets = plans.get(mi).map_or(0, |p| p.channels.len());
                 let label = asset
                     .meshes

@@ -18,6 +18,8 @@ pub(super) struct MeshPlan {
     pub(super) shapes: Vec<String>,
     /// The blend-shape channel tokens (unique over the stage), one per morph target.
     pub(super) channels: Vec<String>,
+    /// The morph targets go out as `points.timeSamples` ([`super::UsdOptions::morphs_as_points`]).
+    pub(super) points_cache: bool,
 }
 
 /// What [`write_mesh`] needs besides the mesh.
@@ -28,6 +30,8 @@ pub(super) struct MeshContext<'a> {
     pub(super) options: &'a UsdOptions,
     /// Each material's prim path.
     pub(super) material_paths: &'a [String],
+    /// The selected (first) clip and its `(time code, seconds)` samples, for point caches.
+    pub(super) cache_clip: Option<(&'a rigport_model::Clip, &'a [(f64, f64)])>,
 }
 
 /// Writes `decl = [..] ( interpolation = "vertex" [elementSize = n] )`.
@@ -128,6 +132,9 @@ pub(super) fn write_mesh(
         tuple(s, &p.to_array())
     });
     doc.end();
+    if plan.points_cache {
+        write_point_samples(doc, mi, mesh, ctx);
+    }
 
     // The dump of `rigport eval` lists vertices by source vertex; say how points map to
     // them when the mesh split vertices (seams) that could not be merged back.
@@ -321,6 +328,51 @@ fn write_vertex_data<T: Copy + Default + PartialEq>(
             "faceVarying",
         );
     }
+}
+
+/// `point3f[] points.timeSamples`: at each time code of the selected clip, the rest points
+/// plus the morph targets weighted by the clip's weight track of mesh `mi` (summed in
+/// `f64` in target order, then rounded to `f32`). Nothing without such a track.
+fn write_point_samples(doc: &mut Usda, mi: usize, mesh: &Mesh, ctx: &MeshContext<'_>) {
+    let Some((clip, times)) = ctx.cache_clip else {
+        return;
+    };
+    let Some(track) = clip.tracks.iter().find(|t| {
+        t.target == rigport_model::TrackTarget::MorphWeights(rigport_model::MeshIndex(mi as u32))
+    }) else {
+        return;
+    };
+    let k = mesh.morph_targets.len();
+    if track.components() != k {
+        return;
+    }
+    let sampler = super::sampler::Sampler::new(track);
+    let mut weights = vec![0.0f64; k];
+    let mut points: Vec<Vec3> = Vec::with_capacity(mesh.positions.len());
+    doc.line("point3f[] points.timeSamples = {");
+    for &(tc, seconds) in times {
+        sampler.sample(seconds, &mut weights);
+        points.clear();
+        for (v, rest) in mesh.positions.iter().enumerate() {
+            let mut p = rest.as_dvec3();
+            for (target, &w) in mesh.morph_targets.iter().zip(&weights) {
+                if w != 0.0 {
+                    if let Some(d) = target.position_deltas.get(v) {
+                        p += d.as_dvec3() * w;
+                    }
+                }
+            }
+            points.push(p.as_vec3());
+        }
+        let line = doc.start();
+        line.push_str("    ");
+        put(line, tc);
+        line.push_str(": ");
+        array(line, &points, |s, p| tuple(s, &p.to_array()));
+        line.push(',');
+        doc.end();
+    }
+    doc.line("}");
 }
 
 /// `matrix4d primvars:skel:geomBindTransform = ...`.

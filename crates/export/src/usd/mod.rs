@@ -75,7 +75,8 @@
 //!   targets is bound for its blend shapes only. A USD source's inbetweens arrive as
 //!   further morph targets whose weight tracks are keyed at every inbetween crossing
 //!   (see the importer), so they are written as plain BlendShapes that UsdSkel evaluates
-//!   like the source at every time.
+//!   like the source at every time. With [`UsdOptions::morphs_as_points`] morph targets are
+//!   written as `points.timeSamples` instead (no binding).
 //!
 //! # Time
 //! `timeCodesPerSecond` comes from the first clip's key times: when three or more keys are
@@ -158,6 +159,11 @@ pub struct UsdOptions {
     /// The stage's `metersPerUnit`; `None` keeps the asset's (1 when it states none).
     /// Lengths are converted by the root prim's transform, not in the data.
     pub meters_per_unit: Option<f64>,
+    /// Write unskinned meshes that are attached to no joint and have morph targets as a
+    /// point cache: `points.timeSamples` (the rest points plus the targets weighted by the
+    /// first clip's morph-weight track of the mesh, at every time code of that clip)
+    /// instead of BlendShapes, e.g. a simulated garment (`rigport cloth`).
+    pub morphs_as_points: bool,
 }
 
 /// A `.usda` file in memory.

@@ -50,7 +50,19 @@ pub(crate) fn build(
     let mut warnings = Vec::new();
     let skeleton = &asset.skeleton;
     let joint_count = skeleton.len();
-    let has_morphs = asset.meshes.iter().any(|m| !m.morph_targets.is_empty());
+    let skinned: std::collections::BTreeSet<usize> =
+        asset.skins.iter().map(|s| s.mesh.get()).collect();
+    let is_cache = |mi: usize, m: &rigport_model::Mesh| {
+        options.morphs_as_points
+            && !skinned.contains(&mi)
+            && m.attached_to.is_none()
+            && !m.morph_targets.is_empty()
+    };
+    let has_morphs = asset
+        .meshes
+        .iter()
+        .enumerate()
+        .any(|(mi, m)| !m.morph_targets.is_empty() && !is_cache(mi, m));
     // UsdSkel is needed for joints, and for blend shapes (which UsdSkel animates); an
     // asset with neither is plain geometry under an Xform.
     let skel_root = joint_count > 0 || has_morphs;
@@ -111,6 +123,7 @@ pub(crate) fn build(
         if renamed && !name.is_empty() {
             mesh_renames.push(name, &prim);
         }
+        let points_cache = is_cache(mi, mesh);
         let binding = match (skin_of_mesh.get(&mi), mesh.attached_to) {
             (Some(&si), _) => {
                 let (skeleton, geom_bind) =
@@ -122,13 +135,14 @@ pub(crate) fn build(
                 }
             }
             (None, Some(j)) => Binding::Rigid { joint: j.get() },
+            (None, None) if points_cache => Binding::None,
             (None, None) if skel_root && !mesh.morph_targets.is_empty() => Binding::MorphOnly,
             (None, None) => Binding::None,
         };
         let mut shape_ns = Namespace::default();
         let mut shapes = Vec::new();
         let mut channels = Vec::new();
-        for target in &mesh.morph_targets {
+        for target in mesh.morph_targets.iter().filter(|_| !points_cache) {
             let (shape, renamed) = shape_ns.claim(&target.name, "shape");
             if renamed && !target.name.is_empty() {
                 mesh_renames.push(&target.name, &shape);
@@ -142,6 +156,7 @@ pub(crate) fn build(
             binding,
             shapes,
             channels,
+            points_cache,
         });
     }
     if !mesh_renames.is_empty() {
@@ -401,6 +416,7 @@ pub(crate) fn build(
                 skeleton_binds: &skeleton_binds,
                 options,
                 material_paths: &material_paths,
+                cache_clip: asset.clips.first().zip(sampled.first().map(Vec::as_slice)),
             },
             &mut warnings,
         );

@@ -190,6 +190,7 @@ impl<'a> Importer<'a> {
                 .map(|m| rigport_model::MaterialIndex(m as u32)),
             node_name: String::new(),
             polygons: Vec::new(),
+            vertex_values: Vec::new(),
         }))
     }
 

@@ -140,6 +140,44 @@ impl<'l> Importer<'l, '_> {
         Ok(())
     }
 
+    /// The mesh's `float[]` primvars with vertex interpolation (other than the ones read
+    /// elsewhere), by name without `primvars:`, one value per output vertex (through
+    /// `source_vertex`). Primvars of other shapes are left out.
+    fn vertex_values(
+        &self,
+        prim: &Prim<'l>,
+        points: usize,
+        faces: usize,
+        corners: usize,
+        source_vertex: &[u32],
+    ) -> Result<Vec<(String, Vec<f32>)>, ImportError> {
+        let mut out = Vec::new();
+        for (name, prop) in &prim.props {
+            let Some(short) = name.strip_prefix("primvars:") else {
+                continue;
+            };
+            if short.contains(':') || prop.type_name != Some("float[]") {
+                continue;
+            }
+            let Some(pv) = self.primvar::<1>(prim, name, Interp::Constant)? else {
+                continue;
+            };
+            if pv.interp != Interp::Vertex
+                || self
+                    .check_primvar(&prim.path, name, &pv, faces, points, corners)
+                    .is_err()
+            {
+                continue;
+            }
+            let values = source_vertex
+                .iter()
+                .map(|&p| pv.at(0, 0, p as usize)[0] as f32)
+                .collect();
+            out.push((short.to_string(), values));
+        }
+        Ok(out)
+    }
+
     /// Builds one Mesh prim (and its skin when `skel` is given).
     pub(super) fn mesh(
         &mut self,
@@ -422,10 +460,17 @@ impl<'l> Importer<'l, '_> {
             normals: out_normals,
             uvs: out_uvs,
             triangles,
-            source_vertex,
+            source_vertex: source_vertex.clone(),
             morph_targets: Vec::new(),
             morph_weights: Vec::new(),
             attached_to: None,
+            vertex_values: self.vertex_values(
+                &prim,
+                n_points,
+                n_faces,
+                n_corners,
+                &source_vertex,
+            )?,
             polygons,
             ..Default::default()
         };

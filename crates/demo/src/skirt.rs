@@ -1,0 +1,92 @@
+//! The demo's garment: a skirt, a flared cone of triangles hanging from the waist, its top
+//! ring pinned to the skin (`rigport cloth`, `rigport_eval::cloth`).
+
+use rigport_model::glam::Vec3;
+use rigport_model::{Asset, Mesh};
+
+/// Height of the skirt's waistband, metres (between the hips joint at 0.98 m and the
+/// spine at 1.10 m).
+pub const WAIST_Y: f32 = 1.0;
+
+/// The skirt's length along its flank, metres (to above the knees).
+const LENGTH: f32 = 0.42;
+
+/// How far the hem flares out beyond the waist, metres.
+const FLARE: f32 = 0.22;
+
+/// A skirt of `rings` rings of `segments` vertices around the demo body's waist: ring 0
+/// (the first `segments` vertices, the ones to pin) lies on the body's cross-section at
+/// [`WAIST_Y`] (per direction, the farthest body vertex within 2 cm of that height and 35
+/// cm of the axis, so arms do not count), the others flare out (as the square root of
+/// the distance down) to the hem. Needs
+/// `rings >= 2` and `segments >= 3` (smaller values are raised to them). Triangles are
+/// counter-clockwise seen from outside.
+///
+/// ```
+/// let demo = rigport_demo::build(1)?;
+/// let skirt = rigport_demo::skirt::skirt(&demo.asset, 10, 40);
+/// assert_eq!(skirt.vertex_count(), 400);
+/// assert_eq!(skirt.triangles.len(), 2 * 9 * 40);
+/// # Ok::<(), rigport_demo::DemoError>(())
+/// ```
+pub fn skirt(asset: &Asset, rings: u32, segments: u32) -> Mesh {
+    let rings = rings.max(2);
+    let segments = segments.max(3);
+    let body: Vec<Vec3> = asset
+        .meshes
+        .first()
+        .map(|m| {
+            m.positions
+                .iter()
+                .copied()
+                .filter(|p| (p.y - WAIST_Y).abs() < 0.02 && p.x.hypot(p.z) < 0.35)
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut positions = Vec::with_capacity((rings * segments) as usize);
+    // Waist radius per direction: the farthest slab vertex within 10 degrees of it.
+    let radius: Vec<f32> = (0..segments)
+        .map(|s| {
+            let a = std::f32::consts::TAU * s as f32 / segments as f32;
+            let dir = Vec3::new(a.cos(), 0.0, a.sin());
+            body.iter()
+                .filter(|p| Vec3::new(p.x, 0.0, p.z).normalize_or_zero().dot(dir) > 0.985)
+                .map(|p| p.x.hypot(p.z))
+                .fold(0.12f32, f32::max)
+        })
+        .collect();
+    for r in 0..rings {
+        let t = r as f32 / (rings - 1) as f32;
+        for (s, &r0) in radius.iter().enumerate() {
+            let a = std::f32::consts::TAU * s as f32 / segments as f32;
+            // A bell: out from the hips quickly (clear of the hip and thigh
+            // colliders), then nearly straight down.
+            let rad = r0 + FLARE * t.sqrt();
+            positions.push(Vec3::new(
+                rad * a.cos(),
+                WAIST_Y - LENGTH * t,
+                rad * a.sin(),
+            ));
+        }
+    }
+    let mut triangles = Vec::new();
+    for r in 0..rings - 1 {
+        for s in 0..segments {
+            let a = r * segments + s;
+            let b = r * segments + (s + 1) % segments;
+            let (c, d) = (a + segments, b + segments);
+            // Angle grows from +X towards +Z, so (a, b, c) seen from outside turns
+            // counter-clockwise when ordered a, c, b.
+            triangles.push([a, c, b]);
+            triangles.push([b, c, d]);
+        }
+    }
+    let n = positions.len() as u32;
+    Mesh {
+        name: "skirt".into(),
+        positions,
+        triangles,
+        source_vertex: (0..n).collect(),
+        ..Mesh::default()
+    }
+}
