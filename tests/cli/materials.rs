@@ -377,6 +377,20 @@ fn a_deep_named_face_mesh_keeps_its_node_and_target_names() {
     let again = dir.path().join("again.glb");
     rigport_ok(&["convert", s(&glb), "-o", s(&again), "--quiet"]);
     assert_eq!(face_of(&again), face_of(&glb));
+    // Through USD and back: the Mesh prim is named after its node, its blend shapes after
+    // the morph targets, and both come back.
+    let usda = dir.path().join("character.usda");
+    rigport_ok(&["convert", s(&glb), "-o", s(&usda), "--quiet"]);
+    let back = dir.path().join("back.glb");
+    rigport_ok(&["convert", s(&usda), "-o", s(&back), "--quiet"]);
+    assert_valid(&back);
+    let (name, _, targets) = face_of(&back);
+    assert_eq!(name, "Face");
+    assert_eq!(
+        targets,
+        ["smile", "blink"],
+        "morph target names through .usda"
+    );
 }
 
 #[test]

@@ -54,6 +54,11 @@ impl Namespace {
         self.taken.insert(name.to_owned());
     }
 
+    /// Whether `name` is handed out or reserved already.
+    pub(crate) fn is_taken(&self, name: &str) -> bool {
+        self.taken.contains(name)
+    }
+
     /// A unique identifier for `name`: sanitized, then suffixed with `_1`, `_2`, ... on a
     /// clash. Returns the identifier and whether it differs from `name`.
     pub(crate) fn claim(&mut self, name: &str, fallback: &str) -> (String, bool) {

@@ -147,7 +147,14 @@ pub(crate) fn build(
             if renamed && !target.name.is_empty() {
                 mesh_renames.push(&target.name, &shape);
             }
-            let (channel, _) = channel_ns.claim(&format!("{prim}_{shape}"), "shape");
+            // The channel is the shape's own name (so names survive a round trip), made
+            // unique across the skeleton's meshes with the mesh's name on a clash.
+            let wanted = if channel_ns.is_taken(&shape) {
+                format!("{prim}_{shape}")
+            } else {
+                shape.clone()
+            };
+            let (channel, _) = channel_ns.claim(&wanted, "shape");
             shapes.push(shape);
             channels.push(channel);
         }
