@@ -60,6 +60,7 @@ mod body;
 mod character;
 pub mod clips;
 pub mod corpus;
+mod error;
 pub mod pictures;
 mod sdf;
 mod skeleton;
@@ -68,11 +69,11 @@ mod surface_nets;
 mod weights;
 
 pub use character::{character, DemoRig, MAX_DETAIL};
+pub use error::DemoError;
 
-use rigport_eval::bake::pipeline::{bake_dqs, DqsBakeError, DqsBakeOptions, MeshBakeReport};
-use rigport_eval::ik::clip::{solve_clip, ClipSolveError, ClipSolveOptions, HandleTargets};
-use rigport_eval::sample::SampleError;
-use rigport_import::{pinocchio, ImportError, Imported};
+use rigport_eval::bake::pipeline::{bake_dqs, DqsBakeOptions, MeshBakeReport};
+use rigport_eval::ik::clip::{solve_clip, ClipSolveOptions, HandleTargets};
+use rigport_import::{pinocchio, Imported};
 use rigport_model::{Asset, Influences, Skeleton, SkinBinding, Warning};
 
 /// The demo: the character as an asset with its clips, and what the pictures need.
@@ -86,48 +87,6 @@ pub struct Demo {
     pub warnings: Vec<Warning>,
     /// The model-space targets the reach was solved for (drawn as markers on its picture).
     pub reach_targets: HandleTargets,
-}
-
-/// Why the demo could not be built: each is a rigport bug for the built-in character,
-/// except [`DemoError::Corpus`] and [`DemoError::Render`] of a corpus rig.
-#[derive(Debug, thiserror::Error)]
-pub enum DemoError {
-    /// The character does not assemble as a Pinocchio rig.
-    #[error("the built-in demo rig is invalid (a rigport bug)")]
-    Assemble(#[source] ImportError),
-    /// Keys or handles name a joint the skeleton lacks.
-    #[error("no joint named {0:?}")]
-    UnknownJoint(String),
-    /// A keyed clip cannot be baked.
-    #[error("cannot bake the keys of clip {clip:?}")]
-    Keys {
-        /// The clip.
-        clip: String,
-        /// Why.
-        #[source]
-        source: SampleError,
-    },
-    /// The IK reach cannot be solved.
-    #[error("the built-in demo reach is invalid (a rigport bug)")]
-    Reach(#[source] ClipSolveError),
-    /// The twist clip's DQS cannot be baked.
-    #[error("cannot bake the demo's twist clip (a rigport bug)")]
-    Bake(#[source] DqsBakeError),
-    /// A picture cannot be rendered.
-    #[error("cannot render {what}")]
-    Render {
-        /// The clip or rig.
-        what: String,
-        /// Why.
-        #[source]
-        source: rigport_render::RenderError,
-    },
-    /// A corpus rig cannot be opened.
-    #[error(transparent)]
-    Corpus(#[from] rigport_import::detect::OpenError),
-    /// A corpus family's files make more or fewer than one rig.
-    #[error("expected one rig, found {0}")]
-    CorpusRigs(usize),
 }
 
 /// The character of [`character`]`(detail)` as an imported Pinocchio rig (bone `k` named

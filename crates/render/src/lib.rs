@@ -32,6 +32,7 @@ pub use encode::{
     apng_delay_ms, contact_sheet, encode_apng, encode_gif, encode_png, gif_delay_cs, pick_evenly,
 };
 pub use raster::{Framebuffer, Rgba};
+pub use surface::MESH_COLORS;
 use surface::{Look, Surfaces};
 
 /// The background colour of every picture.
@@ -44,13 +45,6 @@ pub const JOINT_COLOR: Rgba = [255, 214, 80, 255];
 pub const TEXT_COLOR: Rgba = [235, 235, 235, 255];
 /// Markers ([`Markers`], e.g. IK targets): a magenta that no mesh shade or overlay uses.
 pub const MARKER_COLOR: Rgba = [255, 48, 255, 255];
-/// Base colours of meshes, mesh `i` uses entry `i % 4`.
-pub const MESH_COLORS: [Rgba; 4] = [
-    [222, 196, 164, 255],
-    [150, 182, 222, 255],
-    [170, 210, 160, 255],
-    [220, 164, 182, 255],
-];
 /// Shading levels per mesh colour: flat shading is quantized to these so that every
 /// picture uses the fixed [`palette`] (GIF frames then need no colour quantization).
 pub const SHADE_LEVELS: usize = 48;

@@ -12,7 +12,15 @@ use std::io::Cursor;
 
 use rigport_model::{Asset, Image, Material, Wrap};
 
-use crate::{Rgba, MESH_COLORS};
+use crate::Rgba;
+
+/// Base colours of meshes, mesh `i` uses entry `i % 4`.
+pub const MESH_COLORS: [Rgba; 4] = [
+    [222, 196, 164, 255],
+    [150, 182, 222, 255],
+    [170, 210, 160, 255],
+    [220, 164, 182, 255],
+];
 
 /// A decoded texture: `width * height` RGBA8 texels, row by row from the top.
 pub(crate) struct Texture {

@@ -29,7 +29,7 @@ use rigport_model::{
     Warning,
 };
 
-use super::clip::{
+use super::handles::{
     lerp_keys, ClipSolveError, ClipSolveOptions, HandleResidual, HandleTargets, SolvedClip,
 };
 use super::two_bone::{apply_correction, TwoBoneIkJob};

@@ -65,6 +65,7 @@
 
 pub mod chains;
 pub mod clip;
+mod handles;
 mod linalg;
 mod solver;
 #[cfg(test)]

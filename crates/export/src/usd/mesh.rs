@@ -76,7 +76,7 @@ pub(super) fn write_mesh(
         schemas.push("\"SkelBindingAPI\"");
     }
     // The source's name, when the prim's had to differ from it.
-    let source_name = super::stage::mesh_prim_source_name(mesh);
+    let source_name = mesh_prim_source_name(mesh);
     let display = (!source_name.is_empty() && source_name != plan.prim).then_some(source_name);
     if schemas.is_empty() && display.is_none() {
         doc.open(&header);
@@ -476,4 +476,13 @@ fn mesh_normals(mesh: &Mesh, label: &str, warnings: &mut Vec<Warning>) -> Vec<Ve
         });
     }
     out
+}
+
+/// The name a mesh's prim is made from: its source node's, else its own.
+pub(crate) fn mesh_prim_source_name(mesh: &rigport_model::Mesh) -> &str {
+    if mesh.node_name.is_empty() {
+        &mesh.name
+    } else {
+        &mesh.node_name
+    }
 }

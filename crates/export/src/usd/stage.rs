@@ -118,7 +118,7 @@ pub(crate) fn build(
     let mut plans = Vec::with_capacity(asset.meshes.len());
     for (mi, mesh) in asset.meshes.iter().enumerate() {
         // The prim takes the name of the source node that held the mesh, when known.
-        let name = mesh_prim_source_name(mesh);
+        let name = super::mesh::mesh_prim_source_name(mesh);
         let (prim, renamed) = root_ns.claim(name, "mesh");
         if renamed && !name.is_empty() {
             mesh_renames.push(name, &prim);
@@ -471,13 +471,4 @@ pub(crate) fn build(
     }
     doc.close();
     Ok((doc.finish(), warnings))
-}
-
-/// The name a mesh's prim is made from: its source node's, else its own.
-pub(crate) fn mesh_prim_source_name(mesh: &rigport_model::Mesh) -> &str {
-    if mesh.node_name.is_empty() {
-        &mesh.name
-    } else {
-        &mesh.node_name
-    }
 }
