@@ -590,23 +590,10 @@ pub(super) fn solve_chains(
         .tracks
         .iter()
         .enumerate()
-        .map(|(h, t)| {
-            let r = &residuals[h];
-            let (worst_frame, max) = r
-                .iter()
-                .copied()
-                .enumerate()
-                .fold((0, 0.0f32), |a, (i, v)| if v > a.1 { (i, v) } else { a });
-            HandleResidual {
-                joint: t.name.clone(),
-                max_residual: max,
-                mean_residual: r.iter().sum::<f32>() / r.len().max(1) as f32,
-                worst_frame,
-                worst_time: times.get(worst_frame).copied().unwrap_or(0.0),
-                frames_over_tolerance: r.iter().filter(|&&v| v > tolerance).count(),
-                max_orientation_residual_deg: orientation[h],
-                reached: reached[h].take(),
-            }
+        .map(|(h, t)| HandleResidual {
+            max_orientation_residual_deg: orientation[h],
+            reached: reached[h].take(),
+            ..HandleResidual::from_frames(&t.name, &residuals[h], &times, tolerance)
         })
         .collect();
     let over: usize = summaries.iter().map(|h| h.frames_over_tolerance).sum();

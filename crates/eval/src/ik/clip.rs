@@ -168,23 +168,7 @@ pub fn solve_clip_on(
         .tracks
         .iter()
         .zip(&residuals)
-        .map(|(t, r)| {
-            let (worst_frame, max) = r
-                .iter()
-                .copied()
-                .enumerate()
-                .fold((0, 0.0f32), |a, (i, v)| if v > a.1 { (i, v) } else { a });
-            HandleResidual {
-                joint: t.name.clone(),
-                max_residual: max,
-                mean_residual: r.iter().sum::<f32>() / r.len().max(1) as f32,
-                worst_frame,
-                worst_time: times.get(worst_frame).copied().unwrap_or(0.0),
-                frames_over_tolerance: r.iter().filter(|&&v| v > tolerance).count(),
-                max_orientation_residual_deg: 0.0,
-                reached: None,
-            }
-        })
+        .map(|(t, r)| HandleResidual::from_frames(&t.name, r, &times, tolerance))
         .collect();
     let over: usize = residuals.iter().map(|h| h.frames_over_tolerance).sum();
     let mut warnings = Vec::new();

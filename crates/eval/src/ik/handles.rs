@@ -66,6 +66,31 @@ pub struct HandleResidual {
 }
 
 impl HandleResidual {
+    /// The summary of one handle's per-frame `residuals` at `times` (worst frame, mean,
+    /// frames over `tolerance`); no orientation residual and no `reached` flags.
+    pub(crate) fn from_frames(
+        joint: &str,
+        residuals: &[f32],
+        times: &[f32],
+        tolerance: f32,
+    ) -> Self {
+        let (worst_frame, max) = residuals
+            .iter()
+            .copied()
+            .enumerate()
+            .fold((0, 0.0f32), |a, (i, v)| if v > a.1 { (i, v) } else { a });
+        Self {
+            joint: joint.to_owned(),
+            max_residual: max,
+            mean_residual: residuals.iter().sum::<f32>() / residuals.len().max(1) as f32,
+            worst_frame,
+            worst_time: times.get(worst_frame).copied().unwrap_or(0.0),
+            frames_over_tolerance: residuals.iter().filter(|&&v| v > tolerance).count(),
+            max_orientation_residual_deg: 0.0,
+            reached: None,
+        }
+    }
+
     /// For a two-bone handle, one line: `two-bone hand_l: reached in 58/61 frames; not
     /// reached in frames: 30 31 32` (`none` when every frame reached).
     pub fn reached_summary(&self) -> Option<String> {
