@@ -9,7 +9,16 @@
 #
 # RIGPORT_BIN=path uses that binary instead of building `cargo build --release`.
 # Needs ../shared/corpus (skips the corpus part, with a message, when it is absent).
+#
+# Same bytes are promised for the same platform: rigport's arithmetic is plain IEEE (no
+# fast-math), but sin/cos/exp/pow come from the C library, whose results may differ in the
+# last bit between CPUs (glibc picks FMA or SSE2 code at run time) and between glibc
+# versions. The file therefore records the platform and corpus it was written on (the `#`
+# lines). On a difference, the script names the outputs that differ; it exits 1 when the
+# platform and corpus are the recorded ones (a real change), and 4 when they are not
+# (not comparable here: rerun on the recording platform, or --write there).
 set -euo pipefail
+export LC_ALL=C
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 MODE="${1:-check}"
@@ -75,17 +84,51 @@ else
 fi
 
 EXPECTED="$ROOT/tools/output_hashes.txt"
+# One order whatever the locale or file system: by output name.
+sort -k2 -o "$LIST" "$LIST"
+platform() {
+  local cpu flags libc
+  cpu="$(grep -m1 '^model name' /proc/cpuinfo 2>/dev/null | cut -d: -f2- | sed 's/^ *//')"
+  flags="$(grep -m1 '^flags' /proc/cpuinfo 2>/dev/null | grep -ow -E 'fma|avx2|avx512f' | sort -u | tr '\n' ' ' | sed 's/ $//')"
+  libc="$(ldd --version 2>/dev/null | head -1 | grep -oE '[0-9]+\.[0-9]+$' || true)"
+  echo "$(uname -m) ${cpu:-unknown cpu}; ${flags:-no fma/avx}; glibc ${libc:-unknown}"
+}
+corpus_id() {
+  if [[ -f "$C/MANIFEST.tsv" ]]; then sha256sum < "$C/MANIFEST.tsv" | cut -c1-16; else echo absent; fi
+}
+HEADER_PLATFORM="# platform: $(platform)"
+HEADER_CORPUS="# corpus MANIFEST.tsv sha256: $(corpus_id)"
+# differ: names the outputs whose hash changed, appeared or went missing (at most 12 shown).
+differ() {
+  local expected_body="$1"
+  local names
+  names="$(diff <(echo "$expected_body") "$LIST" | grep -E '^[<>] ' | awk '{print $3}' | sort -u || true)"
+  local n
+  n="$(echo "$names" | grep -c . || true)"
+  echo "tools/output_hashes.sh: $n of $(wc -l < "$LIST") outputs differ: $(echo "$names" | head -12 | tr '\n' ' ')" >&2
+  if [[ "$(grep -m1 '^# platform:' "$EXPECTED" || true)" != "$HEADER_PLATFORM" \
+     || "$(grep -m1 '^# corpus' "$EXPECTED" || true)" != "$HEADER_CORPUS" ]]; then
+    echo "tools/output_hashes.sh: not comparable here: recorded on" >&2
+    grep '^# ' "$EXPECTED" | sed 's/^/  /' >&2
+    echo "  this machine:" >&2
+    printf '  %s\n  %s\n' "$HEADER_PLATFORM" "$HEADER_CORPUS" >&2
+    exit 4
+  fi
+  echo "tools/output_hashes.sh: outputs differ from tools/output_hashes.txt on its own platform and corpus" >&2
+  exit 1
+}
 if [[ "$MODE" == --write ]]; then
-  cp "$LIST" "$EXPECTED"
-  echo "wrote $(wc -l < "$EXPECTED") hashes to tools/output_hashes.txt"
+  { echo "$HEADER_PLATFORM"; echo "$HEADER_CORPUS"; cat "$LIST"; } > "$EXPECTED"
+  echo "wrote $(grep -vc "^#" "$EXPECTED") hashes to tools/output_hashes.txt"
 elif [[ ! -d "$C" ]]; then
   # Only the demo lines can be compared.
-  if diff <(grep '  demo/' "$EXPECTED") "$LIST"; then echo "demo outputs unchanged"; else exit 1; fi
+  body="$(grep '  demo/' "$EXPECTED")"
+  if diff <(echo "$body") "$LIST"; then echo "demo outputs unchanged"; else differ "$body"; fi
 else
-  if diff "$EXPECTED" "$LIST"; then
+  body="$(grep -v '^#' "$EXPECTED")"
+  if diff <(echo "$body") "$LIST"; then
     echo "all $(wc -l < "$LIST") outputs unchanged"
   else
-    echo "tools/output_hashes.sh: outputs differ from tools/output_hashes.txt (lines above: < expected, > now)" >&2
-    exit 1
+    differ "$body"
   fi
 fi
