@@ -306,7 +306,7 @@ elif [[ "$fuzz_seconds" == 0 ]]; then
   record "$CURRENT_STEP" PASS "$((SECONDS - t0))" "skipped: RIGPORT_FUZZ_SECONDS=0"
 else
   fuzz_rc=0
-  bash fuzz/run.sh --dev --seconds "$fuzz_seconds" >"$fuzz_log" 2>&1 || fuzz_rc=$?
+  bash fuzz/run.sh --dev --scratch --seconds "$fuzz_seconds" >"$fuzz_log" 2>&1 || fuzz_rc=$?
   cat "$fuzz_log"
   if [[ "$fuzz_rc" == 0 ]]; then
     record "$CURRENT_STEP" PASS "$((SECONDS - t0))" "${fuzz_seconds} s per target (dev build), no crash"
