@@ -1,5 +1,5 @@
 //! The JSON inputs rigport reads beside a rig: `POSE.json` ([`pose`]), `KEYS.json`
-//! ([`keys`]) and `HANDLES.json` ([`handles`]).
+//! ([`keys`]), `HANDLES.json` ([`handles`]) and retargeting's `MAP.json` ([`map`]).
 //!
 //! Each parser resolves joint names against a skeleton and returns plain data from
 //! `rigport_model`; the evaluator turns that into poses, clips and IK solves. Errors name
@@ -10,6 +10,7 @@
 
 pub mod handles;
 pub mod keys;
+pub mod map;
 pub mod pose;
 
 use std::path::Path;
@@ -109,6 +110,30 @@ pub enum JsonProblem {
     /// A limit pair that is not `[min, max]` in degrees within ±180 with min <= max.
     #[error("limit {0:?}: expected [min_deg, max_deg], finite, within -180..=180, min <= max")]
     BadLimit([f32; 2]),
+    /// A joint map names a joint the source or target lacks.
+    #[error("the {side} has no joint named {name:?}")]
+    MapUnknownJoint {
+        /// `"source"` or `"target"`.
+        side: &'static str,
+        /// The name given.
+        name: String,
+    },
+    /// Two source joints drive one target joint.
+    #[error("two source joints onto one target: {target:?} is driven by {first:?} already")]
+    MappedTwice {
+        /// The target joint.
+        target: String,
+        /// The source joint given first.
+        first: String,
+    },
+    /// A pair whose hierarchy is the reverse of another pair's.
+    #[error("a cycle: {:?} -> {:?} reverses the hierarchy of {:?} -> {:?} (one is above the other in the source, below it in the target)", pair[0], pair[1], other[0], other[1])]
+    MapCycle {
+        /// The pair: source and target names.
+        pair: [String; 2],
+        /// The earlier pair it conflicts with.
+        other: [String; 2],
+    },
     /// A clip name the input does not have.
     #[error("the input has no clip named {name:?} (it has: {known})")]
     UnknownClip {
