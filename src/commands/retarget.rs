@@ -100,7 +100,7 @@ pub fn run(ctx: &Context, args: &RetargetArgs) -> Result<()> {
         .iter()
         .map(|(l, e)| json!({"label": l, "max_error": e}))
         .collect();
-    let report = json!({"clip": clip.name, "map": r.map, "pairs": pairs, "unmapped": r.unmapped,
+    let report = json!({"clip": clip.name, "map": r.map, "pairs": pairs, "unmapped": r.unmapped, "reference": r.reference,
         "scale_vertical": r.scale_vertical, "scale_horizontal": r.scale_horizontal, "frames": r.frames,
         "height": r.height, "limbs": limbs, "feet": feet, "planted": r.planted, "hands": hands});
     let mut out = std::io::stdout().lock();

@@ -27,8 +27,9 @@ fn horizontal(v: Vec3, up: Vec3) -> Vec3 {
 /// model's +z (the convention of the formats rigport reads), else +x.
 ///
 /// `roles` names the joints by body role (see [`super::maps::ROLES`]).
-pub fn facing(skeleton: &Skeleton, roles: &[(&'static str, JointIndex)], up: Vec3) -> Vec3 {
-    let rest = skeleton.model_rest_matrices();
+/// `rest` holds the model matrices of the pose to look at (the rest pose, or a reference
+/// pose), one per joint.
+pub fn facing(rest: &[Mat4], roles: &[(&'static str, JointIndex)], up: Vec3) -> Vec3 {
     let at = |role: &str| {
         roles
             .iter()
@@ -118,26 +119,32 @@ pub(crate) fn mapped_above(
 }
 
 /// Largest angle between a target rest bone and its source bone that the swing corrects,
-/// radians. A T pose against an A pose differs by about 45 degrees; bones more than 90
-/// degrees apart are not the same anatomy (Pinocchio's spine hangs from the shoulders,
-/// pointing down where a mocap spine points up), and keep the frame alignment alone.
-pub const MAX_SWING_RAD: f32 = std::f32::consts::FRAC_PI_2;
+/// radians (150 degrees), for bones outside the arms and legs. A T pose against an A pose
+/// differs by about 45 degrees, a T pose against arms hanging down with bent elbows (a
+/// running first frame used as reference) by up to 145; torso bones further apart are not
+/// the same anatomy (Pinocchio's spine hangs from the shoulders, pointing down where a
+/// mocap spine points up: 165 degrees on `human_model1`), and keep the frame alignment
+/// alone.
+pub const MAX_SWING_RAD: f32 = 5.0 * std::f32::consts::PI / 6.0;
 
 /// Per target joint, the model-space swing `A` that turns its rest bone onto the source's
-/// rest bone as seen in the target's frame (`q` applied): the shortest arc from the
+/// reference bone (`rest_s`: the source's model matrices in its reference pose) as seen in the target's frame (`q` applied): the shortest arc from the
 /// direction towards its one mapped joint below to the same direction in the source.
 /// Joints with several mapped branches below keep the identity; joints with none inherit
 /// the swing of their nearest mapped ancestor, so hands stay aligned with forearms.
 ///
 /// Also returns, per target joint with a swing, its one mapped joint below and the
 /// direction towards it in the joint's own rest frame (for [`aim`]).
+///
+/// `limb` marks the target joints of arms and legs (by role), whose bones are the same
+/// anatomy however far apart the poses are: the angle limit does not apply to them.
 pub(crate) fn swings(
-    source: &Skeleton,
+    rest_s: &[Mat4],
     target: &Skeleton,
     source_of: &[Option<JointIndex>],
+    limb: &[bool],
     q: Quat,
 ) -> (Vec<Quat>, Vec<Option<(JointIndex, Vec3)>>) {
-    let rest_s = source.model_rest_matrices();
     let rest_t = target.model_rest_matrices();
     let pos = |m: &[Mat4], j: JointIndex| m[j.get()].w_axis.truncate();
     let mapped: Vec<bool> = source_of.iter().map(Option::is_some).collect();
@@ -154,9 +161,10 @@ pub(crate) fn swings(
                     continue;
                 };
                 let dt = pos(&rest_t, *c) - pos(&rest_t, tj);
-                let ds = q * (pos(&rest_s, sc) - pos(&rest_s, s));
+                let ds = q * (pos(rest_s, sc) - pos(rest_s, s));
                 let (dt, ds) = (dt.normalize_or_zero(), ds.normalize_or_zero());
-                if dt == Vec3::ZERO || ds == Vec3::ZERO || dt.angle_between(ds) >= MAX_SWING_RAD {
+                let apart = dt.angle_between(ds) >= MAX_SWING_RAD && !limb[t];
+                if dt == Vec3::ZERO || ds == Vec3::ZERO || apart {
                     Quat::IDENTITY
                 } else {
                     let local = rotation(&rest_t[t]).inverse() * dt;

@@ -344,7 +344,7 @@ pub fn resolve(
                 .map(|m| m.w_axis.truncate())
         };
         if let (Some(l), Some(r)) = (at("LeftUpperLeg"), at("RightUpperLeg")) {
-            let forward = super::align::facing(skeleton, &found, up);
+            let forward = super::align::facing(&rest, &found, up);
             let right = forward.cross(up);
             if (l - r).dot(right) > 0.0 {
                 for (role, _) in &mut found {

@@ -4,6 +4,9 @@
 //! (built in: [`auto_map`]; from a file: `rigport_import::json::map`), and returns a clip
 //! for the target:
 //!
+//! 0. **Reference.** The source's rest pose, or its clip's first frame when the rest pose
+//!    does not stand (Bandai Namco's BVH lays every bone along +x at rest) and the target's
+//!    does; "rest" below means this reference for the source.
 //! 1. **Frames.** Each skeleton's facing ([`align::facing`]: where the toes point, else
 //!    where the knees bend) and model-space up direction give a rotation `Q` taking the
 //!    source's model space onto the target's (a Z-up ASF onto a Y-up rig, a walk along -z
@@ -170,6 +173,10 @@ pub struct RetargetReport {
     pub pairs: Vec<(String, String, Option<&'static str>)>,
     /// Target joints no source joint drives (they keep their rest pose).
     pub unmapped: Vec<String>,
+    /// The source pose the target's rest pose is matched to: `"rest pose"`, or `"first
+    /// frame"` when the source's rest pose does not stand (hips less than half a leg above
+    /// the ankles).
+    pub reference: &'static str,
     /// Vertical scale of the hips' path (target hip height / source hip height).
     pub scale_vertical: f32,
     /// Horizontal scale of the hips' path (target leg length / source leg length).
@@ -196,10 +203,11 @@ impl RetargetReport {
     /// hands (what `rigport retarget` prints).
     pub fn summary(&self) -> String {
         let mut lines = vec![format!(
-            "map: {} ({} pairs, {} target joints unmapped); hips scaled {:.3} vertically, {:.3} horizontally; {} frames",
+            "map: {} ({} pairs, {} target joints unmapped); source reference: its {}; hips scaled {:.3} vertically, {:.3} horizontally; {} frames",
             self.map,
             self.pairs.len(),
             self.unmapped.len(),
+            self.reference,
             self.scale_vertical,
             self.scale_horizontal,
             self.frames
@@ -302,6 +310,20 @@ fn positions(skeleton: &Skeleton, frames: &[Transform]) -> Result<Vec<Vec3>, Eva
     Ok(out)
 }
 
+/// Model matrices of one frame of local transforms.
+fn model_of(skeleton: &Skeleton, local: &[Transform]) -> Result<Vec<Mat4>, EvalError> {
+    let parents: Vec<Option<JointIndex>> = skeleton.parents().collect();
+    let mut model = vec![Mat4::IDENTITY; parents.len()];
+    LocalToModelJob {
+        parents: &parents,
+        local,
+        root_model: Mat4::IDENTITY,
+        model: &mut model,
+    }
+    .run()?;
+    Ok(model)
+}
+
 /// The source joint of each target joint.
 fn sources_of(input: &RetargetInput<'_>) -> Result<Vec<Option<JointIndex>>, RetargetError> {
     let (source, target) = (input.source, input.target);
@@ -348,21 +370,42 @@ pub fn retarget(
     }
     let source_frames = sample_frames(&compiled, &rest_locals(source), &times)?;
     let source_pos = positions(source, &source_frames)?;
-    let (rest_s, rest_t) = (source.model_rest_matrices(), target.model_rest_matrices());
+    let rest_t = target.model_rest_matrices();
     let (up_s, up_t) = (unit_or_y(input.source_up), unit_or_y(input.target_up));
-
-    // Frames and scales.
+    let (pelvis_s, pelvis_t) = input.map.pelvis;
     let roles_s = maps::roles_of(source, up_s);
     let roles_t = maps::roles_of(target, up_t);
-    let q = align::frame_rotation(
-        up_s,
-        align::facing(source, &roles_s, up_s),
-        up_t,
-        align::facing(target, &roles_t, up_t),
-    );
-    let (pelvis_s, pelvis_t) = input.map.pelvis;
     let legs_s = legs_of(source, &roles_s);
     let legs_t = legs_of(target, &roles_t);
+    // The source's reference pose: its rest pose, or the clip's first frame when the rest
+    // pose does not stand (Bandai Namco's BVH rest pose lays every bone along +x) and the
+    // target's does.
+    let stands_t = |m: &[Mat4]| {
+        leg_measures(m, &legs_t, pelvis_t, up_t)
+            .is_some_and(|(length, height)| height > 0.5 * length)
+    };
+    let (rest_s, reference) = {
+        let rest = source.model_rest_matrices();
+        let stands = |m: &[Mat4]| {
+            leg_measures(m, &legs_s, pelvis_s, up_s)
+                .is_some_and(|(length, height)| height > 0.5 * length)
+        };
+        let target_stands = legs_t.is_empty() || stands_t(&rest_t);
+        if legs_s.is_empty() || stands(&rest) || !target_stands {
+            (rest, "rest pose")
+        } else {
+            let first = model_of(source, &source_frames[..source.len()])?;
+            (first, "first frame")
+        }
+    };
+
+    // Frames and scales.
+    let q = align::frame_rotation(
+        up_s,
+        align::facing(&rest_s, &roles_s, up_s),
+        up_t,
+        align::facing(&rest_t, &roles_t, up_t),
+    );
     let (scale_h, scale_v) = match (
         leg_measures(&rest_s, &legs_s, pelvis_s, up_s),
         leg_measures(&rest_t, &legs_t, pelvis_t, up_t),
@@ -381,7 +424,16 @@ pub fn retarget(
     };
 
     // Per-joint transfer.
-    let (swings, aims) = align::swings(source, target, &source_of, q);
+    let mut limb = vec![false; target.len()];
+    for p in &input.map.pairs {
+        let is_limb = p.role.is_some_and(|r| {
+            ["Shoulder", "Arm", "Hand", "Leg", "Foot", "Toes"]
+                .iter()
+                .any(|part| r.contains(part))
+        });
+        limb[p.target.get()] = is_limb;
+    }
+    let (swings, aims) = align::swings(&rest_s, target, &source_of, &limb, q);
     let rest_rot_s: Vec<Quat> = rest_s.iter().map(rotation).collect();
     let rest_rot_t: Vec<Quat> = rest_t.iter().map(rotation).collect();
     let rest_local_t = rest_locals(target);
@@ -498,6 +550,7 @@ pub fn retarget(
             })
             .collect(),
         unmapped,
+        reference,
         scale_vertical: scale_v,
         scale_horizontal: scale_h,
         frames: times.len(),
