@@ -23,7 +23,8 @@
 //!    about the bone stays the transferred one. Local rotations follow from the parents'
 //!    world rotations.
 //!    Unmapped target joints keep their rest pose relative to their parent; every target
-//!    joint keeps its rest translation (its bone lengths).
+//!    joint keeps its rest translation (its bone lengths), except, when the hips' path is
+//!    not scaled, joints with the source's rest offset take its animated translation.
 //! 3. **Hips.** The target's pelvis point goes where the source's is, in `Q` and scaled
 //!    about the model origin: horizontally by the ratio of leg lengths (hip to knee to
 //!    ankle), vertically by the ratio of hip heights (pelvis above the ankles in rest);
@@ -440,6 +441,28 @@ pub fn retarget(
     let parents_t: Vec<Option<JointIndex>> = target.parents().collect();
     let root_t = root_of(target, pelvis_t);
     let (n_s, n_t) = (source.len(), target.len());
+    // Joints whose bone is the source's (same rest offset, hips path unscaled): their
+    // animated translations are copied (a BVH with position channels on every joint).
+    let rest_local_s = rest_locals(source);
+    let same_bones: Vec<(usize, usize)> = if scale_h == 1.0 && scale_v == 1.0 {
+        source_of
+            .iter()
+            .enumerate()
+            .filter_map(|(t, s)| {
+                let s = (*s)?.get();
+                let (a, b) = (rest_local_s[s].translation, rest_local_t[t].translation);
+                (a.distance(b) <= 1e-6 * a.length().max(1e-6)).then_some((t, s))
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    // Their offsets move: the rest direction towards them does not hold, so they are not
+    // aimed at.
+    let mut copied = vec![false; n_t];
+    for &(t, _) in &same_bones {
+        copied[t] = true;
+    }
     let mut frames = Vec::with_capacity(times.len() * n_t);
     let mut world = vec![Quat::IDENTITY; n_t];
     let mut model = vec![Mat4::IDENTITY; n_t];
@@ -453,6 +476,9 @@ pub fn retarget(
     for (f, src) in source_frames.chunks_exact(n_s.max(1)).enumerate() {
         let src_pos = &source_pos[f * n_s..(f + 1) * n_s];
         let mut local = rest_local_t.clone();
+        for &(t, s) in &same_bones {
+            local[t].translation = src[s].translation;
+        }
         // World rotations of the source this frame.
         let src_world = |s: JointIndex| -> Quat {
             let mut r = src[s.get()].rotation;
@@ -471,7 +497,8 @@ pub fn retarget(
                     let w = (q * delta * q.inverse() * swings[t] * rest_rot_t[t]).normalize();
                     // The bone points where the source's does this frame (the source may
                     // have joints between the two that the target lacks).
-                    match aims[t].and_then(|(c, dir)| Some((source_of[c.get()]?, dir))) {
+                    let aim = aims[t].filter(|(c, _)| !copied[c.get()]);
+                    match aim.and_then(|(c, dir)| Some((source_of[c.get()]?, dir))) {
                         Some((sc, dir)) => {
                             align::aim(w, dir, q * (src_pos[sc.get()] - src_pos[s.get()]))
                         }
@@ -510,6 +537,9 @@ pub fn retarget(
         mask.rotation[t] = s.is_some();
     }
     mask.translation[root_t.get()] = true;
+    for &(t, _) in &same_bones {
+        mask.translation[t] = true;
+    }
     mask.rotation[root_t.get()] = true;
     let mut clip = bake(&input.clip.name, &times, &frames, &mask)?;
 
