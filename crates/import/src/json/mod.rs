@@ -262,6 +262,27 @@ mod tests {
             .contains("p.json: at /arm: unknown field `euler`"));
     }
 
+    fn map(path: &Path, s: &Skeleton) -> Option<String> {
+        super::map::read(path, s, s).err().map(|e| e.to_string())
+    }
+
+    #[test]
+    fn map_errors_name_the_json_path() {
+        for (text, expected) in [
+            (r#"{"joints": {}}"#, "m.json: at /joints: no joints"),
+            (r#"{"joints": {"nope": "arm"}}"#, "m.json: at /joints/nope: the source has no joint named \"nope\""),
+            (r#"{"joints": {"arm": ["arm", "nope"]}}"#, "m.json: at /joints/arm/1: the target has no joint named \"nope\""),
+            (r#"{"joints": {"arm": "arm", "hand": "arm"}}"#, "m.json: at /joints/hand: two source joints onto one target: \"arm\" is driven by \"arm\" already"),
+            (r#"{"joints": {"arm": "arm", "root": "hand"}}"#, "m.json: at /joints/root: a cycle: \"root\" -> \"hand\" reverses the hierarchy of \"arm\" -> \"arm\" (one is above the other in the source, below it in the target)"),
+            (r#"{"joints": {"arm": "arm"}, "pelvis": {"source": "arm", "target": "nope"}}"#, "m.json: at /pelvis/target: the target has no joint named \"nope\""),
+            (r#"{"joints": {"arm": 3}}"#, "m.json: at /joints/arm: data did not match any variant of untagged enum Targets"),
+        ] {
+            let got = message("m.json", text, map);
+            assert!(got.ends_with(expected), "{text}: {got}");
+        }
+        assert!(message("m.json", r#"{"joint": {}}"#, map).contains("m.json:1:"));
+    }
+
     #[test]
     fn keys_errors_name_the_json_path() {
         for (text, expected) in [
