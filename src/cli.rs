@@ -72,6 +72,12 @@ pub enum Command {
     Animate(AnimateArgs),
     /// Re-time a clip (resample, speed, warp curve, reverse, trim), baked to linear keys.
     Retime(RetimeArgs),
+    /// Put a motion (BVH, ASF/AMC, glTF clip) onto another rig: joints mapped by name
+    /// conventions or --map, rotations transferred relative to each rest pose, hips scaled.
+    #[command(
+        after_help = "MAP.json: {\"joints\": {\"SOURCE\": \"TARGET\" or [\"TARGET\", ...]}, \"pelvis\": {\"source\": \"S\", \"target\": \"T\"}} (pelvis optional)."
+    )]
+    Retarget(RetargetArgs),
     /// Play clips one after another with crossfades, optionally as a seamless loop.
     Sequence(SequenceArgs),
     /// Solve IK handles moving over time, one pose per frame, baked into a clip.
@@ -277,6 +283,35 @@ pub struct AnimateArgs {
     /// The keyframes (see below).
     #[arg(long, value_name = "KEYS.json")]
     pub keys: PathBuf,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `rigport retarget`.
+#[derive(Debug, Args)]
+pub struct RetargetArgs {
+    /// The motion (a .bvh, an .asf with --motion/.amc, a glTF with clips).
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// The rig to put it on: files or a folder, as for inputs.
+    #[arg(long, value_name = "RIG", required = true, num_args = 1..)]
+    pub onto: Vec<PathBuf>,
+    /// A joint map (see below); default: chosen by joint names.
+    #[arg(long, value_name = "MAP.json")]
+    pub map: Option<PathBuf>,
+    /// The clip to retarget (default: the first).
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// Plant the target's feet during their ground contacts (foot locking).
+    #[arg(long)]
+    pub plant_feet: bool,
+    /// Turn the arms so the wrists follow the source's, scaled like the hips.
+    #[arg(long)]
+    pub match_hands: bool,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
     /// Where to write.
     #[command(flatten)]
     pub output: OutputArgs,

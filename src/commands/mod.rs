@@ -12,6 +12,7 @@ mod footlock;
 mod ik;
 mod inspect;
 pub mod render;
+mod retarget;
 mod retime;
 mod sequence;
 
@@ -48,6 +49,7 @@ fn run_command(ctx: Context, command: Command) -> Result<()> {
         Command::Demo(args) => demo::run(&ctx, &args),
         Command::Animate(args) => animate::run(&ctx, &args),
         Command::Retime(args) => retime::run(&ctx, &args),
+        Command::Retarget(args) => retarget::run(&ctx, &args),
         Command::Sequence(args) => sequence::run(&ctx, &args),
         Command::Ik(args) => ik::run(&ctx, &args),
         Command::Footlock(args) => footlock::run(&ctx, &args),
@@ -76,6 +78,11 @@ fn check_outputs(command: &Command) -> Result<()> {
         Command::Convert(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Animate(a) => (&a.output.output, with_files(&a.input, &[&a.keys])),
         Command::Retime(a) => (&a.output.output, with_files(&a.input, &[])),
+        Command::Retarget(a) => {
+            let mut files: Vec<&PathBuf> = a.onto.iter().collect();
+            files.extend(&a.map);
+            (&a.output.output, with_files(&a.input, &files))
+        }
         Command::Sequence(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Ik(a) => (&a.output.output, with_files(&a.input, &[&a.handles])),
         Command::Footlock(a) => (&a.output.output, with_files(&a.input, &[])),

@@ -31,6 +31,7 @@ mod outputs;
 mod pinocchio;
 mod refit;
 mod render;
+mod retarget;
 mod skinning;
 mod three;
 mod usd;

@@ -17,6 +17,7 @@ pub mod keyed;
 pub mod pose;
 pub mod reduce;
 pub mod refit;
+pub mod retarget;
 pub mod retime;
 pub mod rig;
 pub mod sample;

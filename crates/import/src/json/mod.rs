@@ -1,5 +1,5 @@
 //! The JSON inputs rigport reads beside a rig: `POSE.json` ([`pose`]), `KEYS.json`
-//! ([`keys`]) and `HANDLES.json` ([`handles`]).
+//! ([`keys`]), `HANDLES.json` ([`handles`]) and retargeting's `MAP.json` ([`map`]).
 //!
 //! Each parser resolves joint names against a skeleton and returns plain data from
 //! `rigport_model`; the evaluator turns that into poses, clips and IK solves. Errors name
@@ -10,6 +10,7 @@
 
 pub mod handles;
 pub mod keys;
+pub mod map;
 pub mod pose;
 
 use std::path::Path;
@@ -109,6 +110,30 @@ pub enum JsonProblem {
     /// A limit pair that is not `[min, max]` in degrees within ±180 with min <= max.
     #[error("limit {0:?}: expected [min_deg, max_deg], finite, within -180..=180, min <= max")]
     BadLimit([f32; 2]),
+    /// A joint map names a joint the source or target lacks.
+    #[error("the {side} has no joint named {name:?}")]
+    MapUnknownJoint {
+        /// `"source"` or `"target"`.
+        side: &'static str,
+        /// The name given.
+        name: String,
+    },
+    /// Two source joints drive one target joint.
+    #[error("two source joints onto one target: {target:?} is driven by {first:?} already")]
+    MappedTwice {
+        /// The target joint.
+        target: String,
+        /// The source joint given first.
+        first: String,
+    },
+    /// A pair whose hierarchy is the reverse of another pair's.
+    #[error("a cycle: {:?} -> {:?} reverses the hierarchy of {:?} -> {:?} (one is above the other in the source, below it in the target)", pair[0], pair[1], other[0], other[1])]
+    MapCycle {
+        /// The pair: source and target names.
+        pair: [String; 2],
+        /// The earlier pair it conflicts with.
+        other: [String; 2],
+    },
     /// A clip name the input does not have.
     #[error("the input has no clip named {name:?} (it has: {known})")]
     UnknownClip {
@@ -235,6 +260,27 @@ mod tests {
         assert!(message("p.json", "{\"arm\":\n {", pose).contains("p.json:2:"));
         assert!(message("p.json", r#"{"arm": {"euler": [0,0,1]}}"#, pose)
             .contains("p.json: at /arm: unknown field `euler`"));
+    }
+
+    fn map(path: &Path, s: &Skeleton) -> Option<String> {
+        super::map::read(path, s, s).err().map(|e| e.to_string())
+    }
+
+    #[test]
+    fn map_errors_name_the_json_path() {
+        for (text, expected) in [
+            (r#"{"joints": {}}"#, "m.json: at /joints: no joints"),
+            (r#"{"joints": {"nope": "arm"}}"#, "m.json: at /joints/nope: the source has no joint named \"nope\""),
+            (r#"{"joints": {"arm": ["arm", "nope"]}}"#, "m.json: at /joints/arm/1: the target has no joint named \"nope\""),
+            (r#"{"joints": {"arm": "arm", "hand": "arm"}}"#, "m.json: at /joints/hand: two source joints onto one target: \"arm\" is driven by \"arm\" already"),
+            (r#"{"joints": {"arm": "arm", "root": "hand"}}"#, "m.json: at /joints/root: a cycle: \"root\" -> \"hand\" reverses the hierarchy of \"arm\" -> \"arm\" (one is above the other in the source, below it in the target)"),
+            (r#"{"joints": {"arm": "arm"}, "pelvis": {"source": "arm", "target": "nope"}}"#, "m.json: at /pelvis/target: the target has no joint named \"nope\""),
+            (r#"{"joints": {"arm": 3}}"#, "m.json: at /joints/arm: data did not match any variant of untagged enum Targets"),
+        ] {
+            let got = message("m.json", text, map);
+            assert!(got.ends_with(expected), "{text}: {got}");
+        }
+        assert!(message("m.json", r#"{"joint": {}}"#, map).contains("m.json:1:"));
     }
 
     #[test]

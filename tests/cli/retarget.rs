@@ -1,0 +1,284 @@
+//! `rigport retarget` (issue 19): a corpus clip onto its own skeleton gives the same motion;
+//! a BVH walk and an ASF/AMC walk onto the Pinocchio `human_model1` rig and the demo
+//! character validate clean, play in three.js without NaN, keep their feet planted and
+//! their limbs' end-effector paths within 10% of the limb length of the source's, scaled;
+//! bad maps exit 1 with the JSON path and write nothing.
+
+use std::path::{Path, PathBuf};
+
+use rigport_model::glam::Vec3;
+
+use crate::common::*;
+use crate::gltf_read::{self, GltfScene};
+use crate::motion::gltf_pose;
+use crate::three::three_eval;
+
+const WALK_BVH: &str = "4_bvh/cmu_cgspeed__nobuyuki83_delfem2/walk.bvh";
+const WALK_ASF: (&str, &str) = (
+    "3_acclaim_asf_amc/usc_csci520_mocapPlayer__shreyabhaumik/07-walk.asf",
+    "3_acclaim_asf_amc/usc_csci520_mocapPlayer__shreyabhaumik/07_05-walk.amc",
+);
+const BANDAI_WALK: &str = "4_bvh/bandai_namco_ds1/dataset-1_walk_normal_002.bvh";
+const HUMAN_MODEL1: &str = "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1";
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The corpus paths of the two walks, as rigport arguments.
+fn walks() -> Option<Vec<(&'static str, Vec<PathBuf>)>> {
+    Some(vec![
+        ("cgspeed BVH walk", vec![corpus(WALK_BVH)?]),
+        (
+            "CMU ASF/AMC walk",
+            vec![corpus(WALK_ASF.0)?, corpus(WALK_ASF.1)?],
+        ),
+    ])
+}
+
+/// Per key time of the first animation, every node's world position by node name order.
+fn frames(scene: &GltfScene) -> Vec<Vec<Vec3>> {
+    let times = scene.animations[0]
+        .channels
+        .iter()
+        .map(|c| &c.times)
+        .max_by_key(|t| t.len())
+        .unwrap()
+        .clone();
+    times.iter().map(|&t| gltf_pose(scene, 0, t)).collect()
+}
+
+#[test]
+fn identity_returns_the_same_motion() {
+    let (Some(mut walks), Some(bandai)) = (walks(), corpus(BANDAI_WALK)) else {
+        return;
+    };
+    walks.push(("Bandai Namco BVH walk", vec![bandai]));
+    for (label, motion) in walks {
+        let dir = scratch();
+        let (src, out) = (dir.path().join("src.glb"), dir.path().join("out.glb"));
+        let mut convert = vec!["convert"];
+        convert.extend(motion.iter().map(|p| s(p)));
+        convert.extend(["-o", s(&src), "--quiet"]);
+        rigport_ok(&convert);
+        // The skeleton file is the rig: an .asf alone, the .bvh itself.
+        let mut args = vec!["retarget"];
+        args.extend(motion.iter().map(|p| s(p)));
+        args.extend(["--onto", s(&motion[0]), "-o", s(&out), "--quiet"]);
+        rigport_ok(&args);
+        assert_valid(&out);
+        let (a, b) = (gltf_read::read(&src), gltf_read::read(&out));
+        assert_eq!(a.node_names, b.node_names, "{label}: same skeleton");
+        let (fa, fb) = (frames(&a), frames(&b));
+        assert_eq!(fa.len(), fb.len(), "{label}: frame count");
+        let (lo, hi) = fa[0].iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+        let height = (hi - lo).max_element();
+        let worst = fa
+            .iter()
+            .zip(&fb)
+            .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| p.distance(*q)))
+            .fold(0.0f32, f32::max);
+        eprintln!(
+            "{label} onto itself: {} frames, worst joint {:.2e} of the height",
+            fa.len(),
+            worst / height
+        );
+        assert!(worst < 1e-5 * height, "{label}: {worst} of height {height}");
+    }
+}
+
+#[test]
+fn cross_rig_walks_plant_feet_and_follow_limbs() {
+    let (Some(walks), Some(model1)) = (walks(), corpus(HUMAN_MODEL1)) else {
+        return;
+    };
+    let dir = scratch();
+    rigport_ok(&[
+        "demo",
+        "-o",
+        s(&dir.path().join("demo")),
+        "--no-corpus",
+        "--quiet",
+    ]);
+    let demo = dir.path().join("demo/demo.glb");
+    for (label, motion) in walks {
+        for (rig_label, rig) in [("human_model1", &model1), ("demo", &demo)] {
+            let out = dir.path().join(format!("{}_{rig_label}.glb", motion.len()));
+            let mut args = vec!["retarget"];
+            args.extend(motion.iter().map(|p| s(p)));
+            args.extend([
+                "--onto",
+                s(rig),
+                "-o",
+                s(&out),
+                "--plant-feet",
+                "--json",
+                "--quiet",
+            ]);
+            let run = rigport(&args);
+            let stderr = String::from_utf8_lossy(&run.stderr);
+            assert!(run.status.success(), "{label} onto {rig_label}: {stderr}");
+            let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+            assert_valid(&out);
+            let limbs = report["limbs"].as_array().unwrap();
+            assert!(
+                limbs.len() >= 4,
+                "{label} onto {rig_label}: limbs {limbs:?}"
+            );
+            let mut figures = Vec::new();
+            for l in limbs {
+                let max = l["max_error"].as_f64().unwrap();
+                figures.push(format!("{} {max:.3}", l["limb"].as_str().unwrap()));
+                assert!(max < 0.1, "{label} onto {rig_label}: {l}");
+            }
+            let feet = report["feet"].as_array().unwrap();
+            assert_eq!(feet.len(), 2, "{label} onto {rig_label}: feet");
+            for f in feet {
+                assert!(f["contacts"].as_u64().unwrap() > 0, "{f}");
+                let slide = f["slide_after"]["max"].as_f64().unwrap();
+                figures.push(format!(
+                    "foot {} slide {slide:.1e}",
+                    f["label"].as_str().unwrap()
+                ));
+                assert!(slide < 1e-3, "{label} onto {rig_label}: {f}");
+            }
+            eprintln!("{label} onto {rig_label}: {}", figures.join(", "));
+            if let Some((_, positions)) = three_eval(&out, &["--clip-index", "0", "--fps", "10"]) {
+                assert!(!positions.numbers.is_empty());
+                assert!(
+                    positions.numbers.iter().all(|v| v.is_finite()),
+                    "{label} onto {rig_label}: NaN in three.js"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_maps_exit_1_with_the_json_path() {
+    let (Some(bvh), Some(model1)) = (corpus(WALK_BVH), corpus(HUMAN_MODEL1)) else {
+        return;
+    };
+    let dir = scratch();
+    for (name, text, expected) in [
+        (
+            "unknown",
+            r#"{"joints": {"Hips": "root", "LeftArm": "no_such_bone"}}"#,
+            "at /joints/LeftArm: the target has no joint named \"no_such_bone\"",
+        ),
+        (
+            "unknown_source",
+            r#"{"joints": {"Hipz": "root"}}"#,
+            "at /joints/Hipz: the source has no joint named \"Hipz\"",
+        ),
+        (
+            "cycle",
+            r#"{"joints": {"Hips": "bone_1", "Spine": "root"}}"#,
+            "at /joints/Spine: a cycle:",
+        ),
+        (
+            "twice",
+            r#"{"joints": {"Hips": "root", "Spine": ["bone_1", "root"]}}"#,
+            "at /joints/Spine/1: two source joints onto one target",
+        ),
+    ] {
+        let map = dir.path().join(format!("{name}.json"));
+        std::fs::write(&map, text).unwrap();
+        let out = dir.path().join(format!("{name}.glb"));
+        let run = rigport(&[
+            "retarget",
+            s(&bvh),
+            "--onto",
+            s(&model1),
+            "--map",
+            s(&map),
+            "-o",
+            s(&out),
+        ]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{name}: {stderr}");
+        assert!(stderr.contains(expected), "{name}: {stderr}");
+        assert!(!out.exists(), "{name}: no output");
+    }
+    // A good map file works.
+    let map = dir.path().join("good.json");
+    std::fs::write(&map, r#"{"joints": {"Hips": "root", "LeftUpLeg": "bone_9", "LeftLeg": "bone_10", "LeftFoot": "bone_11"}, "pelvis": {"source": "Hips", "target": "bone_4"}}"#).unwrap();
+    let out = dir.path().join("good.glb");
+    rigport_ok(&[
+        "retarget",
+        s(&bvh),
+        "--onto",
+        s(&model1),
+        "--map",
+        s(&map),
+        "-o",
+        s(&out),
+        "--quiet",
+    ]);
+    assert_valid(&out);
+}
+
+#[test]
+fn usd_output_and_matched_hands() {
+    let (Some(asf), Some(amc), Some(model1)) =
+        (corpus(WALK_ASF.0), corpus(WALK_ASF.1), corpus(HUMAN_MODEL1))
+    else {
+        return;
+    };
+    let dir = scratch();
+    let usda = dir.path().join("walk.usda");
+    rigport_ok(&[
+        "retarget",
+        s(&asf),
+        s(&amc),
+        "--onto",
+        s(&model1),
+        "-o",
+        s(&usda),
+        "--plant-feet",
+        "--quiet",
+    ]);
+    if let Some(python) = crate::usd::python() {
+        let (ok, log) = crate::usd::check_usd(&python, &usda, None);
+        assert!(ok, "{log}");
+    }
+    // The demo has hand joints: --match-hands puts its wrists on the source's, scaled.
+    rigport_ok(&[
+        "demo",
+        "-o",
+        s(&dir.path().join("demo")),
+        "--no-corpus",
+        "--quiet",
+    ]);
+    let out = dir.path().join("hands.glb");
+    let run = rigport(&[
+        "retarget",
+        s(&asf),
+        s(&amc),
+        "--onto",
+        s(&dir.path().join("demo/demo.glb")),
+        "-o",
+        s(&out),
+        "--match-hands",
+        "--json",
+        "--quiet",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert_valid(&out);
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let hands = report["hands"].as_array().unwrap();
+    assert_eq!(hands.len(), 2, "{report}");
+    for h in hands {
+        // Within reach the wrist lands on its goal; the demo's arm is short of the CMU
+        // actor's scaled reach on a few frames by about 2% of the height.
+        let e = h["max_error"].as_f64().unwrap();
+        eprintln!("hand {}: {e:.2e} of the height", h["label"]);
+        assert!(e < 0.05, "{h}");
+    }
+}
