@@ -47,8 +47,19 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     };
     let prepared_dqs = rigport_export::prepare_gltf(&twist_asset, &out_dqs, &options)?;
     warnings.extend(prepared_dqs.warnings().iter().cloned());
+    let (skirt_asset, skirt_report) = ctx.step("simulating the skirt", || {
+        rigport_demo::skirt::bake(&demo, &mut warnings, |_, _| {})
+    })?;
+    let out_skirt = args.output.join("skirt.glb");
+    let prepared_skirt =
+        rigport_export::prepare_gltf(&skirt_asset, &out_skirt, &GltfOptions::default())?;
+    warnings.extend(prepared_skirt.warnings().iter().cloned());
     ctx.report(&warnings)?;
-    for (prepared, path) in [(&prepared, &out), (&prepared_dqs, &out_dqs)] {
+    for (prepared, path) in [
+        (&prepared, &out),
+        (&prepared_dqs, &out_dqs),
+        (&prepared_skirt, &out_skirt),
+    ] {
         prepared.write().with_context(|| OutputError {
             path: path.display().to_string(),
         })?;
@@ -56,7 +67,11 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     prepared_usd.write().with_context(|| OutputError {
         path: out_usd.display().to_string(),
     })?;
-    let pictures = ctx.step("rendering pictures", || pictures::pictures(&demo))?;
+    let pictures = ctx.step("rendering pictures", || {
+        let mut all = pictures::pictures(&demo)?;
+        all.push(pictures::skirt_picture(&skirt_asset)?);
+        Ok::<_, rigport_demo::DemoError>(all)
+    })?;
     for picture in &pictures {
         write(&args.output.join(&picture.file), &picture.bytes)?;
     }
@@ -109,6 +124,9 @@ pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
     {
         println!("    {line}");
     }
+    let skirt = out_skirt.display();
+    println!("  wrote {skirt} (clip \"wave\" with a skirt simulated on it, morph targets)");
+    println!("    {skirt_report}");
     for picture in &pictures {
         let path = args.output.join(&picture.file);
         println!("  wrote {} ({})", path.display(), picture.what);

@@ -1,16 +1,20 @@
 //! `rigport cloth` (issue 18): the USTC course's arm with its cloth to .usda and .glb
 //! (validators clean, pinned vertices on the skin in every frame as UsdSkel and three.js
 //! evaluate the files, three.js playing what rigport simulated, same bytes every run), and
-//! the demo's skirt for 10 s at 60 fps (no NaN, stretch, energy, penetration).
+//! the demo's skirt for 10 s at 60 fps (no NaN, stretch, energy, penetration); a flag on
+//! the hand-written arm fixture rendered at two times (body and moving garment drawn), the
+//! same bytes with 1 and 3 rayon threads, and bad input (no pins, NaN, a garment starting
+//! inside the body) refused or warned about.
 
 use std::path::Path;
 
 use rigport_eval::cloth::attach::nearest_point;
-use rigport_eval::cloth::{simulate, ClothOptions, Garment, PinSelection};
+use rigport_eval::cloth::{simulate, ClothOptions, Garment};
 use rigport_model::glam::Vec3;
 
 use crate::common::*;
 use crate::frames::{diagonal, usd_world};
+use crate::render::Picture;
 use crate::three::three_eval;
 use crate::usd::{check_usd, python};
 
@@ -205,44 +209,292 @@ fn bad_pins_are_refused() {
 fn demo_skirt_for_10_seconds_at_60_fps_is_stable() {
     let demo = rigport_demo::build(1).unwrap();
     let asset = demo.asset;
-    let segments = 48;
-    let mesh = rigport_demo::skirt::skirt(&asset, 12, segments);
-    let pins = PinSelection::Vertices((0..segments).collect());
+    // The garment `rigport demo` simulates (skirt.glb), on its clip, looped to 10 s.
+    let (mesh, pins) = rigport_demo::skirt::demo_skirt(&asset);
     let garment = Garment::from_mesh(&asset, &mesh, &[pins]).unwrap();
     let mut warnings = Vec::new();
     let opts = ClothOptions {
-        clip: Some("wave"),
+        clip: Some(rigport_demo::skirt::CLIP),
         fps: Some(60.0),
         seconds: Some(10.0),
         ..ClothOptions::default()
     };
+    let started = std::time::Instant::now();
     let sim = simulate(&asset, &garment, &opts, &mut warnings, |_, _| {}).unwrap();
-    assert_eq!(
-        sim.times.len(),
-        (60.0 * opts.seconds.unwrap()).round() as usize + 1
+    let elapsed = started.elapsed().as_secs_f32();
+    assert_eq!(sim.times.len(), 601, "10 s at 60 fps, both ends");
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(
+        sim.positions.iter().all(|p| p.is_finite()),
+        "a NaN position"
     );
-    assert!(sim.positions.iter().all(|p| p.is_finite()));
     let worst = sim.worst();
+    let argmax = |f: fn(&rigport_eval::cloth::FrameStats) -> f32| {
+        sim.stats.iter().enumerate().fold(
+            (0, 0.0f32),
+            |a, (i, s)| if f(s) > a.1 { (i, f(s)) } else { a },
+        )
+    };
+    let (fs, _) = argmax(|s| s.max_stretch);
+    let (fe, _) = argmax(|s| s.kinetic_energy);
+    let (fd, _) = argmax(|s| s.max_depth);
     eprintln!(
-        "demo skirt, 10 s at 60 fps x {} substeps, {} particles: max stretch {:.3}%, max kinetic energy {:.4} m²/s² per kg, max penetration {:.2e} m (thickness {:.4} m); warnings {warnings:?}",
+        "demo skirt on {:?}, 10 s at 60 fps x {} substeps, {} particles ({} pinned), {} capsules, simulated in {elapsed:.1} s: max edge stretch {:.3}% (frame {fs}), max kinetic energy {:.4} m²/s² per kg (frame {fe}), deepest garment vertex {:.2e} m inside a capsule (frame {fd}; thickness {:.4} m), colliding particles at most {:.2e} m inside the grown capsules",
+        opts.clip.unwrap_or_default(),
         sim.substeps,
         sim.particles,
+        sim.pins.len(),
+        sim.capsules.len(),
         100.0 * worst.max_stretch,
         worst.kinetic_energy,
+        worst.max_depth,
+        sim.thickness,
         worst.max_penetration,
-        sim.thickness
     );
-    let (f, s) = sim.stats.iter().enumerate().fold((0, 0.0f32), |a, (f, s)| {
-        if s.max_stretch > a.1 {
-            (f, s.max_stretch)
-        } else {
-            a
+    for (f, s) in sim.stats.iter().enumerate() {
+        // Edge stretch at most 10% in every frame.
+        assert!(s.max_stretch <= 0.10, "frame {f}: {s:?}");
+        // No garment vertex (pins included) inside a collider by more than the thickness.
+        assert!(s.max_depth <= sim.thickness, "frame {f}: {s:?}");
+        // Bounded: no frame's energy is more than what a fall from the waist to the floor
+        // would give (g h, h = 1 m).
+        assert!(s.kinetic_energy < 9.81, "frame {f}: {s:?}");
+    }
+    // Not growing either: the last 2 s (one loop of the clip) hold no more energy than the
+    // first loop's worst.
+    let loop_frames = 120;
+    let first = sim.stats[..=loop_frames]
+        .iter()
+        .map(|s| s.kinetic_energy)
+        .fold(0.0, f32::max);
+    let last = sim.stats[sim.stats.len() - loop_frames..]
+        .iter()
+        .map(|s| s.kinetic_energy)
+        .fold(0.0, f32::max);
+    eprintln!("max kinetic energy: first 2 s {first:.4}, last 2 s {last:.4}");
+    assert!(last <= first.max(1e-3), "energy grows: {first} then {last}");
+}
+
+/// The hand-written arm fixture (a flat sleeve at z = 1 along +Y, the elbow at y = 2
+/// bending 90 deg about Z in its first 33 ms).
+const FIXTURE_ARM: &str = "fixtures/usda/skinned_arm.usda";
+
+/// A 5 x 5 flag in the sleeve's plane (z = 1) out from its x = 1 edge over the forearm, 0.25
+/// apart (vertex `5 r + c` at `x = 1 + 0.25 c`, `y = 3 + 0.25 r`); the column on the edge
+/// (vertices 0, 5, 10, 15, 20) is the one to pin. `inside`: vertex 12 moved inside the
+/// sleeve's collision capsules (near the bone axis at x = z = 0).
+fn flag_obj(path: &Path, inside: bool) {
+    use std::fmt::Write as _;
+    let mut text = String::from("# a flag for rigport cloth\n");
+    for r in 0..5 {
+        for c in 0..5 {
+            let (mut x, y, mut z) = (1.0 + 0.25 * c as f32, 3.0 + 0.25 * r as f32, 1.0);
+            if inside && r * 5 + c == 12 {
+                (x, z) = (0.05, 0.05);
+            }
+            writeln!(text, "v {x} {y} {z}").unwrap();
         }
-    });
-    eprintln!("worst stretch at frame {f}: {:.3}%", 100.0 * s);
-    assert!(worst.max_stretch <= 0.10, "{worst:?}");
-    assert!(worst.max_penetration <= sim.thickness, "{worst:?}");
-    // Bounded: no frame's energy is more than what a fall from the waist to the floor
-    // would give (g h, h = 1 m), let alone growing.
-    assert!(worst.kinetic_energy < 9.81, "{worst:?}");
+    }
+    for r in 0..4 {
+        for c in 0..4 {
+            let a = r * 5 + c + 1;
+            writeln!(text, "f {a} {} {}", a + 1, a + 6).unwrap();
+            writeln!(text, "f {a} {} {}", a + 6, a + 5).unwrap();
+        }
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+/// `rigport cloth` on the fixture arm with `garment`, pinned on the sleeve's edge, 1 s
+/// (the clip looped), into `out`, with `threads` rayon threads; returns the process output.
+fn cloth_on_fixture(
+    garment: &Path,
+    out: &Path,
+    threads: &str,
+    extra: &[&str],
+) -> std::process::Output {
+    let arm = repo().join(FIXTURE_ARM);
+    let mut args = vec![
+        "cloth",
+        arm.to_str().unwrap(),
+        "--garment",
+        garment.to_str().unwrap(),
+        "--pin-vertices",
+        "0,5,10,15,20",
+        "--seconds",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    std::process::Command::new(env!("CARGO_BIN_EXE_rigport"))
+        .args(&args)
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .unwrap()
+}
+
+/// Pixels of a renderer picture drawn in a shade of mesh colour `k` (no material: mesh
+/// `i` uses `MESH_COLORS[i % 4]`, shaded to the fixed palette).
+fn mesh_pixels(pic: &Picture, x0: usize, w: usize, k: usize) -> Vec<(usize, usize)> {
+    let levels = rigport_render::SHADE_LEVELS;
+    let shades: Vec<[u8; 4]> =
+        rigport_render::palette()[4 + k * levels..4 + (k + 1) * levels].to_vec();
+    (0..pic.height)
+        .flat_map(|y| (x0..x0 + w).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let i = (y * pic.width + x) * 4;
+            shades.iter().any(|s| pic.rgba[i..i + 4] == s[..])
+        })
+        .map(|(x, y)| (x - x0, y))
+        .collect()
+}
+
+#[test]
+fn render_draws_the_body_and_the_garment_moving_with_the_clip() {
+    let dir = scratch();
+    let obj = dir.path().join("flag.obj");
+    flag_obj(&obj, false);
+    let glb = dir.path().join("flag.glb");
+    let o = cloth_on_fixture(&obj, &glb, "2", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_valid(&glb);
+    // Two times through one camera: a contact sheet of t = 0 s and t = 1 s side by side.
+    let png = dir.path().join("sheet.png");
+    rigport_ok(&[
+        "render",
+        glb.to_str().unwrap(),
+        "--fps",
+        "1",
+        "--size",
+        "160x160",
+        "--no-skeleton",
+        "--no-frame-counter",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let pic = Picture::read(&png);
+    assert_eq!(
+        (pic.width, pic.height),
+        (320, 160),
+        "two frames side by side"
+    );
+    let body: Vec<usize> = (0..2)
+        .map(|k| mesh_pixels(&pic, 160 * k, 160, 0).len())
+        .collect();
+    let cloth: Vec<Vec<(usize, usize)>> =
+        (0..2).map(|k| mesh_pixels(&pic, 160 * k, 160, 1)).collect();
+    eprintln!(
+        "body pixels {body:?}, garment pixels {:?}",
+        cloth.iter().map(Vec::len).collect::<Vec<_>>()
+    );
+    assert!(
+        body.iter().all(|&n| n > 100),
+        "the sleeve is drawn: {body:?}"
+    );
+    assert!(
+        cloth.iter().all(|c| c.len() > 100),
+        "the flag is drawn at both times"
+    );
+    // The flag moved: its pixels at 1 s are not those at 0 s.
+    let moved = cloth[1].iter().filter(|p| !cloth[0].contains(p)).count();
+    eprintln!("garment pixels at 1 s not covered at 0 s: {moved}");
+    assert!(moved > cloth[1].len() / 4, "{moved} of {}", cloth[1].len());
+}
+
+#[test]
+fn same_bytes_with_1_and_3_threads() {
+    let dir = scratch();
+    let obj = dir.path().join("flag.obj");
+    flag_obj(&obj, false);
+    for ext in ["glb", "usda"] {
+        let out = |t: &str| dir.path().join(format!("flag{t}.{ext}"));
+        for t in ["1", "3"] {
+            let o = cloth_on_fixture(&obj, &out(t), t, &["-q"]);
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        }
+        assert_eq!(
+            std::fs::read(out("1")).unwrap(),
+            std::fs::read(out("3")).unwrap(),
+            "{ext} differs between RAYON_NUM_THREADS=1 and 3"
+        );
+    }
+}
+
+#[test]
+fn bad_cloth_input_is_refused_or_warned_about_never_written_as_nan() {
+    let dir = scratch();
+    let obj = dir.path().join("flag.obj");
+    flag_obj(&obj, false);
+    let out = dir.path().join("x.glb");
+    let stderr = |o: &std::process::Output| String::from_utf8_lossy(&o.stderr).into_owned();
+    // No pins.
+    let arm = repo().join(FIXTURE_ARM);
+    let o = rigport(&[
+        "cloth",
+        arm.to_str().unwrap(),
+        "--garment",
+        obj.to_str().unwrap(),
+        "--pin-above",
+        "100",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("has no pinned vertex"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    // NaN in the garment, and NaN options.
+    let nan = dir.path().join("nan.obj");
+    let text = std::fs::read_to_string(&obj)
+        .unwrap()
+        .replacen("v 1 3 1", "v nan 3 1", 1);
+    std::fs::write(&nan, text).unwrap();
+    let o = cloth_on_fixture(&nan, &out, "2", &[]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("nan is not a finite number"),
+        "{}",
+        stderr(&o)
+    );
+    for (flag, what) in [("--thickness", "thickness"), ("--fps", "fps")] {
+        let o = cloth_on_fixture(&obj, &out, "2", &[flag, "NaN"]);
+        assert!(!o.status.success(), "{flag} NaN");
+        assert!(
+            stderr(&o).contains(&format!("cloth option {what} = NaN")),
+            "{}",
+            stderr(&o)
+        );
+    }
+    assert!(!out.exists());
+    // A garment starting inside the body: a warning, then pushed out, finite output.
+    let inside = dir.path().join("inside.obj");
+    flag_obj(&inside, true);
+    let o = cloth_on_fixture(&inside, &out, "2", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("1 garment vertices start inside the body's collision capsules"),
+        "{}",
+        stderr(&o)
+    );
+    assert_valid(&out);
+    let (doc, buffers, _) = gltf::import(&out).unwrap();
+    for mesh in doc.meshes() {
+        for prim in mesh.primitives() {
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            assert!(reader
+                .read_positions()
+                .unwrap()
+                .flatten()
+                .all(f32::is_finite));
+            for (_, pos, _) in reader.read_morph_targets() {
+                if let Some(pos) = pos {
+                    assert!(pos.flatten().all(f32::is_finite), "a NaN morph delta");
+                }
+            }
+        }
+    }
 }

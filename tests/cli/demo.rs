@@ -9,7 +9,13 @@ use crate::common::*;
 use crate::render::{Picture, BACKGROUND, MARKER};
 
 /// The pictures the demo always writes.
-const DEMO_PICTURES: [&str; 4] = ["wave.png", "reach.png", "wave.gif", "twist_lbs_vs_dqs.png"];
+const DEMO_PICTURES: [&str; 5] = [
+    "wave.png",
+    "reach.png",
+    "wave.gif",
+    "twist_lbs_vs_dqs.png",
+    "skirt.png",
+];
 
 /// The corpus pictures the demo writes when the corpus is present, one per family.
 const CORPUS_PICTURES: [&str; 6] = [
@@ -202,6 +208,23 @@ fn demo_pictures_show_the_character_unclipped_and_are_deterministic() {
         .flat_map(|a| a.channels())
         .any(|c| c.target().property() == gltf::animation::Property::MorphTargetWeights));
     assert_eq!(doc.animations().count(), 1, "the twist clip alone");
+
+    // The skirt (issue 18): valid glTF, the skirt its own unskinned mesh animated by one
+    // morph target per frame of the wave clip, and the sheet shows it moving.
+    let skirt = out.join("skirt.glb");
+    assert_valid(&skirt);
+    let (doc, _, _) = gltf::import(&skirt).unwrap();
+    let garment = doc
+        .meshes()
+        .find(|m| m.name() == Some("skirt"))
+        .expect("a skirt mesh");
+    let prim = garment.primitives().next().unwrap();
+    assert_eq!(prim.morph_targets().count(), 61, "2 s at 30 fps, both ends");
+    assert!(doc
+        .nodes()
+        .any(|n| n.mesh().is_some_and(|m| m.index() == garment.index()) && n.skin().is_none()));
+    assert_eq!(doc.animations().count(), 1, "the wave clip alone");
+    written.push(skirt);
 
     if corpus_dir.is_some() {
         for p in CORPUS_PICTURES {

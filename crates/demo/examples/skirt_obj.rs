@@ -1,5 +1,5 @@
-//! Writes the demo's skirt ([`rigport_demo::skirt::skirt`], 12 rings of 48 vertices, the
-//! first ring at the waist) as an OBJ, for `rigport cloth demo.glb --garment skirt.obj
+//! Writes the demo's skirt ([`rigport_demo::skirt::demo_skirt`], 12 rings of 48 vertices,
+//! the first ring at the waist; `rigport demo` simulates it into skirt.glb) as an OBJ, for `rigport cloth demo.glb --garment skirt.obj
 //! --pin-above 0.99`.
 //!
 //! `cargo run -p rigport-demo --example skirt_obj -- skirt.obj`
@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args().nth(1).ok_or("usage: skirt_obj OUT.obj")?;
     let demo = rigport_demo::build(1)?;
-    let skirt = rigport_demo::skirt::skirt(&demo.asset, 12, 48);
+    let (skirt, _) = rigport_demo::skirt::demo_skirt(&demo.asset);
     let mut text = String::from("# rigport demo skirt (rigport_demo::skirt)\n");
     for p in &skirt.positions {
         writeln!(text, "v {} {} {}", p.x, p.y, p.z)?;

@@ -30,6 +30,9 @@ pub enum DemoError {
     /// The twist clip's DQS cannot be baked.
     #[error("cannot bake the demo's twist clip (a rigport bug)")]
     Bake(#[source] DqsBakeError),
+    /// The demo's skirt cannot be simulated.
+    #[error("cannot simulate the demo's skirt (a rigport bug)")]
+    Cloth(#[source] rigport_eval::cloth::ClothError),
     /// A picture cannot be rendered.
     #[error("cannot render {what}")]
     Render {

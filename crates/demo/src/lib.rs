@@ -1,6 +1,6 @@
 //! The built-in demo of `rigport demo`: a procedural humanoid in Pinocchio's layout,
 //! assembled into an [`Asset`] with its clips (`wave`, `reach`, `twist`) built in Rust, the
-//! DQS bake of its twist, and its pictures.
+//! DQS bake of its twist, a skirt simulated on its wave ([`skirt::bake`]), and its pictures.
 //!
 //! ```
 //! let demo = rigport_demo::build(1)?;
@@ -21,7 +21,8 @@
 //! # How it is made
 //! Files: `skeleton` (the joint table), `sdf` (distance primitives), `body` (the parts and
 //! their field on a grid), `surface_nets` (the mesh), `weights` (skin weights), `character`
-//! (the steps in order); `clips` (keys and handles), `pictures` (the demo's PNG and GIF),
+//! (the steps in order); `clips` (keys and handles), `skirt` (the garment and its
+//! simulation), `pictures` (the demo's PNG and GIF),
 //! `corpus` (one picture per corpus family).
 //!
 //! 1. **Skeleton**: a fixed table of 24 joints, about 1.75 m tall, standing on `y = 0`,

@@ -1,6 +1,8 @@
 //! The demo's pictures: contact sheets of `wave` and `reach` (with its IK targets), a GIF of
-//! `wave`, and one frame of `twist` skinned with LBS and DQS side by side.
+//! `wave`, one frame of `twist` skinned with LBS and DQS side by side, and a contact sheet
+//! of the skirt simulated on `wave` ([`skirt_picture`]).
 
+use rigport_model::Asset;
 use rigport_render::{FrameTime, RenderOptions, SkinningChoice, View};
 
 use crate::clips::TWIST_PEAK_S;
@@ -106,4 +108,31 @@ pub fn pictures(demo: &Demo) -> Result<Vec<Picture>, DemoError> {
         what: format!("clip \"twist\" at {TWIST_PEAK_S} s: LBS left, DQS right"),
     });
     Ok(written)
+}
+
+/// `skirt.png`: a contact sheet of the demo with its skirt ([`crate::skirt::bake`]'s asset),
+/// evenly chosen frames of the simulated clip, seen three-quarter so the bell's depth shows.
+///
+/// # Errors
+/// [`DemoError::Render`] (a rigport bug).
+pub fn skirt_picture(asset: &Asset) -> Result<Picture, DemoError> {
+    let clip = crate::skirt::CLIP;
+    let options = RenderOptions {
+        width: CELL_PX,
+        height: CELL_PX,
+        view: View::ThreeQuarter,
+        ..RenderOptions::default()
+    };
+    let bytes =
+        rigport_render::render_clip_png(asset, Some(clip), None, &options).map_err(|source| {
+            DemoError::Render {
+                what: format!("the demo's skirt on clip {clip:?} (a rigport bug)"),
+                source,
+            }
+        })?;
+    Ok(Picture {
+        file: "skirt.png".into(),
+        bytes,
+        what: format!("contact sheet of the skirt simulated on clip {clip:?}, three-quarter view"),
+    })
 }

@@ -1,8 +1,24 @@
 //! The demo's garment: a skirt, a flared cone of triangles hanging from the waist, its top
-//! ring pinned to the skin (`rigport cloth`, `rigport_eval::cloth`).
+//! ring pinned to the skin (`rigport cloth`, `rigport_eval::cloth`). [`bake`] simulates it
+//! on the demo's [`CLIP`] and bakes it into morph targets, as `rigport demo` writes it
+//! (`skirt.glb`, `skirt.png`).
 
+use rigport_eval::cloth::pipeline::{self, ClothReport, GarmentSource};
+use rigport_eval::cloth::{ClothOptions, PinSelection};
 use rigport_model::glam::Vec3;
-use rigport_model::{Asset, Mesh};
+use rigport_model::{Asset, Mesh, Warning};
+
+use crate::{Demo, DemoError};
+
+/// The clip the demo's skirt is simulated on: the body bobs down twice while the arm
+/// waves, and the skirt, made flared, falls and swings into its hanging shape.
+pub const CLIP: &str = "wave";
+
+/// Rings of the demo's skirt (waist to hem).
+pub const RINGS: u32 = 12;
+
+/// Vertices per ring of the demo's skirt (the first ring's are pinned).
+pub const SEGMENTS: u32 = 48;
 
 /// Height of the skirt's waistband, metres (between the hips joint at 0.98 m and the
 /// spine at 1.10 m).
@@ -89,4 +105,53 @@ pub fn skirt(asset: &Asset, rings: u32, segments: u32) -> Mesh {
         source_vertex: (0..n).collect(),
         ..Mesh::default()
     }
+}
+
+/// The demo's skirt ([`skirt`] with [`RINGS`] and [`SEGMENTS`]) on `asset` and its pins:
+/// the waist ring, the first [`SEGMENTS`] vertices.
+pub fn demo_skirt(asset: &Asset) -> (Mesh, PinSelection) {
+    (
+        skirt(asset, RINGS, SEGMENTS),
+        PinSelection::Vertices((0..SEGMENTS).collect()),
+    )
+}
+
+/// The demo's skirt simulated on its [`CLIP`] (`rigport cloth`'s pipeline with its default
+/// options: the clip's 30 fps, 1200 substeps per second) and baked in: the character with
+/// the skirt as its second mesh, animated by one morph target per frame, and the clip alone.
+/// `progress(done, total)` is called after every simulated frame; warnings (none expected)
+/// go into `warnings`.
+///
+/// ```no_run
+/// let demo = rigport_demo::build(1)?;
+/// let (asset, report) = rigport_demo::skirt::bake(&demo, &mut Vec::new(), |_, _| {})?;
+/// assert_eq!(asset.meshes[1].name, "skirt");
+/// assert_eq!(report.frames, 61);
+/// # Ok::<(), rigport_demo::DemoError>(())
+/// ```
+///
+/// # Errors
+/// [`DemoError::Cloth`] (a rigport bug).
+pub fn bake(
+    demo: &Demo,
+    warnings: &mut Vec<Warning>,
+    progress: impl FnMut(usize, usize),
+) -> Result<(Asset, ClothReport), DemoError> {
+    let mut asset = demo.asset.clone();
+    let (mesh, pins) = demo_skirt(&asset);
+    let opts = ClothOptions {
+        clip: Some(CLIP),
+        ..ClothOptions::default()
+    };
+    let report = pipeline::run(
+        &mut asset,
+        GarmentSource::Mesh(Box::new(mesh)),
+        &[pins],
+        &opts,
+        None,
+        warnings,
+        progress,
+    )
+    .map_err(DemoError::Cloth)?;
+    Ok((asset, report))
 }

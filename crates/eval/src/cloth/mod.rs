@@ -234,6 +234,10 @@ pub struct FrameStats {
     /// How far the deepest colliding particle (free, not one edge from a pin) is inside a
     /// capsule grown by the thickness (0 when none is).
     pub max_penetration: f32,
+    /// How far the deepest garment vertex of any kind (pinned and next to a pin included)
+    /// is inside a capsule itself, not grown (0 when none is): the issue's "no garment
+    /// vertex inside a collider by more than the thickness".
+    pub max_depth: f32,
 }
 
 /// A finished simulation.
@@ -281,6 +285,7 @@ impl Simulation {
                 max_stretch: a.max_stretch.max(s.max_stretch),
                 kinetic_energy: a.kinetic_energy.max(s.kinetic_energy),
                 max_penetration: a.max_penetration.max(s.max_penetration),
+                max_depth: a.max_depth.max(s.max_depth),
             })
     }
 }
@@ -704,6 +709,9 @@ fn measure(solver: &Solver, capsules: &[Capsule], thickness: f64) -> FrameStats 
     let mut ke = 0.0f64;
     let mut free = 0usize;
     for (i, (x, v)) in solver.x.iter().zip(&solver.v).enumerate() {
+        for c in capsules {
+            s.max_depth = s.max_depth.max(c.depth(*x, 0.0) as f32);
+        }
         if !solver.is_free(i) {
             continue;
         }

@@ -33,7 +33,7 @@ pub struct ClothReport {
     pub capsules: usize,
     /// Output frames.
     pub frames: usize,
-    /// Output frame rate.
+    /// Output frame rate (to a thousandth).
     pub fps: f32,
     /// Substeps per frame.
     pub substeps: u32,
@@ -53,7 +53,7 @@ impl fmt::Display for ClothReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "cloth {:?}: {} particles ({} pinned), {} capsules, {} frames at {} fps x {} substeps; max edge stretch {:.2}%, max kinetic energy {:.4} (per unit mass), max penetration {:.2e} (thickness {:.4}); {} morph targets (max error {:.2e})",
+            "cloth {:?}: {} particles ({} pinned), {} capsules, {} frames at {} fps x {} substeps; max edge stretch {:.2}%, max kinetic energy {:.4} (per unit mass), max penetration {:.2e}, deepest vertex {:.2e} inside a capsule (thickness {:.4}); {} morph targets (max error {:.2e})",
             self.garment,
             self.particles,
             self.pins,
@@ -64,6 +64,7 @@ impl fmt::Display for ClothReport {
             100.0 * self.worst.max_stretch,
             self.worst.kinetic_energy,
             self.worst.max_penetration,
+            self.worst.max_depth,
             self.thickness,
             self.targets,
             self.max_target_error,
@@ -146,7 +147,8 @@ pub fn run(
     let clip = asset.clips.swap_remove(sim.clip);
     asset.clips = vec![clip];
     let fps = match sim.times.as_slice() {
-        [a, b, ..] if b > a => 1.0 / (b - a),
+        // Rounded to a thousandth: frame times are f32, 30 fps would read 29.999998.
+        [a, b, ..] if b > a => (1000.0 / (b - a)).round() / 1000.0,
         _ => 0.0,
     };
     Ok(ClothReport {
