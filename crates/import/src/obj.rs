@@ -58,11 +58,7 @@ pub fn import(path: &Path) -> Result<Imported, ImportError> {
         ..Asset::default()
     };
     apply_materials(&mut asset, path, &used, true, &mut warnings);
-    if let Err(errors) = asset.validate() {
-        // Unreachable for a parse that succeeded; reported rather than trusted.
-        let text: Vec<String> = errors.iter().map(ToString::to_string).collect();
-        return Err(ImportError::invalid(Location::file(path), text.join("; ")));
-    }
+    crate::check_asset(&asset, || Location::file(path))?;
     Ok(Imported { asset, warnings })
 }
 

@@ -750,10 +750,7 @@ fn assemble_from<'a>(
         ik_handles: Vec::new(),
         ..Default::default()
     };
-    if let Err(errors) = asset.validate() {
-        let text: Vec<String> = errors.iter().map(ToString::to_string).collect();
-        return Err(invalid(text.join("; ")));
-    }
+    crate::check_asset(&asset, here)?;
     Ok(Imported { asset, warnings })
 }
 

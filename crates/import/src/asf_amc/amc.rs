@@ -4,7 +4,7 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::Path;
 
-use crate::{ImportError, Location, Problem};
+use crate::{text, ImportError, Location, Problem};
 
 use super::lines::{column, content, invalid, number, syntax, Lines};
 use super::types::{Amc, AmcFrame, AngleUnit, Asf, HeldValue, Skipped};
@@ -100,14 +100,8 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
         };
         let alone = tokens.clone().next().is_none();
         if alone && first.bytes().all(|b| b.is_ascii_digit()) {
-            let number = first.parse::<u64>().map_err(|_| {
-                syntax(
-                    path,
-                    line_no,
-                    raw,
-                    first,
-                    "a frame number that fits 64 bits",
-                )
+            let number: u64 = text::number(first, "frame number", || {
+                text::at(path, line_no, raw, first)
             })?;
             close_frame(&mut amc, &given, &ranges);
             given.fill(0);
@@ -176,7 +170,7 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
         let mut count = 0;
         for token in tokens {
             if let Some(slot) = slots.get_mut(count) {
-                *slot = number(path, line_no, raw, token, "a dof value")?;
+                *slot = number(path, line_no, raw, token, "dof value")?;
             }
             count += 1;
         }

@@ -6,7 +6,7 @@ use std::path::Path;
 use glam::DVec3;
 use rigport_model::conventions::EulerOrder;
 
-use crate::{ImportError, Location, Problem};
+use crate::{text, ImportError, Location, Problem};
 
 use super::hierarchy::resolve_hierarchy;
 use super::lines::{column, content, dof_list, euler_order, invalid, number, syntax, vec3, Lines};
@@ -450,9 +450,8 @@ impl<'a, 't> AsfParser<'a, 't> {
                         line,
                     ));
                 };
-                let id = id
-                    .parse::<i64>()
-                    .map_err(|_| syntax(path, line_no, raw, id, "an integer bone id"))?;
+                let id: i64 =
+                    text::number(id, "bone id", || text::at(path, line_no, raw, id))?;
                 once(&mut draft.id, id, path, line_no, "id", within)
             }
             "name" => {
