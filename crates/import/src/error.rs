@@ -151,10 +151,12 @@ pub enum Problem {
         first_line: usize,
     },
     /// An index beyond the elements it refers to.
-    #[error("{what} index {index} is out of range: there are {count} {what}s")]
+    #[error("{what} index {index} is out of range: there are {count} {plural}")]
     IndexOutOfRange {
         /// The kind of element (`vertex`, `joint`).
         what: &'static str,
+        /// Its plural (`vertices`, `joints`).
+        plural: &'static str,
         /// The index as the file numbers it.
         index: i64,
         /// How many there are.
@@ -171,12 +173,12 @@ pub enum Problem {
         within: String,
     },
     /// A value that must not be negative is.
-    #[error("{what} {value} is negative")]
+    #[error("{what} {found} is negative")]
     Negative {
         /// What the value is.
         what: &'static str,
-        /// The value, as read.
-        value: f64,
+        /// The value as written.
+        found: String,
     },
     /// The imported asset breaks the model's invariants ([`rigport_model::Asset::validate`]);
     /// every problem is listed. Reported rather than trusted: a parse that succeeded
