@@ -355,7 +355,7 @@ fn bad_numbers_read_the_same_in_every_text_format() {
         "bad.amc",
         amc,
         args,
-        ":4:18: dof value \"inf\" is not finite",
+        ":4:16: dof value \"inf\" is not finite",
     ));
 
     let mut problems = Vec::new();

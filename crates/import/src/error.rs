@@ -163,7 +163,7 @@ pub enum Problem {
         count: usize,
     },
     /// A name that refers to nothing.
-    #[error("unknown {what} {name:?}: {within} has none of that name")]
+    #[error("unknown {what} {name:?}: {within} has no {what} of that name")]
     UnknownName {
         /// The kind of thing named (`bone`, `joint`).
         what: &'static str,

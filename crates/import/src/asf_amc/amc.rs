@@ -6,7 +6,7 @@ use std::path::Path;
 
 use crate::{text, ImportError, Location, Problem};
 
-use super::lines::{column, content, invalid, number, syntax, Lines};
+use super::lines::{column, content, duplicate, invalid, number, syntax, Lines};
 use super::types::{Amc, AmcFrame, AngleUnit, Asf, HeldValue, Skipped};
 
 /// Parses an AMC motion of `asf`. `path` is used in messages and kept in [`Amc::path`].
@@ -131,12 +131,13 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
                 "a frame number (a non-negative integer)",
             ));
         } else {
-            return Err(ImportError::invalid(
+            return Err(ImportError::new(
                 Location::line_column(path, line_no, column(raw, first)),
-                format!(
-                    "unknown bone {first:?}: the skeleton {} has no bone of that name",
-                    asf.path.display()
-                ),
+                Problem::UnknownName {
+                    what: "bone",
+                    name: first.to_string(),
+                    within: format!("the skeleton {}", asf.path.display()),
+                },
             ));
         };
         let Some(frame) = amc.frames.last() else {
@@ -149,13 +150,11 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
         let frame_number = frame.number;
         if let Some(slot) = given.get_mut(node) {
             if *slot != 0 {
-                return Err(invalid(
+                return Err(duplicate(
                     path,
                     line_no,
-                    format!(
-                        "{first:?} is given twice in frame {frame_number} (first on line {})",
-                        *slot
-                    ),
+                    format!("{first:?} in frame {frame_number}"),
+                    *slot,
                 ));
             }
             *slot = line_no;

@@ -7,7 +7,7 @@ use glam::DVec3;
 use rigport_model::conventions::EulerOrder;
 
 pub(super) use crate::text::{column, Lines};
-use crate::{text, ImportError, Location};
+use crate::{text, ImportError, Location, Problem};
 
 use super::types::Dof;
 
@@ -41,6 +41,14 @@ pub(super) fn syntax(
         Location::line_column(path, line, column(raw, token)),
         expected,
         token,
+    )
+}
+
+/// A [`Problem::Duplicate`] error at `path:line`: `what` was first given on `first_line`.
+pub(super) fn duplicate(path: &Path, line: usize, what: String, first_line: usize) -> ImportError {
+    ImportError::new(
+        Location::line(path, line),
+        Problem::Duplicate { what, first_line },
     )
 }
 
