@@ -632,19 +632,26 @@ fn out_of_range(
     path: &Path,
     line: usize,
 ) -> ImportError {
-    let (index, count, what, keyword) = if c.v as usize >= nv {
-        (c.v, nv, "vertex", "v")
+    let (index, count, what, plural) = if c.v as usize >= nv {
+        (c.v, nv, "vertex", "vertices (`v` lines)")
     } else if c.vt != NONE && c.vt as usize >= nt {
-        (c.vt, nt, "texture coordinate", "vt")
+        (
+            c.vt,
+            nt,
+            "texture coordinate",
+            "texture coordinates (`vt` lines)",
+        )
     } else {
-        (c.vn, nn, "normal", "vn")
+        (c.vn, nn, "normal", "normals (`vn` lines)")
     };
-    ImportError::invalid(
+    ImportError::new(
         Location::line(path, line),
-        format!(
-            "{what} index {} is out of range: the file has {count} `{keyword}` lines",
-            u64::from(index) + 1
-        ),
+        Problem::IndexOutOfRange {
+            what,
+            plural,
+            index: i64::from(index) + 1,
+            count,
+        },
     )
 }
 
@@ -871,7 +878,7 @@ mod tests {
         let tri = "v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\n";
         assert_eq!(
             err(&format!("{tri}f 1 2 4\r\n")),
-            "t.obj:4: vertex index 4 is out of range: the file has 3 `v` lines"
+            "t.obj:4: vertex index 4 is out of range: there are 3 vertices (`v` lines)"
         );
         assert_eq!(
             err(&format!("{tri}f 1 2 0\n")),
@@ -899,11 +906,11 @@ mod tests {
         );
         assert_eq!(
             err(&format!("{tri}vt 0 0\nf 1/1 2/2 3/1\n")),
-            "t.obj:5: texture coordinate index 2 is out of range: the file has 1 `vt` lines"
+            "t.obj:5: texture coordinate index 2 is out of range: there are 1 texture coordinates (`vt` lines)"
         );
         assert_eq!(
             err(&format!("{tri}f 1//1 2//1 3//1\n")),
-            "t.obj:4: normal index 1 is out of range: the file has 0 `vn` lines"
+            "t.obj:4: normal index 1 is out of range: there are 0 normals (`vn` lines)"
         );
         assert_eq!(
             err(&format!("{tri}f 1 2 99999999999\n")),

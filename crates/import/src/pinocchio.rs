@@ -311,24 +311,22 @@ pub fn parse_attachment(
             Some(l) => l,
             None => {
                 if buf.len() != bones && buf.len() != joint_count {
-                    return Err(ImportError::invalid(
+                    return Err(ImportError::count(
                         at(),
-                        format!(
-                            "{} weights, expected {bones} (one per bone) or {joint_count} (a root column, then one per bone) for a skeleton of {joint_count} joints",
-                            buf.len()
-                        ),
+                        "weights",
+                        buf.len(),
+                        format_args!("{bones} (one per bone) or {joint_count} (a root column, then one per bone) for a skeleton of {joint_count} joints"),
                     ));
                 }
                 *layout.insert((buf.len(), line_no))
             }
         };
         if buf.len() != columns {
-            return Err(ImportError::invalid(
+            return Err(ImportError::count(
                 at(),
-                format!(
-                    "{} weights, expected {columns} as on line {first_line}",
-                    buf.len()
-                ),
+                "weights",
+                buf.len(),
+                format_args!("{columns} as on line {first_line}"),
             ));
         }
         let sum: f64 = buf.iter().map(|&w| f64::from(w)).sum();
