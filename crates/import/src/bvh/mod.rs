@@ -169,7 +169,8 @@ fn decode<'b>(bytes: &'b [u8], path: &Path) -> (Cow<'b, str>, Option<Warning>) {
 /// root's `}`; a missing or malformed `Frames:` / `Frame Time:` line; a `Frame Time` that
 /// is not > 0; a frame line with the wrong number of values (unless it is the cut-off last
 /// line of a truncated file). The file ending early in the hierarchy or before the motion
-/// header is [`Problem::Truncated`].
+/// header is [`Problem::UnexpectedEnd`] ([`Problem::Truncated`] inside a joint block).
+/// Lines end at LF, CRLF or a lone CR.
 pub fn parse(text: &str, path: &Path) -> Result<Bvh, ImportError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut p = Parser {

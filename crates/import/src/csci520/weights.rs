@@ -31,7 +31,7 @@ pub const ROW_SUM_TOLERANCE: f64 = 1e-4;
 /// on the header's line; an entry line without exactly 3 fields, an index that is not an
 /// integer or is out of range, a weight that does not parse or is NaN, infinite or
 /// negative; a row whose sum overflows (at its first entry). A file without the two
-/// header counts is [`Problem::Empty`] or [`Problem::Truncated`].
+/// header counts is [`Problem::Empty`] or [`Problem::UnexpectedEnd`].
 pub fn parse_weights(
     text: &str,
     path: &Path,
