@@ -24,19 +24,19 @@ impl Context {
         if let Some(captured) = &self.captured {
             let mut captured = captured.lock().unwrap_or_else(|e| e.into_inner());
             for w in warnings {
-                let note = matches!(w, Warning::Note { .. });
-                count += usize::from(!note);
-                captured.push(format!("{}: {w}", if note { "note" } else { "warning" }));
+                count += usize::from(!w.is_note());
+                captured.push(w.labelled());
             }
         }
+        // `warning[W003]: file:4: repaired: ...`, `note[N001]: ...` (codes: docs/WARNINGS.md).
         for w in warnings.iter().filter(|_| self.captured.is_none()) {
-            if matches!(w, Warning::Note { .. }) {
+            if w.is_note() {
                 if !self.quiet {
-                    eprintln!("note: {w}");
+                    eprintln!("{}", w.labelled());
                 }
             } else {
                 count += 1;
-                eprintln!("warning: {w}");
+                eprintln!("{}", w.labelled());
             }
         }
         if self.deny_warnings && count > 0 {

@@ -15,7 +15,7 @@ pub fn run(ctx: &Context, args: &InspectArgs) -> Result<()> {
     for plan in input::plans(&args.input)? {
         let imported = ctx.step(&format!("reading {}", plan.label()), || plan.import())?;
         // Warnings are part of the report; they do not go to stderr twice.
-        let warnings = imported.warnings.iter().map(ToString::to_string).collect();
+        let warnings = imported.warnings.iter().map(|w| w.labelled()).collect();
         if ctx.deny_warnings {
             ctx.report(&imported.warnings)?;
         }
@@ -30,7 +30,7 @@ pub fn run(ctx: &Context, args: &InspectArgs) -> Result<()> {
         for r in &reports {
             r.write_text(&mut out)?;
             for w in &r.warnings {
-                writeln!(out, "  warning: {w}")?;
+                writeln!(out, "  {w}")?;
             }
         }
     }

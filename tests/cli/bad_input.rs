@@ -262,7 +262,7 @@ fn deny_warnings_exits_4_and_writes_nothing() {
     assert!(!out.exists());
     // Without the flag the same input converts, with the warning printed.
     let stderr = rigport_ok(&args);
-    assert!(stderr.contains("warning:"), "{stderr}");
+    assert!(stderr.contains("warning[W001]:"), "{stderr}");
     assert!(out.exists());
 }
 

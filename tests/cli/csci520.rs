@@ -424,7 +424,7 @@ fn csci520_rig_without_weights_converts_with_a_warning_and_eval_refuses() {
         out.to_str().unwrap(),
     ]);
     assert!(
-        stderr.contains("warning:") && stderr.contains("no skin weights"),
+        stderr.contains("warning[W004]:") && stderr.contains("no skin weights"),
         "{stderr}"
     );
     assert_valid(&out);

@@ -235,3 +235,150 @@ fn every_refusal_names_its_file_and_a_place_in_it() {
         problems.join("\n")
     );
 }
+
+/// Issue 14, item 5: every text importer words a bad number the same way, at the number's
+/// line and column: `<file>:<line>:<column>: <what> "<token>" is not a number` (or `is not
+/// finite`, `is out of range for <type>`), whatever the format; and line numbers count LF,
+/// CRLF and a lone CR alike.
+#[test]
+fn bad_numbers_read_the_same_in_every_text_format() {
+    let dir = scratch();
+    let out = dir.path().join("out.glb");
+    let fixtures = repo().join("fixtures");
+    let pino = fixtures.join("pinocchio");
+    let chain = fixtures.join("csci520/chain");
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let bvh_text = |eol: &str, value: &str| {
+        [
+            "HIERARCHY",
+            "ROOT Hips",
+            "{",
+            "  OFFSET 0 0 0",
+            "  CHANNELS 3 Zrotation Xrotation Yrotation",
+            "  End Site",
+            "  {",
+            "    OFFSET 0 1 0",
+            "  }",
+            "}",
+            "MOTION",
+            "Frames: 2",
+            "Frame Time: 0.1",
+            "0 0 0",
+            &format!("0 {value} 0"),
+            "",
+        ]
+        .join(eol)
+    };
+    // (case, the file to blame, the command line, what the message must hold after the
+    // file's name).
+    let mut cases: Vec<(&str, PathBuf, Vec<String>, &str)> = Vec::new();
+    let convert = |inputs: &[&Path]| {
+        let mut args = vec!["convert".to_string()];
+        args.extend(inputs.iter().map(|p| p.display().to_string()));
+        args.extend(["-o".to_string(), out.display().to_string()]);
+        args
+    };
+    for (name, eol) in [("lf.bvh", "\n"), ("crlf.bvh", "\r\n"), ("cr.bvh", "\r")] {
+        let p = write(name, &bvh_text(eol, "zero"));
+        cases.push((
+            name,
+            p.clone(),
+            convert(&[&p]),
+            ":15:3: motion value \"zero\" is not a number",
+        ));
+    }
+    let p = write("nan.bvh", &bvh_text("\n", "NaN"));
+    cases.push((
+        "nan.bvh",
+        p.clone(),
+        convert(&[&p]),
+        ":15:3: motion value \"NaN\" is not finite",
+    ));
+    let p = write("big.obj", "v 0 0 0\nv 1 0 1e39\nv 0 1 0\nf 1 2 3\n");
+    cases.push((
+        "big.obj",
+        p.clone(),
+        convert(&[&p]),
+        ":2:7: coordinate \"1e39\" is out of range for f32",
+    ));
+    let p = write("zero_skeleton.out", "0 0 0 0 -1\n1 0 1 zero 0\n");
+    let args = convert(&[
+        &pino.join("branch.obj"),
+        &p,
+        &pino.join("branch_attachment.out"),
+    ]);
+    cases.push((
+        "skeleton.out",
+        p,
+        args,
+        ":2:7: coordinate \"zero\" is not a number",
+    ));
+    let attachment = std::fs::read_to_string(pino.join("branch_attachment.out")).unwrap();
+    let mut rows: Vec<String> = attachment.lines().map(String::from).collect();
+    let last = rows.len() - 1;
+    rows[last] = format!("{} x", rows[last].trim_end());
+    let p = write("x_attachment.out", &rows.join("\r\n"));
+    let args = convert(&[
+        &pino.join("branch.obj"),
+        &pino.join("branch_skeleton.out"),
+        &p,
+    ]);
+    let expected_x = format!(":{}:", last + 1);
+    cases.push(("attachment.out", p, args, "weight \"x\" is not a number"));
+    // A CSCI 520 folder whose weights file has an entry with a bad weight.
+    let rig = dir.path().join("rig");
+    std::fs::create_dir_all(&rig).unwrap();
+    for entry in std::fs::read_dir(&chain).unwrap() {
+        let entry = entry.unwrap().path();
+        std::fs::copy(&entry, rig.join(entry.file_name().unwrap())).unwrap();
+    }
+    let weights = rig.join("jointWeights.txt");
+    let text = std::fs::read_to_string(&weights).unwrap();
+    std::fs::write(&weights, text.replacen("0 2 1.0", "0 2 1.0e999", 1)).unwrap();
+    let args = convert(&[&rig.join("skin.config")]);
+    cases.push((
+        "jointWeights.txt",
+        weights,
+        args,
+        ":2:5: weight \"1.0e999\" is out of range for f64",
+    ));
+    let amc = write(
+        "bad.amc",
+        ":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 inf\n",
+    );
+    let args = convert(&[&fixtures.join("asf_amc/chain.asf"), &amc]);
+    cases.push((
+        "bad.amc",
+        amc,
+        args,
+        ":4:16: dof value \"inf\" is not finite",
+    ));
+
+    let mut problems = Vec::new();
+    for (label, file, args, expected) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let r = rigport(&args);
+        let stderr = String::from_utf8_lossy(&r.stderr).to_string();
+        let file = file.display().to_string();
+        let at_file = stderr.find(&file).map(|i| &stderr[i + file.len()..]);
+        let ok = r.status.code() == Some(1)
+            && at_file.is_some_and(|rest| {
+                if *label == "attachment.out" {
+                    rest.starts_with(&expected_x) && rest.contains(expected)
+                } else {
+                    rest.starts_with(expected)
+                }
+            });
+        if !ok {
+            problems.push(format!(
+                "{label}: expected {file}{expected}, got {:?}: {stderr}",
+                r.status.code()
+            ));
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}

@@ -1,7 +1,9 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use rigport_model::SkeletonProblem;
+use rigport_model::{AssetError, SkeletonProblem};
+
+use crate::text::NumberIssue;
 
 /// Where in an input a problem is: the file, and a line and column, a JSON path or a byte
 /// offset when known.
@@ -113,9 +115,102 @@ pub enum Problem {
     /// The file is truncated: it ends before the data it declares.
     #[error("truncated: {0}")]
     Truncated(String),
+    /// The file ends where the format requires more.
+    #[error("truncated: the file ends where {expected} was expected")]
+    UnexpectedEnd {
+        /// What the format requires next.
+        expected: &'static str,
+    },
+    /// A token that must be a number is not one, is out of its type's range, or is not
+    /// finite (one wording for every text importer).
+    #[error("{what} {found:?} {issue}")]
+    Number {
+        /// What the number is (`coordinate`, `weight`, `Frame Time`).
+        what: &'static str,
+        /// The token as written (shortened if long).
+        found: String,
+        /// What is wrong with it.
+        issue: NumberIssue,
+    },
+    /// A count that differs from the one the file (or format) requires.
+    #[error("{found} {what}, expected {expected}")]
+    Count {
+        /// What is counted (plural: `weights`, `values`).
+        what: &'static str,
+        /// How many the file has.
+        found: usize,
+        /// How many are required (or the rule: `3`, `1 to 3`, `at least 3`).
+        expected: String,
+    },
+    /// A name, key or item given twice.
+    #[error("{what} is given twice (first on line {first_line})")]
+    Duplicate {
+        /// What is repeated, as written (`*skinWeights`, `bone "arm"`).
+        what: String,
+        /// The line of its first occurrence.
+        first_line: usize,
+    },
+    /// An index beyond the elements it refers to.
+    #[error("{what} index {index} is out of range: there are {count} {plural}")]
+    IndexOutOfRange {
+        /// The kind of element (`vertex`, `joint`).
+        what: &'static str,
+        /// Its plural (`vertices`, `joints`).
+        plural: &'static str,
+        /// The index as the file numbers it.
+        index: i64,
+        /// How many there are.
+        count: usize,
+    },
+    /// A name that refers to nothing.
+    #[error("unknown {what} {name:?}: {within} has no {what} of that name")]
+    UnknownName {
+        /// The kind of thing named (`bone`, `joint`).
+        what: &'static str,
+        /// The name.
+        name: String,
+        /// Where names are looked up (`:bonedata`, `the skeleton "walk"`).
+        within: String,
+    },
+    /// A value that must not be negative is.
+    #[error("{what} {found} is negative")]
+    Negative {
+        /// What the value is.
+        what: &'static str,
+        /// The value as written.
+        found: String,
+    },
+    /// The imported asset breaks the model's invariants ([`rigport_model::Asset::validate`]);
+    /// every problem is listed. Reported rather than trusted: a parse that succeeded
+    /// should never get here.
+    #[error("the imported asset is invalid: {}", join(.0))]
+    Asset(Vec<AssetError>),
 }
 
-fn join(problems: &[SkeletonProblem]) -> String {
+/// `found` as an error shows it: at most 40 characters, then `...`.
+pub(crate) fn shortened(found: &str) -> String {
+    if found.chars().count() > 40 {
+        found.chars().take(40).collect::<String>() + "..."
+    } else {
+        found.to_string()
+    }
+}
+
+/// Checks `asset` with [`rigport_model::Asset::validate`], the one place every importer
+/// (and any caller that builds or edits an asset) maps its problems to an error.
+///
+/// # Errors
+/// [`Problem::Asset`] with every problem, at `location()` (usually the file).
+pub fn check_asset(
+    asset: &rigport_model::Asset,
+    location: impl FnOnce() -> Location,
+) -> Result<(), ImportError> {
+    asset
+        .validate()
+        .map_err(|problems| ImportError::new(location(), Problem::Asset(problems)))
+}
+
+fn join(problems: &[impl ToString]) -> String {
     problems
         .iter()
         .map(ToString::to_string)
@@ -151,15 +246,28 @@ impl ImportError {
 
     /// A [`Problem::Syntax`] error at `location`.
     pub fn syntax(location: Location, expected: impl Into<String>, found: &str) -> Self {
-        let mut found = found.to_string();
-        if found.chars().count() > 40 {
-            found = found.chars().take(40).collect::<String>() + "...";
-        }
         Self::new(
             location,
             Problem::Syntax {
                 expected: expected.into(),
+                found: shortened(found),
+            },
+        )
+    }
+
+    /// A [`Problem::Count`] error at `location`.
+    pub fn count(
+        location: Location,
+        what: &'static str,
+        found: usize,
+        expected: impl ToString,
+    ) -> Self {
+        Self::new(
+            location,
+            Problem::Count {
+                what,
                 found,
+                expected: expected.to_string(),
             },
         )
     }

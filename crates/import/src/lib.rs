@@ -17,10 +17,12 @@ pub mod mtl;
 mod number;
 pub mod obj;
 pub mod pinocchio;
+mod text;
 pub mod usda;
 
 pub use detect::detect;
-pub use error::{ImportError, Location, Problem};
+pub use error::{check_asset, ImportError, Location, Problem};
+pub use text::NumberIssue;
 
 use rigport_model::{Asset, Warning};
 

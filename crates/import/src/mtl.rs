@@ -20,6 +20,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::text::{Lines, Number};
 use rigport_model::{AlphaMode, Image, ImageIndex, Material, TextureRef, Warning};
 
 /// A material as the `.mtl` states it, before conversion.
@@ -70,7 +71,7 @@ impl MtlMaterial {
 /// skipped with a warning naming `path:line`.
 pub fn parse(text: &str, path: &Path, warnings: &mut Vec<Warning>) -> Vec<MtlMaterial> {
     let mut out: Vec<MtlMaterial> = Vec::new();
-    for (i, line) in text.split('\n').enumerate() {
+    for (line_no, line) in Lines::new(text) {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
@@ -88,7 +89,7 @@ pub fn parse(text: &str, path: &Path, warnings: &mut Vec<Warning>) -> Vec<MtlMat
         };
         let numbers: Option<Vec<f32>> = rest
             .split_ascii_whitespace()
-            .map(|t| t.parse::<f32>().ok().filter(|v| v.is_finite()))
+            .map(|t| f32::read(t).ok())
             .collect();
         let mut bad = false;
         let mut rgb = |slot: &mut [f32; 3]| match numbers.as_deref() {
@@ -115,7 +116,7 @@ pub fn parse(text: &str, path: &Path, warnings: &mut Vec<Warning>) -> Vec<MtlMat
         }
         if bad {
             warnings.push(Warning::Note {
-                location: format!("{}:{}", path.display(), i + 1),
+                location: format!("{}:{line_no}", path.display()),
                 message: format!("`{keyword}` needs numbers, found {rest:?}; line ignored"),
             });
         }

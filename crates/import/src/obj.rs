@@ -34,6 +34,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 use rigport_model::{Asset, Mesh, Warning};
 
+use crate::text::{self, Lines};
 use crate::{read_file, ImportError, Imported, Location, Problem};
 
 /// The problem of an OBJ without faces (a point cloud): rigport refuses it for every
@@ -58,11 +59,7 @@ pub fn import(path: &Path) -> Result<Imported, ImportError> {
         ..Asset::default()
     };
     apply_materials(&mut asset, path, &used, true, &mut warnings);
-    if let Err(errors) = asset.validate() {
-        // Unreachable for a parse that succeeded; reported rather than trusted.
-        let text: Vec<String> = errors.iter().map(ToString::to_string).collect();
-        return Err(ImportError::invalid(Location::file(path), text.join("; ")));
-    }
+    crate::check_asset(&asset, || Location::file(path))?;
     Ok(Imported { asset, warnings })
 }
 
@@ -219,8 +216,10 @@ fn submesh(mesh: &Mesh, tri_slots: &[u32], k: u32) -> Mesh {
 /// before parsing, e.g. to read per-vertex data in parallel. Same line rules as [`parse`]
 /// (keyword `v` followed by white space, leading white space allowed).
 pub fn count_vertex_lines(bytes: &[u8]) -> usize {
+    // Every line end (LF, CRLF, a lone CR) cuts, as in [`crate::text::Lines`]; the empty
+    // piece between CR and LF is no `v` line.
     bytes
-        .split(|&b| b == b'\n')
+        .split(|&b| b == b'\n' || b == b'\r')
         .filter(|line| {
             let start = line
                 .iter()
@@ -287,9 +286,8 @@ impl Raw {
             current_material: NONE,
             ..Raw::default()
         };
-        for (i, line) in text.split('\n').enumerate() {
-            let line_no = i + 1;
-            let line = line.trim_ascii();
+        for (line_no, full) in Lines::new(text) {
+            let line = full.trim_ascii();
             if line.is_empty() || line.starts_with('#') {
                 continue;
             }
@@ -301,21 +299,24 @@ impl Raw {
             // An ASCII byte is always a char boundary, so this never fails.
             let (keyword, rest) = line.split_at_checked(keyword_end).unwrap_or((line, ""));
             let at = || Location::line(path, line_no);
+            let at_token = |token: &str| text::at(path, line_no, full, token);
             match keyword {
                 "v" => {
                     let mut tokens = rest.split_ascii_whitespace();
-                    let p = read_vec3(&mut tokens, "x y z", &at)?;
+                    let p = read_vec3(&mut tokens, "coordinate", &at, &at_token)?;
                     // `w` (a rational-curve weight, meaningless for polygons) and the
                     // common `r g b` vertex-colour extension are checked and ignored.
                     let mut extra = 0;
                     for token in tokens {
-                        read_number(token, "a number", &at)?;
+                        text::number::<f32>(token, "vertex value", || at_token(token))?;
                         extra += 1;
                     }
                     if extra > 4 {
-                        return Err(ImportError::invalid(
+                        return Err(ImportError::count(
                             at(),
-                            format!("a `v` line holds at most 7 numbers, found {}", 3 + extra),
+                            "numbers on a `v` line",
+                            3 + extra,
+                            "at most 7",
                         ));
                     }
                     raw.positions.push(p);
@@ -324,16 +325,18 @@ impl Raw {
                     let mut values = [0.0_f32; 3];
                     let mut n = 0;
                     for token in rest.split_ascii_whitespace() {
-                        let value = read_number(token, "a texture coordinate", &at)?;
+                        let value = text::number(token, "texture coordinate", || at_token(token))?;
                         if let Some(slot) = values.get_mut(n) {
                             *slot = value;
                         }
                         n += 1;
                     }
                     if !(1..=3).contains(&n) {
-                        return Err(ImportError::invalid(
+                        return Err(ImportError::count(
                             at(),
-                            format!("a `vt` line holds 1 to 3 numbers, found {n}"),
+                            "numbers on a `vt` line",
+                            n,
+                            "1 to 3",
                         ));
                     }
                     // OBJ puts the texture origin bottom-left, glTF top-left.
@@ -341,7 +344,7 @@ impl Raw {
                 }
                 "vn" => {
                     let mut tokens = rest.split_ascii_whitespace();
-                    let n = read_vec3(&mut tokens, "x y z", &at)?;
+                    let n = read_vec3(&mut tokens, "normal coordinate", &at, &at_token)?;
                     if let Some(token) = tokens.next() {
                         return Err(ImportError::syntax(at(), "the end of the `vn` line", token));
                     }
@@ -421,9 +424,11 @@ impl Raw {
         }
         let found = self.corners.len() - start;
         if found < 3 {
-            return Err(ImportError::invalid(
+            return Err(ImportError::count(
                 at(),
-                format!("a face needs at least 3 corners, found {found}"),
+                "face corners",
+                found,
+                "at least 3",
             ));
         }
         self.faces.push(Face {
@@ -627,19 +632,26 @@ fn out_of_range(
     path: &Path,
     line: usize,
 ) -> ImportError {
-    let (index, count, what, keyword) = if c.v as usize >= nv {
-        (c.v, nv, "vertex", "v")
+    let (index, count, what, plural) = if c.v as usize >= nv {
+        (c.v, nv, "vertex", "vertices (`v` lines)")
     } else if c.vt != NONE && c.vt as usize >= nt {
-        (c.vt, nt, "texture coordinate", "vt")
+        (
+            c.vt,
+            nt,
+            "texture coordinate",
+            "texture coordinates (`vt` lines)",
+        )
     } else {
-        (c.vn, nn, "normal", "vn")
+        (c.vn, nn, "normal", "normals (`vn` lines)")
     };
-    ImportError::invalid(
+    ImportError::new(
         Location::line(path, line),
-        format!(
-            "{what} index {} is out of range: the file has {count} `{keyword}` lines",
-            u64::from(index) + 1
-        ),
+        Problem::IndexOutOfRange {
+            what,
+            plural,
+            index: i64::from(index) + 1,
+            count,
+        },
     )
 }
 
@@ -647,34 +659,19 @@ fn out_of_range(
 // here for the Pinocchio reader, which reaches it as `obj::parse_f32` / `obj::Decimal`.
 pub(crate) use crate::number::{parse_f32, Decimal};
 
-/// Parses one number, which must be finite.
-fn read_number(token: &str, expected: &str, at: &dyn Fn() -> Location) -> Result<f32, ImportError> {
-    let value = parse_f32(token).ok_or_else(|| ImportError::syntax(at(), expected, token))?;
-    if value.is_finite() {
-        Ok(value)
-    } else {
-        Err(ImportError::invalid(
-            at(),
-            format!("{token} is not a finite number"),
-        ))
-    }
-}
-
-/// Parses three finite numbers (`names` says what they are, for the error).
+/// Parses three finite numbers (`what` they are, for the error).
 fn read_vec3<'a>(
     tokens: &mut impl Iterator<Item = &'a str>,
-    names: &str,
+    what: &'static str,
     at: &dyn Fn() -> Location,
+    at_token: &dyn Fn(&str) -> Location,
 ) -> Result<Vec3, ImportError> {
     let mut v = [0.0_f32; 3];
     for (k, slot) in v.iter_mut().enumerate() {
         let Some(token) = tokens.next() else {
-            return Err(ImportError::invalid(
-                at(),
-                format!("expected 3 numbers ({names}), found {k}"),
-            ));
+            return Err(ImportError::count(at(), "numbers", k, 3));
         };
-        *slot = read_number(token, "a number", at)?;
+        *slot = text::number(token, what, || at_token(token))?;
     }
     Ok(Vec3::from_array(v))
 }
@@ -696,9 +693,7 @@ fn resolve_index(
             return Ok(x - 1);
         }
     }
-    let x: i64 = part
-        .parse()
-        .map_err(|_| ImportError::syntax(at(), "an index", token))?;
+    let x: i64 = text::number(part, "index", at)?;
     let resolved = match x {
         0 => {
             return Err(ImportError::invalid(
@@ -836,7 +831,7 @@ mod tests {
         let latin1 = parse(b"v 0 0 0\nv 1 \xE9 0\n", Path::new("t.obj")).unwrap_err();
         assert_eq!(
             latin1.to_string(),
-            "t.obj:2: expected a number, found \"\u{fffd}\""
+            "t.obj:2:5: coordinate \"\u{fffd}\" is not a number"
         );
     }
 
@@ -857,27 +852,24 @@ mod tests {
         );
         assert_eq!(
             err("v 0 0 0\nv 0 x 0\n"),
-            "t.obj:2: expected a number, found \"x\""
+            "t.obj:2:5: coordinate \"x\" is not a number"
         );
-        assert_eq!(
-            err("v 0 0\n"),
-            "t.obj:1: expected 3 numbers (x y z), found 2"
-        );
+        assert_eq!(err("v 0 0\n"), "t.obj:1: 2 numbers, expected 3");
         assert_eq!(
             err("v 0 0 0\nv 0 nan 0\n"),
-            "t.obj:2: nan is not a finite number"
+            "t.obj:2:5: coordinate \"nan\" is not finite"
         );
         assert_eq!(
             err("v 0 0 0\nv inf 0 0\n"),
-            "t.obj:2: inf is not a finite number"
+            "t.obj:2:3: coordinate \"inf\" is not finite"
         );
         assert_eq!(
             err("v 0 0 0 1 2 3 4 5\n"),
-            "t.obj:1: a `v` line holds at most 7 numbers, found 8"
+            "t.obj:1: 8 numbers on a `v` line, expected at most 7"
         );
         assert_eq!(
             err("vt\n"),
-            "t.obj:1: a `vt` line holds 1 to 3 numbers, found 0"
+            "t.obj:1: 0 numbers on a `vt` line, expected 1 to 3"
         );
         assert_eq!(
             err("vn 0 0 1 1\n"),
@@ -886,7 +878,7 @@ mod tests {
         let tri = "v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\n";
         assert_eq!(
             err(&format!("{tri}f 1 2 4\r\n")),
-            "t.obj:4: vertex index 4 is out of range: the file has 3 `v` lines"
+            "t.obj:4: vertex index 4 is out of range: there are 3 vertices (`v` lines)"
         );
         assert_eq!(
             err(&format!("{tri}f 1 2 0\n")),
@@ -898,11 +890,11 @@ mod tests {
         );
         assert_eq!(
             err(&format!("{tri}f 1 2\n")),
-            "t.obj:4: a face needs at least 3 corners, found 2"
+            "t.obj:4: 2 face corners, expected at least 3"
         );
         assert_eq!(
             err(&format!("{tri}f 1 2 3/x\n")),
-            "t.obj:4: expected an index, found \"3/x\""
+            "t.obj:4: index \"x\" is not a number"
         );
         assert_eq!(
             err(&format!("{tri}f 1 2 /1\n")),
@@ -914,11 +906,11 @@ mod tests {
         );
         assert_eq!(
             err(&format!("{tri}vt 0 0\nf 1/1 2/2 3/1\n")),
-            "t.obj:5: texture coordinate index 2 is out of range: the file has 1 `vt` lines"
+            "t.obj:5: texture coordinate index 2 is out of range: there are 1 texture coordinates (`vt` lines)"
         );
         assert_eq!(
             err(&format!("{tri}f 1//1 2//1 3//1\n")),
-            "t.obj:4: normal index 1 is out of range: the file has 0 `vn` lines"
+            "t.obj:4: normal index 1 is out of range: there are 0 normals (`vn` lines)"
         );
         assert_eq!(
             err(&format!("{tri}f 1 2 99999999999\n")),

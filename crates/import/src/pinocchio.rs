@@ -37,6 +37,7 @@ use rigport_model::{
     Skeleton, SkinBinding, Transform, Warning,
 };
 
+use crate::text::{self, Lines, Number};
 use crate::{exact_fields, obj, read_file, utf8, ImportError, Imported, Location, Problem};
 
 /// A Pinocchio skeleton as written in `skeleton.out`: joints in Pinocchio's numbering.
@@ -180,12 +181,13 @@ pub fn parse_skeleton(text: &str, path: &Path) -> Result<PinocchioSkeleton, Impo
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut skeleton = PinocchioSkeleton::default();
     let mut lines = Vec::new();
-    for (i, raw) in text.split('\n').enumerate() {
+    for (line_no, raw) in Lines::new(text) {
         let line = raw.trim_ascii();
         if line.is_empty() {
             continue;
         }
-        let at = || Location::line(path, i + 1);
+        let at = || Location::line(path, line_no);
+        let at_token = |token: &str| text::at(path, line_no, raw, token);
         let Some(fields) = exact_fields::<5>(line) else {
             return Err(ImportError::syntax(
                 at(),
@@ -194,9 +196,7 @@ pub fn parse_skeleton(text: &str, path: &Path) -> Result<PinocchioSkeleton, Impo
             ));
         };
         let ordinal = skeleton.positions.len();
-        let index: usize = fields[0]
-            .parse()
-            .map_err(|_| ImportError::syntax(at(), "a joint index", fields[0]))?;
+        let index: usize = text::number(fields[0], "joint index", || at_token(fields[0]))?;
         if index != ordinal {
             return Err(ImportError::invalid(
                 at(),
@@ -207,19 +207,9 @@ pub fn parse_skeleton(text: &str, path: &Path) -> Result<PinocchioSkeleton, Impo
         }
         let mut p = [0.0_f32; 3];
         for (slot, token) in p.iter_mut().zip(&fields[1..4]) {
-            *slot = token
-                .parse()
-                .map_err(|_| ImportError::syntax(at(), "a coordinate", token))?;
-            if !slot.is_finite() {
-                return Err(ImportError::invalid(
-                    at(),
-                    format!("coordinate {token} of joint {index} is not finite"),
-                ));
-            }
+            *slot = text::number(token, "coordinate", || at_token(token))?;
         }
-        let parent: i64 = fields[4].parse().map_err(|_| {
-            ImportError::syntax(at(), "a parent index (-1 for the root)", fields[4])
-        })?;
+        let parent: i64 = text::number(fields[4], "parent index", || at_token(fields[4]))?;
         let parent = match parent {
             -1 => None,
             p => Some(usize::try_from(p).map_err(|_| {
@@ -231,7 +221,7 @@ pub fn parse_skeleton(text: &str, path: &Path) -> Result<PinocchioSkeleton, Impo
         };
         skeleton.positions.push(Vec3::from_array(p));
         skeleton.parents.push(parent);
-        lines.push(i + 1);
+        lines.push(line_no);
     }
     if lines.is_empty() {
         return Err(ImportError::new(Location::file(path), Problem::Empty));
@@ -286,13 +276,12 @@ pub fn parse_attachment(
     let mut rescaled = 0_usize;
     let mut max_error = 0.0_f64;
     let mut buf: Vec<f32> = Vec::with_capacity(joint_count);
-    let mut lines = text.split('\n').enumerate();
-    while let Some((i, raw)) = lines.next() {
+    let mut lines = Lines::new(text);
+    while let Some((line_no, raw)) = lines.next() {
         let line = raw.trim_ascii();
         if line.is_empty() {
             continue;
         }
-        let line_no = i + 1;
         let at = || Location::line(path, line_no);
         if row_count == vertex_count {
             let extra = 1 + lines.filter(|(_, l)| !l.trim_ascii().is_empty()).count();
@@ -305,35 +294,39 @@ pub fn parse_attachment(
                 ),
             ));
         }
-        parse_row(line, &mut buf).map_err(|(column, token)| match obj::parse_f32(token) {
-            None => ImportError::syntax(at(), "a weight", token),
-            Some(w) if w.is_nan() || w.is_infinite() => {
-                ImportError::invalid(at(), format!("weight {column} ({token}) is not finite"))
+        parse_row(line, &mut buf).map_err(|(_, token)| {
+            let location = text::at(path, line_no, raw, token);
+            match f32::read(token) {
+                Err(issue) => text::number_error(location, "weight", token, issue),
+                Ok(_) => ImportError::new(
+                    location,
+                    Problem::Negative {
+                        what: "weight",
+                        found: crate::error::shortened(token),
+                    },
+                ),
             }
-            Some(_) => ImportError::invalid(at(), format!("weight {column} ({token}) is negative")),
         })?;
         let (columns, first_line) = match layout {
             Some(l) => l,
             None => {
                 if buf.len() != bones && buf.len() != joint_count {
-                    return Err(ImportError::invalid(
+                    return Err(ImportError::count(
                         at(),
-                        format!(
-                            "{} weights, expected {bones} (one per bone) or {joint_count} (a root column, then one per bone) for a skeleton of {joint_count} joints",
-                            buf.len()
-                        ),
+                        "weights",
+                        buf.len(),
+                        format_args!("{bones} (one per bone) or {joint_count} (a root column, then one per bone) for a skeleton of {joint_count} joints"),
                     ));
                 }
                 *layout.insert((buf.len(), line_no))
             }
         };
         if buf.len() != columns {
-            return Err(ImportError::invalid(
+            return Err(ImportError::count(
                 at(),
-                format!(
-                    "{} weights, expected {columns} as on line {first_line}",
-                    buf.len()
-                ),
+                "weights",
+                buf.len(),
+                format_args!("{columns} as on line {first_line}"),
             ));
         }
         let sum: f64 = buf.iter().map(|&w| f64::from(w)).sum();
@@ -750,10 +743,7 @@ fn assemble_from<'a>(
         ik_handles: Vec::new(),
         ..Default::default()
     };
-    if let Err(errors) = asset.validate() {
-        let text: Vec<String> = errors.iter().map(ToString::to_string).collect();
-        return Err(invalid(text.join("; ")));
-    }
+    crate::check_asset(&asset, here)?;
     Ok(Imported { asset, warnings })
 }
 
@@ -948,23 +938,23 @@ mod tests {
         );
         assert_eq!(
             skel_err("0 0 0 0 -1\nx 0 1 0 0\n"),
-            "s.out:2: expected a joint index, found \"x\""
+            "s.out:2:1: joint index \"x\" is not a number"
         );
         assert_eq!(
             skel_err("0 0 0 0 -1\n1 0 y 0 0\n"),
-            "s.out:2: expected a coordinate, found \"y\""
+            "s.out:2:5: coordinate \"y\" is not a number"
         );
         assert_eq!(
             skel_err("0 0 0 0 -1\n1 0 NaN 0 0\n"),
-            "s.out:2: coordinate NaN of joint 1 is not finite"
+            "s.out:2:5: coordinate \"NaN\" is not finite"
         );
         assert_eq!(
             skel_err("0 0 0 0 -1\n1 0 0 -inf 0\n"),
-            "s.out:2: coordinate -inf of joint 1 is not finite"
+            "s.out:2:7: coordinate \"-inf\" is not finite"
         );
         assert_eq!(
             skel_err("0 0 0 0 -1\n1 0 1 0 0.5\n"),
-            "s.out:2: expected a parent index (-1 for the root), found \"0.5\""
+            "s.out:2:9: parent index \"0.5\" is not a number"
         );
         assert_eq!(
             skel_err("0 0 0 0 -1\n\n2 0 1 0 0\n"),
@@ -1076,19 +1066,19 @@ mod tests {
         );
         assert_eq!(
             att_err("1 0\r\n0 x\r\n", 3, 2),
-            "a.out:2: expected a weight, found \"x\""
+            "a.out:2:3: weight \"x\" is not a number"
         );
         assert_eq!(
             att_err("1 0\nNaN 1\n", 3, 2),
-            "a.out:2: weight 1 (NaN) is not finite"
+            "a.out:2:1: weight \"NaN\" is not finite"
         );
         assert_eq!(
             att_err("1 0\n1 inf\n", 3, 2),
-            "a.out:2: weight 2 (inf) is not finite"
+            "a.out:2:3: weight \"inf\" is not finite"
         );
         assert_eq!(
             att_err("1 0\n1.1 -0.1\n", 3, 2),
-            "a.out:2: weight 2 (-0.1) is negative"
+            "a.out:2:5: weight -0.1 is negative"
         );
         assert_eq!(
             att_err("1 0\n0 0 \n", 3, 2),

@@ -36,7 +36,7 @@ pub use mesh::{Mesh, MorphTarget};
 pub use skeleton::{parents_first_order, Joint, Skeleton, SkeletonProblem};
 pub use skin::{Influence, Influences, SkinBinding};
 pub use transform::Transform;
-pub use warning::Warning;
+pub use warning::{Warning, WARNING_CODES};
 
 /// Re-exported so downstream crates use the same math types.
 pub use glam;

@@ -50,6 +50,80 @@ pub enum Warning {
     },
 }
 
+/// Every warning code with its kebab-case name and meaning, in code order (the table
+/// `docs/WARNINGS.md` documents). A code never changes meaning once released.
+pub const WARNING_CODES: [(&str, &str, &str); 5] = [
+    (
+        "W001",
+        "weights-renormalized",
+        "weight rows did not sum to 1 and were rescaled",
+    ),
+    (
+        "W002",
+        "influences-dropped",
+        "vertices lost influences to a per-vertex limit or as negligibly small",
+    ),
+    (
+        "W003",
+        "repaired",
+        "something malformed was repaired unambiguously",
+    ),
+    (
+        "W004",
+        "incomplete",
+        "part of what the input should hold is absent, and the result lacks it",
+    ),
+    (
+        "N001",
+        "note",
+        "a fact about the input (nothing lost or repaired); never fatal",
+    ),
+];
+
+impl Warning {
+    /// The stable code of this kind of warning (`W001`..; `N001` for a [`Warning::Note`]),
+    /// one row of [`WARNING_CODES`].
+    pub fn code(&self) -> &'static str {
+        self.code_row().0
+    }
+
+    /// The stable kebab-case name of this kind of warning (`weights-renormalized`, ...).
+    pub fn name(&self) -> &'static str {
+        self.code_row().1
+    }
+
+    /// Whether this is a [`Warning::Note`]: a fact, nothing lost or repaired.
+    pub fn is_note(&self) -> bool {
+        matches!(self, Warning::Note { .. })
+    }
+
+    /// `warning` or `note`: the word the CLI prints before the code.
+    pub fn severity(&self) -> &'static str {
+        if self.is_note() {
+            "note"
+        } else {
+            "warning"
+        }
+    }
+
+    /// The warning as the CLI prints and reports it: `warning[W003]: obj.obj:4: repaired: ...`
+    /// (`note[N001]: ...` for a note).
+    pub fn labelled(&self) -> String {
+        format!("{}[{}]: {self}", self.severity(), self.code())
+    }
+
+    fn code_row(&self) -> (&'static str, &'static str, &'static str) {
+        let i = match self {
+            Warning::WeightsRenormalized { .. } => 0,
+            Warning::InfluencesDropped { .. } => 1,
+            Warning::Repaired { .. } => 2,
+            Warning::Incomplete { .. } => 3,
+            Warning::Note { .. } => 4,
+        };
+        WARNING_CODES[i]
+    }
+}
+
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -74,5 +148,30 @@ impl fmt::Display for Warning {
             Warning::Incomplete { location, message } => write!(f, "{location}: {message}"),
             Warning::Note { location, message } => write!(f, "{location}: {message}"),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_are_unique_and_labelled() {
+        let mut codes: Vec<&str> = WARNING_CODES.iter().map(|r| r.0).collect();
+        codes.sort_unstable();
+        codes.dedup();
+        assert_eq!(codes.len(), WARNING_CODES.len());
+        let w = Warning::Repaired {
+            location: "a.obj:4".into(),
+            message: "x".into(),
+        };
+        assert_eq!(w.code(), "W003");
+        assert_eq!(w.name(), "repaired");
+        assert_eq!(w.labelled(), "warning[W003]: a.obj:4: repaired: x");
+        let n = Warning::Note {
+            location: "a".into(),
+            message: "b".into(),
+        };
+        assert_eq!(n.labelled(), "note[N001]: a: b");
     }
 }

@@ -4,9 +4,9 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::Path;
 
-use crate::{ImportError, Location, Problem};
+use crate::{text, ImportError, Location, Problem};
 
-use super::lines::{column, content, invalid, number, syntax, Lines};
+use super::lines::{column, content, duplicate, invalid, number, syntax, Lines};
 use super::types::{Amc, AmcFrame, AngleUnit, Asf, HeldValue, Skipped};
 
 /// Parses an AMC motion of `asf`. `path` is used in messages and kept in [`Amc::path`].
@@ -100,14 +100,8 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
         };
         let alone = tokens.clone().next().is_none();
         if alone && first.bytes().all(|b| b.is_ascii_digit()) {
-            let number = first.parse::<u64>().map_err(|_| {
-                syntax(
-                    path,
-                    line_no,
-                    raw,
-                    first,
-                    "a frame number that fits 64 bits",
-                )
+            let number: u64 = text::number(first, "frame number", || {
+                text::at(path, line_no, raw, first)
             })?;
             close_frame(&mut amc, &given, &ranges);
             given.fill(0);
@@ -137,12 +131,13 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
                 "a frame number (a non-negative integer)",
             ));
         } else {
-            return Err(ImportError::invalid(
+            return Err(ImportError::new(
                 Location::line_column(path, line_no, column(raw, first)),
-                format!(
-                    "unknown bone {first:?}: the skeleton {} has no bone of that name",
-                    asf.path.display()
-                ),
+                Problem::UnknownName {
+                    what: "bone",
+                    name: first.to_string(),
+                    within: format!("the skeleton {}", asf.path.display()),
+                },
             ));
         };
         let Some(frame) = amc.frames.last() else {
@@ -155,13 +150,11 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
         let frame_number = frame.number;
         if let Some(slot) = given.get_mut(node) {
             if *slot != 0 {
-                return Err(invalid(
+                return Err(duplicate(
                     path,
                     line_no,
-                    format!(
-                        "{first:?} is given twice in frame {frame_number} (first on line {})",
-                        *slot
-                    ),
+                    format!("{first:?} in frame {frame_number}"),
+                    *slot,
                 ));
             }
             *slot = line_no;
@@ -176,7 +169,7 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
         let mut count = 0;
         for token in tokens {
             if let Some(slot) = slots.get_mut(count) {
-                *slot = number(path, line_no, raw, token, "a dof value")?;
+                *slot = number(path, line_no, raw, token, "dof value")?;
             }
             count += 1;
         }

@@ -6,10 +6,12 @@ use std::path::Path;
 use glam::DVec3;
 use rigport_model::conventions::EulerOrder;
 
-use crate::{ImportError, Location, Problem};
+use crate::{text, ImportError, Location, Problem};
 
 use super::hierarchy::resolve_hierarchy;
-use super::lines::{column, content, dof_list, euler_order, invalid, number, syntax, vec3, Lines};
+use super::lines::{
+    column, content, dof_list, duplicate, euler_order, invalid, number, syntax, vec3, Lines,
+};
 use super::types::{AngleUnit, Asf, Bone, Dof, Root, Skipped, Units};
 
 /// Parses an ASF skeleton. `path` is used in messages and kept in [`Asf::path`].
@@ -116,10 +118,11 @@ fn once<T>(
     within: &str,
 ) -> Result<(), ImportError> {
     if let Some((_, first)) = slot {
-        return Err(invalid(
+        return Err(duplicate(
             path,
             line,
-            format!("`{key}` is given twice in {within} (first on line {first})"),
+            format!("`{key}` in {within}"),
+            *first,
         ));
     }
     *slot = Some((value, line));
@@ -206,11 +209,7 @@ impl<'a, 't> AsfParser<'a, 't> {
             }
         };
         if let Some((_, first)) = self.seen.iter().find(|(k, _)| *k == lower) {
-            return Err(invalid(
-                self.path,
-                line_no,
-                format!("`:{lower}` is given twice (first on line {first})"),
-            ));
+            return Err(duplicate(self.path, line_no, format!("`:{lower}`"), *first));
         }
         self.seen.push((lower.clone(), line_no));
         let takes_value = matches!(lower.as_str(), "version" | "name" | "documentation");
@@ -311,10 +310,11 @@ impl<'a, 't> AsfParser<'a, 't> {
         };
         let lower = key.to_ascii_lowercase();
         if let Some((_, first)) = self.units_seen.iter().find(|(k, _)| *k == lower) {
-            return Err(invalid(
+            return Err(duplicate(
                 path,
                 line_no,
-                format!("`{lower}` is given twice in `:units` (first on line {first})"),
+                format!("`{lower}` in `:units`"),
+                *first,
             ));
         }
         match lower.as_str() {
@@ -450,9 +450,8 @@ impl<'a, 't> AsfParser<'a, 't> {
                         line,
                     ));
                 };
-                let id = id
-                    .parse::<i64>()
-                    .map_err(|_| syntax(path, line_no, raw, id, "an integer bone id"))?;
+                let id: i64 =
+                    text::number(id, "bone id", || text::at(path, line_no, raw, id))?;
                 once(&mut draft.id, id, path, line_no, "id", within)
             }
             "name" => {

@@ -31,9 +31,13 @@ pub(super) fn resolve_hierarchy(
         };
         let lookup = |token: &str| {
             index.get(token).copied().ok_or_else(|| {
-                ImportError::invalid(
+                ImportError::new(
                     Location::line_column(&path, line_no, column(raw, token)),
-                    format!("unknown bone {token:?}: `:bonedata` has no bone of that name"),
+                    Problem::UnknownName {
+                        what: "bone",
+                        name: token.to_string(),
+                        within: "`:bonedata`".into(),
+                    },
                 )
             })
         };

@@ -1,56 +1,15 @@
-//! Lines and tokens, shared by the ASF and AMC parsers: line splitting, comments, and
-//! errors with line and column.
+//! What the ASF and AMC parsers share on top of [`crate::text`]: comments, and errors,
+//! numbers, vectors, dof lists and axis orders at a line and column.
 
 use std::path::Path;
 
 use glam::DVec3;
 use rigport_model::conventions::EulerOrder;
 
-use crate::{ImportError, Location};
+pub(super) use crate::text::{column, Lines};
+use crate::{text, ImportError, Location, Problem};
 
 use super::types::Dof;
-
-/// The lines of a text with their 1-based numbers; LF, CRLF and a lone CR all end a line.
-pub(super) struct Lines<'a> {
-    rest: Option<&'a str>,
-    number: usize,
-}
-
-impl<'a> Lines<'a> {
-    pub(super) fn new(text: &'a str) -> Self {
-        Self {
-            rest: Some(text),
-            number: 0,
-        }
-    }
-}
-
-impl<'a> Iterator for Lines<'a> {
-    type Item = (usize, &'a str);
-
-    fn next(&mut self) -> Option<Self::Item> {
-        let rest = self.rest?;
-        if rest.is_empty() && self.number > 0 {
-            // The text ends with a line break: there is no line after it.
-            self.rest = None;
-            return None;
-        }
-        let line = match rest.find(['\n', '\r']) {
-            Some(i) => {
-                let (line, tail) = rest.split_at(i);
-                let skip = if tail.starts_with("\r\n") { 2 } else { 1 };
-                self.rest = tail.get(skip..);
-                line
-            }
-            None => {
-                self.rest = None;
-                rest
-            }
-        };
-        self.number += 1;
-        Some((self.number, line))
-    }
-}
 
 /// The line without its comment and surrounding white space. A `#` starts a comment at the
 /// start of the line or after white space only (`-1.#IND` stays one, non-numeric, token).
@@ -70,13 +29,6 @@ pub(super) fn content(raw: &str) -> &str {
     raw.get(..end).unwrap_or(raw).trim_ascii()
 }
 
-/// 1-based character column of `token` (a sub-slice of `raw`) in `raw`.
-pub(super) fn column(raw: &str, token: &str) -> usize {
-    let offset = (token.as_ptr() as usize).wrapping_sub(raw.as_ptr() as usize);
-    raw.get(..offset)
-        .map_or(1, |before| before.chars().count() + 1)
-}
-
 /// A token-level error at `path:line:column`.
 pub(super) fn syntax(
     path: &Path,
@@ -92,6 +44,14 @@ pub(super) fn syntax(
     )
 }
 
+/// A [`Problem::Duplicate`] error at `path:line`: `what` was first given on `first_line`.
+pub(super) fn duplicate(path: &Path, line: usize, what: String, first_line: usize) -> ImportError {
+    ImportError::new(
+        Location::line(path, line),
+        Problem::Duplicate { what, first_line },
+    )
+}
+
 pub(super) fn invalid(path: &Path, line: usize, message: impl Into<String>) -> ImportError {
     ImportError::invalid(Location::line(path, line), message)
 }
@@ -102,22 +62,9 @@ pub(super) fn number(
     line: usize,
     raw: &str,
     token: &str,
-    what: &str,
+    what: &'static str,
 ) -> Result<f64, ImportError> {
-    match token.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err(ImportError::invalid(
-            Location::line_column(path, line, column(raw, token)),
-            format!("{what} is not finite: {token:?}"),
-        )),
-        Err(_) => Err(syntax(
-            path,
-            line,
-            raw,
-            token,
-            &format!("a number ({what})"),
-        )),
-    }
+    text::number(token, what, || text::at(path, line, raw, token))
 }
 
 /// Exactly three finite numbers after a keyword.
@@ -127,7 +74,7 @@ pub(super) fn vec3(
     raw: &str,
     whole: &str,
     args: &[&str],
-    what: &str,
+    what: &'static str,
 ) -> Result<DVec3, ImportError> {
     let [x, y, z] = args else {
         return Err(ImportError::syntax(

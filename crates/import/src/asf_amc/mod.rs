@@ -202,13 +202,7 @@ pub fn to_asset(
         meters_per_unit: asf.units.meters_per_unit(),
         ..Asset::default()
     };
-    asset.validate().map_err(|errors| {
-        let list: Vec<String> = errors.iter().map(ToString::to_string).collect();
-        ImportError::invalid(
-            Location::file(&asf.path),
-            format!("the imported asset is invalid: {}", list.join("; ")),
-        )
-    })?;
+    crate::check_asset(&asset, || Location::file(&asf.path))?;
     Ok(Imported { asset, warnings })
 }
 

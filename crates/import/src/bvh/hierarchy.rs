@@ -5,9 +5,9 @@ use rigport_model::Warning;
 
 use crate::{ImportError, Location, Problem};
 
-use super::parser::Parser;
-use super::tokens::{keyword, Token};
+use super::parser::{keyword, Parser};
 use super::types::{BvhEndSite, BvhJoint, Channel};
+use crate::text::Token;
 
 impl<'a> Parser<'a, '_> {
     /// `OFFSET x y z` with nothing after it on the line.
@@ -19,7 +19,7 @@ impl<'a> Parser<'a, '_> {
         let mut xyz = [0.0_f32; 3];
         for v in &mut xyz {
             let t = self.expect_on_line(kw, "3 numbers")?;
-            *v = self.number(t)?;
+            *v = self.number(t, "OFFSET value")?;
         }
         if let Some(t) = self.next_on_line() {
             return Err(self.syntax(t, "the end of the line after OFFSET's 3 numbers"));
@@ -100,7 +100,7 @@ impl<'a> Parser<'a, '_> {
         let offset = self.offset()?;
         let mut channels = Vec::new();
         let mut peek = self.cur;
-        if let Some(t) = peek.next().filter(|t| keyword(*t, "CHANNELS")) {
+        if let Some(t) = peek.next_token().filter(|t| keyword(*t, "CHANNELS")) {
             self.cur = peek;
             self.last_line = t.line;
             channels = self.channels(t)?;
@@ -121,10 +121,8 @@ impl<'a> Parser<'a, '_> {
     /// The rest of a `CHANNELS n name...` line, `kw` being `CHANNELS`.
     fn channels(&mut self, kw: Token<'a>) -> Result<Vec<Channel>, ImportError> {
         let count_token = self.expect_on_line(kw, "a channel count")?;
-        let count: usize = count_token
-            .text
-            .parse()
-            .map_err(|_| self.syntax(count_token, "a channel count (0 to 6)"))?;
+        let count: usize =
+            crate::text::number(count_token.text, "channel count", || self.at(count_token))?;
         if count > Channel::ALL.len() {
             return Err(ImportError::invalid(
                 self.at(count_token),

@@ -95,7 +95,6 @@ mod motion;
 mod parser;
 #[cfg(test)]
 mod tests;
-mod tokens;
 mod tracks;
 mod types;
 
@@ -109,9 +108,10 @@ use rigport_model::{Asset, Joint, JointIndex, Skeleton, Transform, Warning};
 
 use crate::{read_file, ImportError, Imported, Location, Problem};
 
+use self::parser::keyword;
 use self::parser::Parser;
-use self::tokens::{keyword, Cursor};
 use self::tracks::clip;
+use crate::text::Cursor;
 
 /// Imports a BVH file: the skeleton and one clip named after the file stem (see the
 /// module docs for the mapping).
@@ -169,17 +169,13 @@ fn decode<'b>(bytes: &'b [u8], path: &Path) -> (Cow<'b, str>, Option<Warning>) {
 /// root's `}`; a missing or malformed `Frames:` / `Frame Time:` line; a `Frame Time` that
 /// is not > 0; a frame line with the wrong number of values (unless it is the cut-off last
 /// line of a truncated file). The file ending early in the hierarchy or before the motion
-/// header is [`Problem::Truncated`].
+/// header is [`Problem::UnexpectedEnd`] ([`Problem::Truncated`] inside a joint block).
+/// Lines end at LF, CRLF or a lone CR.
 pub fn parse(text: &str, path: &Path) -> Result<Bvh, ImportError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut p = Parser {
         path,
-        cur: Cursor {
-            text,
-            pos: 0,
-            line: 1,
-            line_start: 0,
-        },
+        cur: Cursor::new(text),
         last_line: 1,
         joints: Vec::new(),
         end_sites: Vec::new(),
@@ -315,10 +311,7 @@ pub fn to_asset(name: &str, bvh: &Bvh) -> Result<Imported, ImportError> {
         meters_per_unit: None,
         ..Asset::default()
     };
-    if let Err(errors) = asset.validate() {
-        let text: Vec<String> = errors.iter().map(ToString::to_string).collect();
-        return Err(ImportError::invalid(Location::file(path), text.join("; ")));
-    }
+    crate::check_asset(&asset, || Location::file(path))?;
     Ok(Imported { asset, warnings })
 }
 

@@ -5,10 +5,10 @@ use std::path::Path;
 
 use rigport_model::Warning;
 
+use crate::text::{self, column, Lines, Number};
 use crate::{number, ImportError, Location, Problem};
 
 use super::parser::Parser;
-use super::tokens::column;
 
 /// The motion section as read.
 pub(super) struct Motion {
@@ -22,13 +22,13 @@ impl<'a> Parser<'a, '_> {
     /// Everything after the `MOTION` line: `rest` starts at the end of that line.
     pub(super) fn motion(&mut self, rest: &str, motion_line: usize) -> Result<Motion, ImportError> {
         let path = self.path;
-        let mut lines = rest.split('\n');
+        let mut lines = Lines::new(rest).map(|(_, line)| line);
         // What is left of the MOTION line itself (checked blank by the caller).
         lines.next();
         let mut line_no = motion_line;
         // The last line holding text, where a file that ends early is reported.
         let mut last_text_line = motion_line;
-        let mut header = |label: &str, expected: &str| {
+        let mut header = |label: &str, expected: &'static str| {
             for line in lines.by_ref() {
                 line_no += 1;
                 if !line.trim_ascii().is_empty() {
@@ -46,26 +46,18 @@ impl<'a> Parser<'a, '_> {
             }
             Err(ImportError::new(
                 Location::line(path, last_text_line),
-                Problem::Truncated(format!("the file ends where {expected} was expected")),
+                Problem::UnexpectedEnd { expected },
             ))
         };
         let (value, line, col) = header("frames", "`Frames: <count>`")?;
-        let frames_declared: usize = value.parse().map_err(|_| {
-            ImportError::syntax(
-                Location::line_column(path, line, col),
-                "a frame count (a whole number >= 0)",
-                value,
-            )
+        let frames_declared: usize = text::number(value, "frame count", || {
+            Location::line_column(path, line, col)
         })?;
         let (value, line, col) = header("frametime", "`Frame Time: <seconds>`")?;
-        let frame_time: f64 = value.parse().map_err(|_| {
-            ImportError::syntax(
-                Location::line_column(path, line, col),
-                "a frame time in seconds",
-                value,
-            )
+        let frame_time: f64 = text::number(value, "Frame Time", || {
+            Location::line_column(path, line, col)
         })?;
-        if !(frame_time.is_finite() && frame_time > 0.0) {
+        if frame_time <= 0.0 {
             return Err(ImportError::invalid(
                 Location::line_column(path, line, col),
                 format!("Frame Time {value} is not a number of seconds > 0"),
@@ -120,7 +112,7 @@ impl<'a> Parser<'a, '_> {
                         cut_off_line = Some(line_no);
                         break;
                     }
-                    return Err(bad.error(path, line_no, line, frame_count + 1, channels));
+                    return Err(bad.error(path, line_no, line, channels));
                 }
             }
         }
@@ -194,7 +186,7 @@ pub(super) fn frames_on_two_threads(
     let read = |text: &str, capacity: usize| -> Option<(Vec<f32>, usize)> {
         let mut values = Vec::with_capacity(capacity);
         let mut count = 0_usize;
-        for line in text.split('\n') {
+        for (_, line) in Lines::new(text) {
             if !line.trim_ascii().is_empty() {
                 frame_values(line, channels, &mut values).ok()?;
                 count += 1;
@@ -232,7 +224,7 @@ fn header_value<'l>(line: &'l str, label: &str) -> Result<(&'l str, usize), (usi
         .chars()
         .all(|l| key_chars.next().is_some_and(|k| k.eq_ignore_ascii_case(&l)))
         && key_chars.next().is_none();
-    let col = |s: &str| offset_in(line, s).map_or(1, |o| column(line, 0, o));
+    let col = |s: &str| column(line, s);
     if !label_matches || value.is_empty() || value.contains(|c: char| c.is_ascii_whitespace()) {
         return Err((col(trimmed), trimmed));
     }
@@ -263,31 +255,20 @@ impl BadFrame<'_> {
             }
     }
 
-    fn error(
-        &self,
-        path: &Path,
-        line_no: usize,
-        line: &str,
-        frame: usize,
-        channels: usize,
-    ) -> ImportError {
+    fn error(&self, path: &Path, line_no: usize, line: &str, channels: usize) -> ImportError {
         match self.bad {
             Some((token, _)) => {
-                let col = offset_in(line, token).map_or(1, |o| column(line, 0, o));
-                let location = Location::line_column(path, line_no, col);
-                match token.parse::<f32>() {
-                    Ok(_) => {
-                        ImportError::invalid(location, format!("{token} is not a finite number"))
-                    }
-                    Err(_) => ImportError::syntax(location, "a number", token),
-                }
+                let location = text::at(path, line_no, line, token);
+                let issue = f32::read(token)
+                    .err()
+                    .unwrap_or(text::NumberIssue::NotANumber);
+                text::number_error(location, "motion value", token, issue)
             }
-            None => ImportError::invalid(
+            None => ImportError::count(
                 Location::line(path, line_no),
-                format!(
-                    "frame {frame} has {} values, expected {channels} (one per channel)",
-                    self.tokens
-                ),
+                "values",
+                self.tokens,
+                format_args!("{channels} (one per channel)"),
             ),
         }
     }

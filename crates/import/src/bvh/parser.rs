@@ -5,10 +5,9 @@ use std::path::Path;
 
 use rigport_model::Warning;
 
-use crate::{number, ImportError, Location, Problem};
-
-use super::tokens::{column, Cursor, Token};
 use super::types::{BvhEndSite, BvhJoint};
+use crate::text::{self, Cursor, Token};
+use crate::{ImportError, Location, Problem};
 
 /// The parser: a cursor over the text and what has been read so far.
 pub(super) struct Parser<'a, 'p> {
@@ -24,7 +23,7 @@ pub(super) struct Parser<'a, 'p> {
 
 impl<'a> Parser<'a, '_> {
     pub(super) fn next(&mut self) -> Option<Token<'a>> {
-        let t = self.cur.next();
+        let t = self.cur.next_token();
         if let Some(t) = t {
             self.last_line = t.line;
         }
@@ -39,12 +38,12 @@ impl<'a> Parser<'a, '_> {
         t
     }
 
-    /// The next token, or a [`Problem::Truncated`] error naming what was expected.
-    pub(super) fn expect(&mut self, expected: &str) -> Result<Token<'a>, ImportError> {
+    /// The next token, or a [`Problem::UnexpectedEnd`] error naming what was expected.
+    pub(super) fn expect(&mut self, expected: &'static str) -> Result<Token<'a>, ImportError> {
         self.next().ok_or_else(|| {
             ImportError::new(
                 Location::line(self.path, self.last_line),
-                Problem::Truncated(format!("the file ends where {expected} was expected")),
+                Problem::UnexpectedEnd { expected },
             )
         })
     }
@@ -65,27 +64,20 @@ impl<'a> Parser<'a, '_> {
     }
 
     pub(super) fn at(&self, t: Token<'_>) -> Location {
-        Location::line_column(
-            self.path,
-            t.line,
-            column(self.cur.text, t.line_start, t.start),
-        )
+        self.cur.location(self.path, t)
     }
 
     pub(super) fn syntax(&self, t: Token<'_>, expected: &str) -> ImportError {
         ImportError::syntax(self.at(t), expected, t.text)
     }
 
-    /// A finite `f32`.
-    pub(super) fn number(&self, t: Token<'_>) -> Result<f32, ImportError> {
-        let v = number::parse_f32(t.text).ok_or_else(|| self.syntax(t, "a number"))?;
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(ImportError::invalid(
-                self.at(t),
-                format!("{} is not a finite number", t.text),
-            ))
-        }
+    /// A finite `f32`, `what` naming it in the error.
+    pub(super) fn number(&self, t: Token<'_>, what: &'static str) -> Result<f32, ImportError> {
+        text::number(t.text, what, || self.at(t))
     }
+}
+
+/// Whether `t` is the keyword `word` (ASCII case-insensitive).
+pub(super) fn keyword(t: Token<'_>, word: &str) -> bool {
+    t.text.eq_ignore_ascii_case(word)
 }

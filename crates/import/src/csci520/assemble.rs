@@ -104,10 +104,7 @@ pub(super) fn assemble(
         ik_handles: Vec::new(),
         ..Default::default()
     };
-    if let Err(errors) = asset.validate() {
-        let text: Vec<String> = errors.iter().map(ToString::to_string).collect();
-        return Err(ImportError::invalid(here(), text.join("; ")));
-    }
+    crate::check_asset(&asset, here)?;
     Ok(Assembled {
         asset,
         order,

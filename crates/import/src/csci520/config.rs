@@ -4,7 +4,7 @@ use std::path::Path;
 
 use rigport_model::Warning;
 
-use crate::{ImportError, Location};
+use crate::{ImportError, Location, Problem};
 
 use super::types::{ConfigEntry, SkinConfig};
 
@@ -32,8 +32,7 @@ pub fn parse_config(text: &str, path: &Path) -> Result<(SkinConfig, Vec<Warning>
     let mut pending: Option<(&str, usize)> = None;
     // Lower-case names seen, with their lines.
     let mut seen: Vec<(String, usize)> = Vec::new();
-    for (i, raw) in text.split('\n').enumerate() {
-        let line_no = i + 1;
+    for (line_no, raw) in crate::text::Lines::new(text) {
         let line = raw.trim_ascii();
         if line.is_empty() || line.starts_with('#') {
             continue;
@@ -59,9 +58,12 @@ pub fn parse_config(text: &str, path: &Path) -> Result<(SkinConfig, Vec<Warning>
             }
             let lower = name.to_ascii_lowercase();
             if let Some((_, first)) = seen.iter().find(|(n, _)| *n == lower) {
-                return Err(ImportError::invalid(
+                return Err(ImportError::new(
                     at(),
-                    format!("*{name} is given twice (first on line {first})"),
+                    Problem::Duplicate {
+                        what: format!("*{name}"),
+                        first_line: *first,
+                    },
                 ));
             }
             seen.push((lower, line_no));

@@ -4,6 +4,7 @@ use std::path::Path;
 
 use rigport_model::{parents_first_order, SkeletonProblem};
 
+use crate::text::{self, Lines};
 use crate::{ImportError, Location, Problem};
 
 /// Parses `jointHierarchy.txt`: entry `i` is joint `i`'s parent, `-1` for the root.
@@ -20,19 +21,19 @@ pub fn parse_hierarchy(text: &str, path: &Path) -> Result<Vec<Option<usize>>, Im
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut parents: Vec<Option<usize>> = Vec::new();
     let mut lines: Vec<usize> = Vec::new();
-    for (i, raw) in text.split('\n').enumerate() {
+    for (line_no, raw) in Lines::new(text) {
         let line = raw.trim_ascii();
         if line.starts_with('#') {
             continue;
         }
-        let at = || Location::line(path, i + 1);
+        let at = || Location::line(path, line_no);
         for token in line
             .split(|c: char| c.is_ascii_whitespace() || c == ',')
             .filter(|t| !t.is_empty())
         {
             let joint = parents.len();
-            let value: i64 = token.parse().map_err(|_| {
-                ImportError::syntax(at(), "a parent index (-1 for the root)", token)
+            let value: i64 = text::number(token, "parent index", || {
+                text::at(path, line_no, raw, token)
             })?;
             let parent = match value {
                 -1 => None,
@@ -44,7 +45,7 @@ pub fn parse_hierarchy(text: &str, path: &Path) -> Result<Vec<Option<usize>>, Im
                 })?),
             };
             parents.push(parent);
-            lines.push(i + 1);
+            lines.push(line_no);
         }
     }
     let count = parents.len();

@@ -7,6 +7,7 @@ use glam::{DQuat, DVec3, Vec3};
 use rigport_model::conventions::EulerOrder;
 use rigport_model::Transform;
 
+use crate::text::{self, Cursor, NumberIssue};
 use crate::{ImportError, Location, Problem};
 
 use super::types::RestTransforms;
@@ -39,7 +40,7 @@ pub fn parse_rest_transforms(
     let mut values: Vec<f64> = Vec::with_capacity(total.min(1 << 20));
     let mut last_line = 0;
     while values.len() < total {
-        let Some((token, line)) = cursor.token() else {
+        let Some(t) = cursor.next_token() else {
             if last_line == 0 {
                 return Err(ImportError::new(Location::file(path), Problem::Empty));
             }
@@ -51,31 +52,21 @@ pub fn parse_rest_transforms(
                 )),
             ));
         };
+        let (token, line) = (t.text, t.line);
         last_line = line;
         let k = values.len();
         let section = SECTIONS
             .get(k / per_section.max(1))
             .copied()
             .unwrap_or("value");
-        let joint = (k % per_section.max(1)) / 3;
-        let at = || Location::line(path, line);
-        let value: f64 = token.parse().map_err(|_| {
-            ImportError::syntax(
-                at(),
-                format!("a number ({section} of joint {joint})"),
-                token,
-            )
-        })?;
-        if !value.is_finite() {
-            return Err(ImportError::invalid(
-                at(),
-                format!("{section} {token} of joint {joint} is not finite"),
-            ));
-        }
+        let at = || cursor.location(path, t);
+        let value: f64 = text::number(token, section, at)?;
         if k < per_section && !(value as f32).is_finite() {
-            return Err(ImportError::invalid(
+            return Err(text::number_error(
                 at(),
-                format!("translation {token} of joint {joint} is too large for f32"),
+                section,
+                token,
+                NumberIssue::OutOfRange("f32"),
             ));
         }
         values.push(value);
@@ -95,13 +86,13 @@ pub fn parse_rest_transforms(
         rotate_orders: vec![EulerOrder::Xyz; joint_count],
         rotate_orders_given: false,
     };
-    cursor.skip_white_space();
-    if cursor.at_end() {
+    cursor.skip_space(true);
+    if cursor.pos >= text.len() {
         return Ok(rest);
     }
     rest.rotate_orders_given = true;
     for (joint, slot) in rest.rotate_orders.iter_mut().enumerate() {
-        let Some((token, line)) = cursor.three_chars() else {
+        let Some((token, line)) = three_chars(&mut cursor) else {
             return Err(ImportError::new(
                 Location::line(path, last_line),
                 Problem::Truncated(format!(
@@ -118,7 +109,8 @@ pub fn parse_rest_transforms(
             )
         })?;
     }
-    if let Some((token, line)) = cursor.token() {
+    if let Some(t) = cursor.next_token() {
+        let (token, line) = (t.text, t.line);
         return Err(ImportError::syntax(
             Location::line(path, line),
             format!("the end of the file after {joint_count} rotate orders"),
@@ -128,70 +120,31 @@ pub fn parse_rest_transforms(
     Ok(rest)
 }
 
-/// A position in a text that counts lines, for the stream-read rest transforms.
-struct Cursor<'a> {
-    text: &'a str,
-    pos: usize,
-    /// 1-based line of `pos`.
-    line: usize,
-}
-
-impl<'a> Cursor<'a> {
-    fn new(text: &'a str) -> Self {
-        Self {
-            text,
-            pos: 0,
-            line: 1,
+/// The next three characters after white space (fewer at the end of the text) and the
+/// line they start on; `None` at the end. The cursor moves past them, counting the line
+/// ends among them (LF, CRLF or a lone CR).
+fn three_chars<'a>(cursor: &mut Cursor<'a>) -> Option<(&'a str, usize)> {
+    cursor.skip_space(true);
+    let line = cursor.line;
+    let rest = cursor.text.get(cursor.pos..)?;
+    if rest.is_empty() {
+        return None;
+    }
+    let len = rest.char_indices().nth(3).map_or(rest.len(), |(i, _)| i);
+    let chars = rest.get(..len)?;
+    let bytes = cursor.text.as_bytes();
+    for (i, b) in chars.bytes().enumerate() {
+        let at = cursor.pos + i;
+        // A CR followed by LF ends one line, counted at the LF (which may come after
+        // the three characters, where the cursor counts it).
+        let lone_cr = b == b'\r' && bytes.get(at + 1) != Some(&b'\n');
+        if b == b'\n' || lone_cr {
+            cursor.line += 1;
+            cursor.line_start = at + 1;
         }
     }
-
-    fn at_end(&self) -> bool {
-        self.pos >= self.text.len()
-    }
-
-    fn skip_white_space(&mut self) {
-        while let Some(&b) = self.text.as_bytes().get(self.pos) {
-            if !b.is_ascii_whitespace() {
-                break;
-            }
-            if b == b'\n' {
-                self.line += 1;
-            }
-            self.pos += 1;
-        }
-    }
-
-    /// The next white-space-delimited token and its line.
-    fn token(&mut self) -> Option<(&'a str, usize)> {
-        self.skip_white_space();
-        let start = self.pos;
-        let bytes = self.text.as_bytes();
-        while bytes
-            .get(self.pos)
-            .is_some_and(|b| !b.is_ascii_whitespace())
-        {
-            self.pos += 1;
-        }
-        // Both ends are at an ASCII byte or the end: char boundaries.
-        let token = self.text.get(start..self.pos)?;
-        (!token.is_empty()).then_some((token, self.line))
-    }
-
-    /// The next three characters after white space (fewer at the end of the text) and the
-    /// line they start on; `None` at the end.
-    fn three_chars(&mut self) -> Option<(&'a str, usize)> {
-        self.skip_white_space();
-        let line = self.line;
-        let rest = self.text.get(self.pos..)?;
-        if rest.is_empty() {
-            return None;
-        }
-        let len = rest.char_indices().nth(3).map_or(rest.len(), |(i, _)| i);
-        let chars = rest.get(..len)?;
-        self.line += chars.bytes().filter(|&b| b == b'\n').count();
-        self.pos += len;
-        Some((chars, line))
-    }
+    cursor.pos += len;
+    Some((chars, line))
 }
 
 /// The rotation `R_xyz(joint_orient) · R_order(angles)` of the assignment's

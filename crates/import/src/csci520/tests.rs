@@ -226,7 +226,7 @@ fn hierarchy_parses_any_order_and_checks_the_tree() {
     assert_eq!(err(hierarchy(" \n")), "h.txt: the file is empty");
     assert_eq!(
         err(hierarchy("-1\n0 x\n")),
-        "h.txt:2: expected a parent index (-1 for the root), found \"x\""
+        "h.txt:2:3: parent index \"x\" is not a number"
     );
     assert_eq!(
         err(hierarchy("-1\n0\n-2\n")),
@@ -298,19 +298,19 @@ fn rest_transform_errors_name_the_line_and_token() {
     // The orders line where the joint orients should be.
     assert_eq!(
         err(rest("0 0 0 0 0 0\n0 0 0 0 0 0\nxyz xyz\n", 2)),
-        "r.txt:3: expected a number (joint orient of joint 0), found \"xyz\""
+        "r.txt:3:1: joint orient \"xyz\" is not a number"
     );
     assert_eq!(
         err(rest("0 0 0 0 0 0\n0 0 0 0 0 1,5\n", 2)),
-        "r.txt:2: expected a number (rest angle of joint 1), found \"1,5\""
+        "r.txt:2:11: rest angle \"1,5\" is not a number"
     );
     assert_eq!(
         err(rest("0 0 0\nNaN 0 0\n0 0 0\n", 1)),
-        "r.txt:2: rest angle NaN of joint 0 is not finite"
+        "r.txt:2:1: rest angle \"NaN\" is not finite"
     );
     assert_eq!(
         err(rest("0 1e39 0\n0 0 0\n0 0 0\n", 1)),
-        "r.txt:1: translation 1e39 of joint 0 is too large for f32"
+        "r.txt:1:3: translation \"1e39\" is out of range for f32"
     );
     assert_eq!(err(rest("\n\n", 1)), "r.txt: the file is empty");
 }
@@ -487,20 +487,20 @@ fn weight_errors_name_the_line() {
         );
     assert_eq!(
         err(weights("four 2\n", 4, 2)),
-        "w.txt:1: expected the row count, found \"four\""
+        "w.txt:1: row count \"four\" is not a number"
     );
     assert_eq!(
         err(weights("4\n", 4, 2)),
-        "w.txt:1: truncated: the header `rows cols` has no column count"
+        "w.txt:1: truncated: the file ends where the column count of the header `rows cols` was expected"
     );
     assert_eq!(err(weights("", 4, 2)), "w.txt: the file is empty");
     assert_eq!(
         err(weights("4 2\n0 0 1\n\n4 1 1\n", 4, 2)),
-        "w.txt:4: vertex index 4 is out of range: there are 4 vertexs (0..=3)"
+        "w.txt:4:1: vertex index 4 is out of range: there are 4 vertices"
     );
     assert_eq!(
         err(weights("4 2\n0 -1 1\n", 4, 2)),
-        "w.txt:2: joint index -1 is out of range: there are 2 joints (0..=1)"
+        "w.txt:2:3: joint index -1 is out of range: there are 2 joints"
     );
     assert_eq!(
         err(weights("4 2\n0 0 1\n1 1\n", 4, 2)),
@@ -508,15 +508,15 @@ fn weight_errors_name_the_line() {
     );
     assert_eq!(
         err(weights("4 2\n0 0.5 1\n", 4, 2)),
-        "w.txt:2: expected a joint index, found \"0.5\""
+        "w.txt:2:3: joint \"0.5\" is not a number"
     );
     assert_eq!(
         err(weights("4 2\n0 0 -0.5\n", 4, 2)),
-        "w.txt:2: weight -0.5 is negative"
+        "w.txt:2:5: weight -0.5 is negative"
     );
     assert_eq!(
         err(weights("4 2\n0 0 nan\n", 4, 2)),
-        "w.txt:2: weight nan is not finite"
+        "w.txt:2:5: weight \"nan\" is not finite"
     );
     assert_eq!(
         err(weights("4 2\n0 0 1e308\n0 1 1e308\n", 4, 2)),

@@ -4,6 +4,7 @@ use std::path::Path;
 
 use rigport_model::{Influence, Influences, Warning};
 
+use crate::text::{self, Lines};
 use crate::{exact_fields, ImportError, Location, Problem};
 
 /// A row of weights whose sum differs from 1 by more than this is renormalized with a
@@ -30,7 +31,7 @@ pub const ROW_SUM_TOLERANCE: f64 = 1e-4;
 /// on the header's line; an entry line without exactly 3 fields, an index that is not an
 /// integer or is out of range, a weight that does not parse or is NaN, infinite or
 /// negative; a row whose sum overflows (at its first entry). A file without the two
-/// header counts is [`Problem::Empty`] or [`Problem::Truncated`].
+/// header counts is [`Problem::Empty`] or [`Problem::UnexpectedEnd`].
 pub fn parse_weights(
     text: &str,
     path: &Path,
@@ -38,10 +39,8 @@ pub fn parse_weights(
     joint_count: usize,
 ) -> Result<(Influences, Vec<Warning>), ImportError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines = text
-        .split('\n')
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_ascii()))
+    let mut lines = Lines::new(text)
+        .map(|(n, l)| (n, l.trim_ascii()))
         .filter(|(_, l)| !l.is_empty());
 
     // Header: `rows cols` on one line or two.
@@ -52,7 +51,9 @@ pub fn parse_weights(
                 None => ImportError::new(Location::file(path), Problem::Empty),
                 Some(&(line, _)) => ImportError::new(
                     Location::line(path, line),
-                    Problem::Truncated("the header `rows cols` has no column count".into()),
+                    Problem::UnexpectedEnd {
+                        expected: "the column count of the header `rows cols`",
+                    },
                 ),
             });
         };
@@ -67,12 +68,15 @@ pub fn parse_weights(
             header.push((line_no, token));
         }
     }
-    let header_count = |index: usize, what: &str, expected: usize, source: &str| {
+    let header_count = |index: usize, what: &'static str, expected: usize, source: &str| {
         let (line, token) = header.get(index).copied().unwrap_or((0, ""));
         let at = || Location::line(path, line);
-        let value: i64 = token
-            .parse()
-            .map_err(|_| ImportError::syntax(at(), format!("the {what} count"), token))?;
+        let count = if index == 0 {
+            "row count"
+        } else {
+            "column count"
+        };
+        let value: i64 = text::number(token, count, at)?;
         if usize::try_from(value).ok() != Some(expected) {
             return Err(ImportError::invalid(
                 at(),
@@ -96,36 +100,35 @@ pub fn parse_weights(
                 line,
             ));
         };
-        let index = |token: &str, what: &str, count: usize| -> Result<u32, ImportError> {
-            let value: i64 = token
-                .parse()
-                .map_err(|_| ImportError::syntax(at(), format!("a {what} index"), token))?;
+        let at_token = |token: &str| text::at(path, line_no, line, token);
+        let index = |token: &str,
+                     (what, plural): (&'static str, &'static str),
+                     count: usize|
+         -> Result<u32, ImportError> {
+            let value: i64 = text::number(token, what, || at_token(token))?;
             match usize::try_from(value) {
                 Ok(v) if v < count => Ok(v as u32),
-                _ => Err(ImportError::invalid(
-                    at(),
-                    format!(
-                        "{what} index {value} is out of range: there are {count} {what}s (0..={})",
-                        count.saturating_sub(1)
-                    ),
+                _ => Err(ImportError::new(
+                    at_token(token),
+                    Problem::IndexOutOfRange {
+                        what,
+                        plural,
+                        index: value,
+                        count,
+                    },
                 )),
             }
         };
-        let vertex = index(vertex, "vertex", vertex_count)?;
-        let joint = index(joint, "joint", joint_count)?;
-        let value: f64 = weight
-            .parse()
-            .map_err(|_| ImportError::syntax(at(), "a weight", weight))?;
-        if !value.is_finite() {
-            return Err(ImportError::invalid(
-                at(),
-                format!("weight {weight} is not finite"),
-            ));
-        }
+        let vertex = index(vertex, ("vertex", "vertices"), vertex_count)?;
+        let joint = index(joint, ("joint", "joints"), joint_count)?;
+        let value: f64 = text::number(weight, "weight", || at_token(weight))?;
         if value < 0.0 {
-            return Err(ImportError::invalid(
-                at(),
-                format!("weight {weight} is negative"),
+            return Err(ImportError::new(
+                at_token(weight),
+                Problem::Negative {
+                    what: "weight",
+                    found: crate::error::shortened(weight),
+                },
             ));
         }
         if value > 0.0 {

@@ -272,16 +272,7 @@ impl<'a> Importer<'a> {
             materials,
             images,
         };
-        asset.validate().map_err(|problems| {
-            ImportError::invalid(
-                Location::file(self.path),
-                problems
-                    .iter()
-                    .map(ToString::to_string)
-                    .collect::<Vec<_>>()
-                    .join("; "),
-            )
-        })?;
+        crate::check_asset(&asset, || Location::file(self.path))?;
         Ok(asset)
     }
 }

@@ -197,16 +197,7 @@ impl<'l> Importer<'l, '_> {
             materials: looks.materials,
             images: looks.images,
         };
-        asset.validate().map_err(|problems| {
-            ImportError::invalid(
-                self.file(),
-                problems
-                    .iter()
-                    .map(ToString::to_string)
-                    .collect::<Vec<_>>()
-                    .join("; "),
-            )
-        })?;
+        crate::check_asset(&asset, || self.file())?;
         Ok(asset)
     }
 
