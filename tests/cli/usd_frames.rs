@@ -225,6 +225,18 @@ fn reality_converter_usdz_with_animated_transforms_play_in_glb_and_usda() {
         let stderr = rigport_ok(&["convert", s(cube), "-o", s(&glb)]);
         assert!(stderr.contains("1 clips"), "{stderr}");
         assert!(!stderr.contains("default time is used"), "{stderr}");
+        // In USD the mesh keeps its own animated xformOps, as in the source.
+        let usda = dir.path().join("cube.usda");
+        rigport_ok(&["convert", s(cube), "-o", s(&usda), "--quiet"]);
+        let text = std::fs::read_to_string(&usda).unwrap();
+        assert!(
+            text.contains("quatf xformOp:orient.timeSamples = {"),
+            "{text}"
+        );
+        assert!(
+            !text.contains("jointIndices"),
+            "not a rigid binding: {text}"
+        );
     }
     measure_all(&sources, 1e-6, 1e-5);
 }
