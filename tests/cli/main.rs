@@ -36,6 +36,7 @@ mod skinning;
 mod three;
 mod usd;
 mod usd_blendshapes;
+mod usd_frames;
 mod usd_import;
 mod usd_root_motion;
 mod usd_topology;

@@ -20,6 +20,10 @@ pub(super) struct MeshPlan {
     pub(super) channels: Vec<String>,
     /// The morph targets go out as `points.timeSamples` ([`super::UsdOptions::morphs_as_points`]).
     pub(super) points_cache: bool,
+    /// The joint whose transform the Mesh prim carries as its own `xformOp`s (time-sampled
+    /// from the first clip), instead of a rigid binding: a mesh attached to a root joint
+    /// that nothing else uses (a USD source's animated static mesh, a glTF node animation).
+    pub(super) xform_joint: Option<usize>,
 }
 
 /// What [`write_mesh`] needs besides the mesh.
@@ -134,6 +138,9 @@ pub(super) fn write_mesh(
     doc.end();
     if plan.points_cache {
         write_point_samples(doc, mi, mesh, ctx);
+    }
+    if let Some(joint) = plan.xform_joint {
+        write_xform_ops(doc, asset, joint, ctx);
     }
 
     // The dump of `rigport eval` lists vertices by source vertex; say how points map to
@@ -485,4 +492,91 @@ pub(crate) fn mesh_prim_source_name(mesh: &rigport_model::Mesh) -> &str {
     } else {
         &mesh.node_name
     }
+}
+
+/// `xformOp:translate`, `xformOp:orient` and `xformOp:scale` of a Mesh prim that carries
+/// joint `joint`'s local transform: the rest value as default, and where the first clip
+/// animates the joint, time samples at the clip's time codes (rotations unit and
+/// sign-continuous; USD slerps `quatf` between samples as glTF LINEAR does).
+fn write_xform_ops(doc: &mut Usda, asset: &Asset, joint: usize, ctx: &MeshContext<'_>) {
+    use rigport_model::{JointIndex, TrackTarget};
+    let Some(rest) = asset.skeleton.joints().get(joint).map(|j| j.rest_local) else {
+        return;
+    };
+    let j = JointIndex(joint as u32);
+    let track = |target: TrackTarget| {
+        ctx.cache_clip.and_then(|(clip, times)| {
+            Some((clip.tracks.iter().find(|t| t.target == target)?, times))
+        })
+    };
+    let unit = |q: [f64; 4]| {
+        let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+        if n > 0.0 {
+            q.map(|c| (c / n) as f32)
+        } else {
+            [0.0, 0.0, 0.0, 1.0]
+        }
+    };
+    // (name, type, rest value as written, track, components)
+    let r = rest.rotation.to_array();
+    let ops: [(&str, &str, Vec<f32>, Option<_>); 3] = [
+        (
+            "xformOp:translate",
+            "float3",
+            rest.translation.to_array().to_vec(),
+            track(TrackTarget::Translation(j)),
+        ),
+        (
+            "xformOp:orient",
+            "quatf",
+            vec![r[3], r[0], r[1], r[2]],
+            track(TrackTarget::Rotation(j)),
+        ),
+        (
+            "xformOp:scale",
+            "float3",
+            rest.scale.to_array().to_vec(),
+            track(TrackTarget::Scale(j)),
+        ),
+    ];
+    for (name, ty, value, sampled) in ops {
+        let line = doc.start();
+        line.push_str(ty);
+        line.push(' ');
+        line.push_str(name);
+        line.push_str(" = ");
+        tuple(line, &value);
+        doc.end();
+        let Some((track, times)) = sampled else {
+            continue;
+        };
+        let sampler = super::sampler::Sampler::new(track);
+        let mut out = [0.0f64; 4];
+        let mut prev: Option<[f32; 4]> = None;
+        doc.line(&format!("{ty} {name}.timeSamples = {{"));
+        for &(tc, seconds) in times {
+            sampler.sample(seconds, &mut out);
+            let value: Vec<f32> = if name == "xformOp:orient" {
+                let mut q = unit([out[0], out[1], out[2], out[3]]);
+                if let Some(p) = prev {
+                    if p.iter().zip(&q).map(|(a, b)| a * b).sum::<f32>() < 0.0 {
+                        q = q.map(|c| -c);
+                    }
+                }
+                prev = Some(q);
+                vec![q[3], q[0], q[1], q[2]]
+            } else {
+                out[..3].iter().map(|&v| v as f32).collect()
+            };
+            let line = doc.start();
+            line.push_str("    ");
+            put(line, tc);
+            line.push_str(": ");
+            tuple(line, &value);
+            line.push(',');
+            doc.end();
+        }
+        doc.line("}");
+    }
+    doc.line("uniform token[] xformOpOrder = [\"xformOp:translate\", \"xformOp:orient\", \"xformOp:scale\"]");
 }

@@ -69,7 +69,12 @@
 //! - attached to a joint ([`Mesh::attached_to`](rigport_model::Mesh::attached_to)): points
 //!   stay in the joint's space, a rigid binding (`jointIndices = [j]`, `jointWeights =
 //!   [1]`, constant interpolation, `elementSize = 1`) with `geomBindTransform` = the
-//!   joint's bind matrix, so the mesh follows the joint exactly;
+//!   joint's bind matrix, so the mesh follows the joint exactly; except when that joint
+//!   is a root without children that no skin uses and the asset has at most one clip (a
+//!   USD source's animated static mesh, a glTF node animation): then the Mesh prim is not
+//!   bound and carries the joint's transform as its own `xformOp:translate` / `orient` /
+//!   `scale`, time-sampled at the clip's time codes (the joint stays in the Skeleton,
+//!   driving nothing);
 //! - morph targets: `BlendShape` children (`offsets`, `normalOffsets`, `pointIndices` when
 //!   sparse), `skel:blendShapes` / `skel:blendShapeTargets`; an unskinned mesh with morph
 //!   targets is bound for its blend shapes only. A USD source's inbetweens arrive as

@@ -113,6 +113,7 @@ pub(crate) fn build(
     for (si, skin) in asset.skins.iter().enumerate() {
         skin_of_mesh.entry(skin.mesh.get()).or_insert(si);
     }
+    let xform_joints = xform_joints(asset);
     let mut mesh_renames = Renames::default();
     let mut channel_ns = Namespace::default();
     let mut plans = Vec::with_capacity(asset.meshes.len());
@@ -133,6 +134,9 @@ pub(crate) fn build(
                     skeleton,
                     geom_bind,
                 }
+            }
+            (None, Some(j)) if xform_joints.contains(&j.get()) && mesh.morph_targets.is_empty() => {
+                Binding::None
             }
             (None, Some(j)) => Binding::Rigid { joint: j.get() },
             (None, None) if points_cache => Binding::None,
@@ -158,8 +162,13 @@ pub(crate) fn build(
             shapes.push(shape);
             channels.push(channel);
         }
+        let xform_joint = match (&binding, mesh.attached_to) {
+            (Binding::None, Some(j)) => Some(j.get()),
+            _ => None,
+        };
         plans.push(MeshPlan {
             prim,
+            xform_joint,
             binding,
             shapes,
             channels,
@@ -471,4 +480,40 @@ pub(crate) fn build(
     }
     doc.close();
     Ok((doc.finish(), warnings))
+}
+
+/// Joints a rigidly attached mesh carries as its own `xformOp`s instead of a binding: root
+/// joints without children that no skin uses and no other joint hangs from, with at most
+/// one clip (time samples cannot differ per clip variant). Such a joint is the transform of
+/// a static mesh in the source (a USD prim's animated xformOps, a glTF node animation);
+/// it stays in the Skeleton, where it drives nothing.
+fn xform_joints(asset: &Asset) -> std::collections::BTreeSet<usize> {
+    let mut out = std::collections::BTreeSet::new();
+    if asset.clips.len() > 1 {
+        return out;
+    }
+    let joints = asset.skeleton.joints();
+    let mut has_child = vec![false; joints.len()];
+    for j in joints {
+        if let Some(p) = j.parent {
+            if let Some(slot) = has_child.get_mut(p.get()) {
+                *slot = true;
+            }
+        }
+    }
+    let in_skin = |j: usize| {
+        asset
+            .skins
+            .iter()
+            .any(|s| s.joints.iter().any(|x| x.get() == j))
+    };
+    for mesh in &asset.meshes {
+        if let Some(j) = mesh.attached_to.map(|j| j.get()) {
+            let root = joints.get(j).is_some_and(|x| x.parent.is_none());
+            if root && !has_child[j] && !in_skin(j) {
+                out.insert(j);
+            }
+        }
+    }
+    out
 }

@@ -5,6 +5,7 @@ use rigport_model::{Asset, MeshIndex, SceneFrame, Skeleton};
 
 use super::implicit::is_implicit;
 use super::importer::Importer;
+use super::root_motion::MovingMesh;
 use super::shapes::MeshShapes;
 use super::skin::has_skin_primvars;
 use crate::ImportError;
@@ -87,7 +88,7 @@ impl<'l> Importer<'l, '_> {
             );
         }
 
-        let (skeleton, skel) = match chosen {
+        let (mut skeleton, skel) = match chosen {
             Some(s) => {
                 let (skeleton, data) = self.skeleton(s)?;
                 (skeleton, Some((s, data)))
@@ -113,6 +114,7 @@ impl<'l> Importer<'l, '_> {
         let looks = self.materials();
         let mut meshes = Vec::new();
         let mut skins = Vec::new();
+        let mut moving = Vec::new();
         for i in 0..self.stage.prims.len() {
             let Some(prim) = self.stage.prims.get(i) else {
                 continue;
@@ -142,7 +144,7 @@ impl<'l> Importer<'l, '_> {
                 (Some(_), _) => continue, // bound to another skeleton: warned above
                 (None, _) => None,
             };
-            if let Some((mut mesh, skin, channels)) = self.mesh(i, skin_to)? {
+            if let Some((mut mesh, skin, channels, animated)) = self.mesh(i, skin_to)? {
                 mesh.material = self.stage.prims.get(i).and_then(|p| looks.bound(p));
                 let index = MeshIndex(meshes.len() as u32);
                 if !channels.is_empty() {
@@ -153,6 +155,13 @@ impl<'l> Importer<'l, '_> {
                     });
                 }
                 meshes.push(mesh);
+                if !animated.is_empty() {
+                    moving.push(MovingMesh {
+                        mesh: index,
+                        prim: i,
+                        animated,
+                    });
+                }
                 if let Some(mut skin) = skin {
                     skin.mesh = index;
                     skins.push(skin);
@@ -177,6 +186,8 @@ impl<'l> Importer<'l, '_> {
                 ),
             );
         }
+
+        self.moving_meshes(&mut skeleton, &mut meshes, &mut clips, &moving)?;
 
         let asset = Asset {
             frame: SceneFrame {

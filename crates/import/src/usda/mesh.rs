@@ -17,8 +17,10 @@ use super::values::{self, is_half_type, matrix, numbers, round_to_half, token, t
 use super::xform::usd_matrix;
 use crate::ImportError;
 
-/// A mesh, its skin when bound, and its blend-shape channels.
-pub(super) type ImportedMesh = (Mesh, Option<SkinBinding>, Vec<Channel>);
+/// A mesh, its skin when bound, its blend-shape channels, and for a static mesh under
+/// time-sampled transforms the prims whose ops are animated (its points are then in the
+/// prim's own space: `root_motion.rs` attaches it to a joint that carries the motion).
+pub(super) type ImportedMesh = (Mesh, Option<SkinBinding>, Vec<Channel>, Vec<String>);
 
 impl<'l> Importer<'l, '_> {
     /// A primvar of `N`-tuples (`N = 1` reads plain numbers) with its indices.
@@ -478,24 +480,21 @@ impl<'l> Importer<'l, '_> {
         // Blend-shape offsets are in the points' space: deltas take the linear part of
         // whatever moves the points (geomBindTransform, or the static mesh's transform).
         let mut linear = DMat3::from_mat4(geom_bind);
+        let mut moving = Vec::new();
         let skin = match skel {
             Some(skel) => Some(self.skin(index, skel, n_points, &mesh.source_vertex)?),
             None => {
                 // UsdSkel ignores a skinned mesh's own transform; a static mesh keeps it:
                 // its points go to model space (the skeleton's), which the scene frame
-                // places in the stage.
+                // places in the stage. Under time-sampled transforms they stay in the
+                // prim's own space, and a joint carries the motion (`root_motion.rs`).
                 let (world, animated) = self.world(index)?;
-                if !animated.is_empty() {
-                    self.incomplete(
-                        &path,
-                        format!(
-                            "a static mesh under time-sampled transforms (xformOp) on {}: \
-                             their value at the default time is used",
-                            animated.join(", ")
-                        ),
-                    );
-                }
-                let m = self.skel_world.inverse() * world;
+                let m = if animated.is_empty() {
+                    self.skel_world.inverse() * world
+                } else {
+                    moving = animated;
+                    DMat4::IDENTITY
+                };
                 linear = DMat3::from_mat4(m);
                 if m != DMat4::IDENTITY {
                     for p in &mut mesh.positions {
@@ -527,7 +526,7 @@ impl<'l> Importer<'l, '_> {
             },
         )?;
         mesh.morph_targets = targets;
-        Ok(Some((mesh, skin, channels)))
+        Ok(Some((mesh, skin, channels, moving)))
     }
 
     // -----------------------------------------------------------------------------------

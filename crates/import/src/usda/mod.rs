@@ -42,7 +42,9 @@
 //!   become root motion, tracks of the root joints sampled at every time code between
 //!   the ops' samples, in every clip (a clip of their own without a SkelAnimation; see
 //!   `root_motion.rs`), with a [`Warning::Note`]. A static mesh under time-sampled ops
-//!   keeps their default-time value, with a [`Warning::Incomplete`].
+//!   keeps its points in its own space and is attached to a root joint of its own, named
+//!   after it, whose tracks are its transform in model space, sampled the same way (a
+//!   clip of their own when there is no SkelAnimation), with a [`Warning::Note`].
 //! - **Weights** are kept as authored, as UsdSkel skins with them (it does not normalize):
 //!   zero weights are dropped, a joint listed twice for a point is merged, and rows that do
 //!   not sum to 1 get a [`Warning::Note`].

@@ -10,14 +10,32 @@
 //! and rotate ops animated together move the joint on a curve USD would sample the same
 //! way only at the frames). Every clip gets it; without a SkelAnimation it is a clip of its
 //! own, named after the prim whose transforms are animated.
+//!
+//! A static (unskinned) mesh under time-sampled ops (Reality Converter's `AnimatedCube`,
+//! `BoxAnimated`) gets a root joint of its own, named after the mesh prim, whose rest is
+//! the prim's transform in model space at the default time (`M0⁻¹ · W`) and whose tracks
+//! are `M0⁻¹ · W(t)`, sampled at the same times as root motion; the mesh is attached to it
+//! with its points in the prim's own space. glTF then plays it as node animation and USD
+//! through a rigid binding.
 
 use glam::{DMat4, DQuat, DVec3};
 use rigport_model::glam::{Quat, Vec3};
-use rigport_model::{Clip, Interpolation, JointIndex, Skeleton, Track, TrackTarget};
+use rigport_model::{
+    Clip, Interpolation, Joint, JointIndex, Mesh, MeshIndex, Skeleton, Track, TrackTarget,
+};
 
 use super::importer::Importer;
+use super::skeleton::{matches_trs, trs_of};
 use super::xform;
 use crate::ImportError;
+
+/// A static mesh under time-sampled transforms: its index in the asset, its prim, and the
+/// prims whose ops are animated.
+pub(super) struct MovingMesh {
+    pub(super) mesh: MeshIndex,
+    pub(super) prim: usize,
+    pub(super) animated: Vec<String>,
+}
 
 /// Most samples of root motion one clip may get (one per integer time code): a stage
 /// whose transforms span more time codes is sampled at their own samples only.
@@ -47,6 +65,35 @@ fn sample(track: &Track, t: f32) -> Vec<f32> {
         return qa.slerp(qb, u).to_array().to_vec();
     }
     a.iter().zip(b).map(|(x, y)| x + (y - x) * u).collect()
+}
+
+/// Scales a mesh's points and morph deltas by `scale` (per axis, in its own space), its
+/// normals and normal deltas by the inverse transpose; a mirroring scale flips the winding.
+fn scale_mesh(mesh: &mut Mesh, scale: Vec3) {
+    for p in &mut mesh.positions {
+        *p *= scale;
+    }
+    let inverse = scale.recip();
+    if let Some(normals) = &mut mesh.normals {
+        for n in normals {
+            *n = (*n * inverse).normalize_or_zero();
+        }
+    }
+    for target in &mut mesh.morph_targets {
+        for d in &mut target.position_deltas {
+            *d *= scale;
+        }
+        if let Some(deltas) = &mut target.normal_deltas {
+            for d in deltas {
+                *d *= inverse;
+            }
+        }
+    }
+    if scale.x * scale.y * scale.z < 0.0 {
+        for t in &mut mesh.triangles {
+            t.swap(1, 2);
+        }
+    }
 }
 
 impl<'l> Importer<'l, '_> {
@@ -90,6 +137,166 @@ impl<'l> Importer<'l, '_> {
         times
     }
 
+    /// The time codes transforms of prim `index` are sampled at: every `xformOp` sample on
+    /// it and its ancestors and every integer time code between the first and the last
+    /// (unless there are more than [`MAX_FRAMES`]); empty when nothing is time-sampled.
+    fn xform_times(&self, index: usize) -> Vec<f64> {
+        let samples = self.xform_sample_times(index);
+        let (Some(&first), Some(&last)) = (samples.first(), samples.last()) else {
+            return Vec::new();
+        };
+        let mut times = samples.clone();
+        if last - first <= MAX_FRAMES {
+            let mut tc = first.ceil();
+            while tc < last {
+                times.push(tc);
+                tc += 1.0;
+            }
+        }
+        times
+    }
+
+    /// Attaches every static mesh of `moving` to a new root joint carrying its animated
+    /// transforms (see the module doc), added to every clip (a clip of its own, named after
+    /// the first animated prim, when there is none).
+    pub(super) fn moving_meshes(
+        &mut self,
+        skeleton: &mut Skeleton,
+        meshes: &mut [Mesh],
+        clips: &mut Vec<Clip>,
+        moving: &[MovingMesh],
+    ) -> Result<(), ImportError> {
+        if moving.is_empty() {
+            return Ok(());
+        }
+        let mut joints = skeleton.joints().to_vec();
+        let limits = skeleton.limits().to_vec();
+        let inverse_m0 = self.skel_world.inverse();
+        let mut tracks = Vec::new();
+        for m in moving {
+            let prim = self.prim(m.prim).clone();
+            let mut name = prim.name.to_string();
+            let mut k = 1;
+            while joints.iter().any(|j| j.name == name) {
+                k += 1;
+                name = format!("{}_{k}", prim.name);
+            }
+            let joint = JointIndex(joints.len() as u32);
+            let rest = inverse_m0 * self.world_at(m.prim, None)?;
+            let mut rest_trs = trs_of(&rest);
+            let mut out = [Vec::new(), Vec::new(), Vec::new()];
+            let mut seconds = Vec::new();
+            let mut prev: Option<Quat> = None;
+            let mut sheared = !matches_trs(&rest, &trs_of(&rest));
+            let mut times = self.xform_times(m.prim);
+            times.sort_by(f64::total_cmp);
+            times.dedup_by(|a, b| ((*a / self.tcps) as f32) == ((*b / self.tcps) as f32));
+            let mut samples = Vec::with_capacity(times.len());
+            for &tc in &times {
+                let local = inverse_m0 * self.world_at(m.prim, Some(tc))?;
+                let trs = trs_of(&local);
+                sheared |= !matches_trs(&local, &trs);
+                samples.push(trs);
+            }
+            // A scale that does not change over time (the skeleton's space is often scaled
+            // against the mesh's: a centimetre stage's `scale 100`) goes into the points,
+            // so the joint's scale is 1 (SkelAnimation scales are half precision).
+            let fixed = rest_trs.scale;
+            let constant = samples
+                .iter()
+                .all(|t| (t.scale - fixed).abs().max_element() <= 1e-6 * fixed.abs().max_element());
+            if constant && fixed != Vec3::ONE && fixed.min_element().abs() > 0.0 {
+                if let Some(mesh) = meshes.get_mut(m.mesh.get()) {
+                    scale_mesh(mesh, fixed);
+                }
+                rest_trs.scale = Vec3::ONE;
+                for t in &mut samples {
+                    t.scale = Vec3::ONE;
+                }
+            }
+            joints.push(Joint {
+                name: name.clone(),
+                parent: None,
+                rest_local: rest_trs,
+            });
+            for (trs, &tc) in samples.iter().zip(&times) {
+                let mut q = trs.rotation;
+                if prev.is_some_and(|p| p.dot(q) < 0.0) {
+                    q = -q;
+                }
+                prev = Some(q);
+                out[0].extend(trs.translation.to_array());
+                out[1].extend(q.to_array());
+                out[2].extend(trs.scale.to_array());
+                seconds.push((tc / self.tcps) as f32);
+            }
+            for (target, values) in [
+                TrackTarget::Translation(joint),
+                TrackTarget::Rotation(joint),
+                TrackTarget::Scale(joint),
+            ]
+            .into_iter()
+            .zip(out)
+            {
+                tracks.push(Track {
+                    target,
+                    interpolation: Interpolation::Linear,
+                    times: seconds.clone(),
+                    values,
+                });
+            }
+            if let Some(mesh) = meshes.get_mut(m.mesh.get()) {
+                mesh.attached_to = Some(joint);
+                mesh.node_name = name.clone();
+            }
+            let path = prim.path.clone();
+            self.note(
+                &path,
+                format!(
+                    "a static mesh under time-sampled transforms (xformOp) on {}: attached to \
+                     a joint {name:?} that carries them (sampled at every time code between \
+                     their samples)",
+                    m.animated.join(", ")
+                ),
+            );
+            if sheared {
+                self.repaired(
+                    &path,
+                    "its transform has shear, which a joint's translation, rotation and scale \
+                     cannot hold: the shear is lost",
+                );
+            }
+        }
+        let mut built = Skeleton::new(joints).map_err(|problems| {
+            self.err(
+                &self.prim(moving[0].prim).path,
+                problems
+                    .iter()
+                    .map(ToString::to_string)
+                    .collect::<Vec<_>>()
+                    .join("; "),
+            )
+        })?;
+        built.set_limits(limits);
+        *skeleton = built;
+        if clips.is_empty() {
+            let name = moving[0]
+                .animated
+                .first()
+                .and_then(|p| p.trim_matches(['<', '>']).rsplit('/').next())
+                .unwrap_or("xform")
+                .to_string();
+            clips.push(Clip {
+                name,
+                tracks: Vec::new(),
+            });
+        }
+        for clip in clips.iter_mut() {
+            clip.tracks.extend(tracks.iter().cloned());
+        }
+        Ok(())
+    }
+
     /// Adds the animated transforms above Skeleton prim `skel_index` to every clip as root
     /// motion (see the module doc); `name` names the clip made when there is none.
     pub(super) fn root_motion(
@@ -99,17 +306,9 @@ impl<'l> Importer<'l, '_> {
         clips: &mut Vec<Clip>,
         name: &str,
     ) -> Result<(), ImportError> {
-        let samples = self.xform_sample_times(skel_index);
-        let (Some(&first), Some(&last)) = (samples.first(), samples.last()) else {
+        let xform_times = self.xform_times(skel_index);
+        if xform_times.is_empty() {
             return Ok(());
-        };
-        let mut xform_times = samples.clone();
-        if last - first <= MAX_FRAMES {
-            let mut tc = first.ceil();
-            while tc < last {
-                xform_times.push(tc);
-                tc += 1.0;
-            }
         }
         let inverse_m0 = self.skel_world.inverse();
         let roots: Vec<usize> = skeleton

@@ -16,7 +16,7 @@ use crate::{ImportError, Problem};
 const MATRIX_TOLERANCE: f64 = 1e-5;
 
 /// A matrix as TRS (shear is lost).
-fn trs_of(m: &DMat4) -> Transform {
+pub(super) fn trs_of(m: &DMat4) -> Transform {
     let (scale, rotation, translation) = m.to_scale_rotation_translation();
     Transform {
         translation: translation.as_vec3(),
@@ -26,7 +26,7 @@ fn trs_of(m: &DMat4) -> Transform {
 }
 
 /// Whether `t` reproduces `m` (no shear lost).
-fn matches_trs(m: &DMat4, t: &Transform) -> bool {
+pub(super) fn matches_trs(m: &DMat4, t: &Transform) -> bool {
     let back = t.to_mat4().as_dmat4();
     let scale = DMat3::from_mat4(*m)
         .to_cols_array()

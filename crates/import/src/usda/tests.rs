@@ -559,7 +559,10 @@ fn transforms_above_the_skeleton_become_the_scene_frame() {
     let deg = f64::to_radians;
     // rotateXYZ: X first, then Y, then Z.
     let rot = DQuat::from_rotation_z(deg(30.0)) * DQuat::from_rotation_x(deg(90.0));
-    let orient = DQuat::from_xyzw(0.0, 0.70710677, 0.0, 0.70710677).normalize();
+    // `orient` as USD evaluates it (`GfRotation(quat)`): the angle 2 acos(w) about the
+    // imaginary part's direction; the f32 value 0.70710677 is not exactly sqrt(1/2), so it
+    // turns 3.4e-8 rad more than the normalized quaternion does (usd-core agrees).
+    let orient = DQuat::from_axis_angle(DVec3::Y, 2.0 * f64::from(0.70710677_f32).acos());
     let expect = DMat4::from_scale(DVec3::splat(100.0))
         * DMat4::from_translation(DVec3::new(0.5, 0.0, 0.0))
         * DMat4::from_quat(rot)
@@ -648,5 +651,63 @@ fn results_that_differ_from_usdskel_are_warnings_not_notes() {
             if message.contains("SkelBindingAPI"))),
         "{:?}",
         imported.warnings
+    );
+}
+
+#[test]
+fn a_static_mesh_under_animated_transforms_rides_a_joint_of_its_own() {
+    // Reality Converter's AnimatedTriangle: a non-unit orient (0.707, 0, 0, 0.707)
+    // time-sampled on the mesh itself. usd-core (26.x) gives, at time code 3, the slerp
+    // (0.92385066, 0, 0, 0.38263762) and a matrix whose first row is (0.707, 0.707213, 0):
+    // GfSlerp on the components as authored, then GfRotation's angle 2 acos(w).
+    let text = r#"#usda 1.0
+(
+    timeCodesPerSecond = 24
+    upAxis = "Y"
+    metersPerUnit = 1
+)
+def Xform "Root"
+{
+    def Mesh "Tri"
+    {
+        int[] faceVertexCounts = [3]
+        int[] faceVertexIndices = [0, 1, 2]
+        point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+        quatf xformOp:orient.timeSamples = {
+            0: (1, 0, 0, 0),
+            6: (0.707, 0, 0, 0.707),
+        }
+        uniform token[] xformOpOrder = ["xformOp:orient"]
+    }
+}
+"#;
+    let imported = ok(text, "tri.usda");
+    let a = &imported.asset;
+    assert_eq!(a.skeleton.len(), 1, "one joint carries the mesh's motion");
+    assert_eq!(a.skeleton.joints()[0].name, "Tri");
+    assert_eq!(a.meshes[0].attached_to, Some(JointIndex(0)));
+    assert_eq!(
+        a.meshes[0].positions[1],
+        Vec3::X,
+        "points stay in the prim's space"
+    );
+    let clip = &a.clips[0];
+    let rot = clip
+        .tracks
+        .iter()
+        .find(|t| t.target == rigport_model::TrackTarget::Rotation(JointIndex(0)))
+        .unwrap();
+    // Keys at every time code 0..=6.
+    assert_eq!(rot.times.len(), 7);
+    assert!((rot.times[3] - 3.0 / 24.0).abs() < 1e-7);
+    let q = Quat::from_slice(rot.key_value(3));
+    let m = glam::Mat3::from_quat(q);
+    // USD's row 0 is the image of +X: (0.707, 0.707213, 0).
+    assert!((m.x_axis.x - 0.707).abs() < 1e-6, "{m}");
+    assert!((m.x_axis.y - 0.707213).abs() < 1e-6, "{m}");
+    let text: Vec<String> = imported.warnings.iter().map(ToString::to_string).collect();
+    assert!(
+        !text.iter().any(|w| w.contains("default time")),
+        "the motion is kept: {text:?}"
     );
 }

@@ -34,9 +34,9 @@ pub(super) struct Local {
 }
 
 /// The value of an op attribute at `time` (time code; `None`: the default value, else the
-/// first sample). Between samples: linear interpolation of numbers (USD interpolates
-/// `double3`, `float`, matrices component-wise and quaternions by slerp; the difference for
-/// quaternions is handled by the caller normalizing).
+/// first sample). Between samples: linear interpolation of numbers, as USD interpolates
+/// `double3`, `float` and matrices component-wise; quaternions are slerped by the caller
+/// ([`Sampled::quat`]), as USD's `GfSlerp`.
 fn value_at<'l>(prop: &Prop<'l>, time: Option<f64>) -> Option<Sampled<'l>> {
     let samples = prop.samples.as_ref().filter(|s| !s.is_empty());
     match (time, samples) {
@@ -86,6 +86,53 @@ impl Sampled<'_> {
     }
 }
 
+impl Sampled<'_> {
+    /// A quaternion value `(w, x, y, z)` as written; between samples `GfSlerp` (OpenUSD
+    /// `pxr/base/gf/quat.template.cpp`, what `Usd_Lerp` uses for quaternions): the
+    /// shorter arc, on the components as authored (not normalized), linear within 1e-5.
+    fn quat(&self) -> Option<[f64; 4]> {
+        match self {
+            Sampled::One(v) => tuple::<4>(v),
+            Sampled::Mix(a, b, u) => {
+                let (a, b) = (tuple::<4>(a)?, tuple::<4>(b)?);
+                let mut cos = (0..4).map(|k| a[k] * b[k]).sum::<f64>();
+                let flip = cos < 0.0;
+                if flip {
+                    cos = -cos;
+                }
+                let (s0, mut s1) = if 1.0 - cos > 1e-5 {
+                    let theta = cos.acos();
+                    let sin = theta.sin();
+                    (((1.0 - u) * theta).sin() / sin, (u * theta).sin() / sin)
+                } else {
+                    (1.0 - u, *u)
+                };
+                if flip {
+                    s1 = -s1;
+                }
+                Some(std::array::from_fn(|k| s0 * a[k] + s1 * b[k]))
+            }
+        }
+    }
+}
+
+/// The rotation of an `orient` value `(w, x, y, z)` as `UsdGeomXformOp` makes it: a unit
+/// quaternion as is; otherwise through `GfRotation(quat)`, i.e. the angle `2 acos(w)`
+/// about the normalized imaginary part (not the normalized quaternion: Reality Converter
+/// writes `(0.707, 0, 0, 0.707)`, which USD turns by 90.017°).
+fn orient_rotation([w, x, y, z]: [f64; 4]) -> DQuat {
+    let q = DQuat::from_xyzw(x, y, z, w);
+    if (q.length_squared() - 1.0).abs() <= 1e-9 {
+        return q.normalize();
+    }
+    let axis = DVec3::new(x, y, z);
+    let len = axis.length();
+    if len <= 1e-10 {
+        return DQuat::IDENTITY;
+    }
+    DQuat::from_axis_angle(axis / len, 2.0 * w.clamp(-1.0, 1.0).acos())
+}
+
 fn flat_matrix(v: &Value) -> Option<[f64; 16]> {
     let m = matrix(v)?;
     let mut out = [0.0; 16];
@@ -122,10 +169,7 @@ fn op_matrix(prim: &Prim<'_>, name: &str, time: Option<f64>) -> Result<DMat4, St
             let [deg] = v.map(|x| number(x).map(|n| [n])).ok_or_else(bad)?;
             DMat4::from_quat(axis_rotation(kind.chars().last().unwrap_or('X'), deg))
         }
-        "orient" => {
-            let [w, x, y, z] = v.map(tuple::<4>).ok_or_else(bad)?;
-            DMat4::from_quat(DQuat::from_xyzw(x, y, z, w).normalize())
-        }
+        "orient" => DMat4::from_quat(orient_rotation(v.quat().ok_or_else(bad)?)),
         "transform" => {
             let f = v.map(flat_matrix).ok_or_else(bad)?;
             let mut rows = [[0.0; 4]; 4];
