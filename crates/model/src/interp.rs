@@ -186,7 +186,11 @@ pub fn unit<T: Real>(q: [T; 4]) -> [T; 4] {
 /// equal quaternions where `acos(dot)` loses digits; below [`Real::SLERP_LERP_BELOW`] the
 /// quaternions are lerped (exact to O(θ³)).
 pub fn slerp<T: Real>(a: [T; 4], b: [T; 4], u: T) -> [T; 4] {
-    let b = if dot(a, b) < T::ZERO { b.map(|c| -c) } else { b };
+    let b = if dot(a, b) < T::ZERO {
+        b.map(|c| -c)
+    } else {
+        b
+    };
     let diff: [T; 4] = std::array::from_fn(|k| a[k] - b[k]);
     let sum: [T; 4] = std::array::from_fn(|k| a[k] + b[k]);
     let theta = T::TWO * dot(diff, diff).sqrt().atan2(dot(sum, sum).sqrt());
@@ -297,5 +301,76 @@ impl<T: Real> Keys<'_, T> {
                 unit(std::array::from_fn(|i| self.sample_component(span, i)))
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Quat;
+
+    /// The evaluator's former glam code, kept as the reference the f32 path must match bit
+    /// for bit.
+    fn glam_unit(q: Quat) -> Quat {
+        let length = q.length();
+        if length > 0.0 && length.is_finite() {
+            q * (1.0 / length)
+        } else {
+            Quat::IDENTITY
+        }
+    }
+
+    fn glam_slerp(a: Quat, b: Quat, u: f32) -> Quat {
+        let b = if a.dot(b) < 0.0 { -b } else { b };
+        let theta = 2.0 * (a - b).length().atan2((a + b).length());
+        let sin_theta = theta.sin();
+        if sin_theta < 1e-6 {
+            return glam_unit(a + (b - a) * u);
+        }
+        let wa = ((1.0 - u) * theta).sin() / sin_theta;
+        let wb = (u * theta).sin() / sin_theta;
+        glam_unit(a * wa + b * wb)
+    }
+
+    #[test]
+    fn f32_unit_and_slerp_are_glams_bit_for_bit() {
+        // A small deterministic generator (no dependency): xorshift.
+        let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        for _ in 0..20_000 {
+            let a = Quat::from_xyzw(next(), next(), next(), next());
+            let b = Quat::from_xyzw(next(), next(), next(), next());
+            let near = Quat::from_xyzw(a.x + next() * 1e-7, a.y, a.z, a.w);
+            let u = next().abs();
+            assert_eq!(unit(a.to_array()), glam_unit(a).to_array());
+            assert_eq!(dot(a.to_array(), b.to_array()), a.dot(b));
+            let (ua, ub, un) = (glam_unit(a), glam_unit(b), glam_unit(near));
+            let ours = slerp(ua.to_array(), ub.to_array(), u);
+            assert_eq!(ours, glam_slerp(ua, ub, u).to_array());
+            let ours = slerp(ua.to_array(), un.to_array(), u);
+            assert_eq!(ours, glam_slerp(ua, un, u).to_array());
+        }
+    }
+
+    #[test]
+    fn cubic_keys_hit_values_and_follow_hermite() {
+        let keys = Keys {
+            interpolation: Interpolation::CubicSpline,
+            times: &[0.0f64, 2.0],
+            values: &[9.0, 0.0, 1.0, 0.0, 1.0, 9.0],
+            components: 1,
+        };
+        let mut out = [f64::NAN];
+        keys.sample(2.0, &mut out);
+        assert_eq!(out, [1.0]);
+        keys.sample(0.5, &mut out);
+        let u = 0.25;
+        let expect = (u * u * u - 2.0 * u * u + u) * 2.0 + (-2.0 * u * u * u + 3.0 * u * u);
+        assert!((out[0] - expect).abs() < 1e-12);
     }
 }
