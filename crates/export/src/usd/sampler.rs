@@ -168,7 +168,8 @@ mod tests {
         assert!((dot(quat(&end), quat(&end)) - 1.0).abs() < 1e-12);
         assert!(dot(quat(&at(&s, 0.0)), quat(&end)) > 0.0);
         // Tiny angles: no 0/0.
-        let q: [f64; 4] = rigport_model::interp::slerp([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1e-12, 1.0], 0.5);
+        let q: [f64; 4] =
+            rigport_model::interp::slerp([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1e-12, 1.0], 0.5);
         assert!(q.iter().all(|c| c.is_finite()));
     }
 
