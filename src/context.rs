@@ -1,8 +1,8 @@
-//! What every command shares: quiet and deny-warnings settings, warning reports, spinners,
-//! and small message helpers.
+//! What every command shares: quiet and deny-warnings settings, warning reports and
+//! spinners.
 
 use anyhow::Result;
-use rigport_model::{Asset, Warning};
+use rigport_model::Warning;
 
 use crate::exit::DeniedWarnings;
 
@@ -47,29 +47,22 @@ impl Context {
 
     /// Runs `f` under a spinner on stderr (shown only on a terminal, never with --quiet).
     pub fn step<T>(&self, message: &str, f: impl FnOnce() -> T) -> T {
-        use std::io::IsTerminal;
-        // No spinner thread at all unless someone can see it.
-        if self.quiet || !std::io::stderr().is_terminal() {
-            return f();
-        }
-        let bar = indicatif::ProgressBar::new_spinner();
+        let bar = self.spinner();
         bar.set_message(message.to_string());
-        bar.enable_steady_tick(std::time::Duration::from_millis(100));
         let out = f();
         bar.finish_and_clear();
         out
     }
-}
 
-/// The clip names of an asset, for messages.
-pub fn clip_names(asset: &Asset) -> String {
-    if asset.clips.is_empty() {
-        return "none".into();
+    /// A spinner on stderr for a library's progress messages (hidden unless on a terminal
+    /// and without --quiet: then no thread at all).
+    pub fn spinner(&self) -> indicatif::ProgressBar {
+        use std::io::IsTerminal;
+        if self.quiet || !std::io::stderr().is_terminal() {
+            return indicatif::ProgressBar::hidden();
+        }
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.enable_steady_tick(std::time::Duration::from_millis(100));
+        bar
     }
-    asset
-        .clips
-        .iter()
-        .map(|c| format!("{:?}", c.name))
-        .collect::<Vec<_>>()
-        .join(", ")
 }

@@ -53,6 +53,14 @@ pub fn code_for(err: &anyhow::Error) -> u8 {
         OUTPUT
     } else if err.downcast_ref::<UsageError>().is_some() {
         USAGE
+    } else if let Some(e) = err.downcast_ref::<rigport_pipeline::PipelineError>() {
+        if e.is_output() {
+            OUTPUT
+        } else if e.is_usage() {
+            USAGE
+        } else {
+            BAD_INPUT
+        }
     } else {
         BAD_INPUT
     }

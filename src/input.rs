@@ -1,17 +1,17 @@
-//! Resolves input arguments into import plans (`rigport_import::detect`) and runs the
-//! importers.
+//! Resolves input arguments into import plans and runs the importers
+//! (`rigport_pipeline::load`).
 
-use anyhow::{bail, Result};
-use rigport_import::detect::{self, Inputs};
+use anyhow::Result;
 use rigport_import::Imported;
+use rigport_pipeline::load::{self, Inputs};
 
 use crate::cli::InputArgs;
 
 /// One asset to import.
-pub type Plan = detect::Source;
+pub type Plan = load::Source;
 
 /// The library's view of the input arguments.
-fn inputs(args: &InputArgs) -> Inputs {
+pub fn inputs(args: &InputArgs) -> Inputs {
     Inputs {
         paths: args.inputs.clone(),
         mesh: args.mesh.clone(),
@@ -22,41 +22,24 @@ fn inputs(args: &InputArgs) -> Inputs {
     }
 }
 
-/// Resolves the arguments into one plan per asset (see `rigport_import::detect::plan`).
+/// Resolves the arguments into one plan per asset.
 pub fn plans(args: &InputArgs) -> Result<Vec<Plan>> {
-    Ok(detect::plan(&inputs(args))?)
+    Ok(load::plan(&inputs(args))?)
 }
 
 /// Resolves the arguments into exactly one asset plan.
 pub fn single_plan(args: &InputArgs) -> Result<Plan> {
-    let mut plans = plans(args)?;
-    if plans.len() != 1 {
-        bail!("this command takes one rig; {} were given", plans.len());
-    }
-    Ok(plans.remove(0))
+    Ok(load::single_plan(&inputs(args))?)
 }
 
-/// Imports a plan; unless `--no-bone-mesh`, a skeleton-only asset gets a generated bone
-/// mesh (noted in the warnings) so viewers show its motion.
-///
-/// # Errors
-/// Over the memory budget; as the importer.
+/// Imports a plan within the budget (a skeleton-only asset gets a bone mesh unless
+/// `--no-bone-mesh`).
 pub fn load(plan: &Plan, args: &InputArgs) -> Result<Imported> {
-    crate::memory::check_import(plan)?;
-    let mut imported = plan.import()?;
-    if !args.no_bone_mesh && rigport_eval::bone_mesh::add_bone_mesh(&mut imported.asset) {
-        imported.warnings.push(rigport_model::Warning::Note {
-            location: plan.label(),
-            message: "skeleton only: added a bone mesh (one shape per bone; --no-bone-mesh to leave it out)".into(),
-        });
-    }
-    Ok(imported)
+    let budget = crate::memory::budget();
+    Ok(load::load(plan, !args.no_bone_mesh, &budget)?)
 }
 
 /// Resolves and imports exactly one asset.
-///
-/// # Errors
-/// As [`single_plan`] and [`load`].
 pub fn load_single(args: &InputArgs) -> Result<(Plan, Imported)> {
     let plan = single_plan(args)?;
     let imported = load(&plan, args)?;

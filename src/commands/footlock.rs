@@ -7,7 +7,7 @@ use rigport_eval::footlock::{footlock, resolve_feet, up_in_model, FootlockOption
 use serde_json::json;
 
 use crate::cli::FootlockArgs;
-use crate::context::{clip_names, Context};
+use crate::context::Context;
 use crate::{input, output};
 
 /// Runs `footlock`.
@@ -42,7 +42,7 @@ pub fn run(ctx: &Context, args: &FootlockArgs) -> Result<()> {
                 Some(name) => format!("no clip named {name:?}"),
                 None => "the rig has no clip to clean".into(),
             },
-            clip_names(&asset)
+            rigport_pipeline::clip_names(&asset)
         );
     };
     let (legs, found_by) = resolve_feet(&asset.skeleton, &args.feet)

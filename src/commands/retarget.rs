@@ -8,8 +8,9 @@ use rigport_eval::retarget::{auto_map, retarget, JointMap, RetargetInput, Retarg
 use serde_json::json;
 
 use crate::cli::{InputArgs, RetargetArgs};
-use crate::context::{clip_names, Context};
+use crate::context::Context;
 use crate::{input, output};
+use rigport_pipeline::clip_names;
 
 /// Runs `retarget`.
 pub fn run(ctx: &Context, args: &RetargetArgs) -> Result<()> {

@@ -6,7 +6,7 @@ use rigport_eval::sequence::trim;
 use rigport_model::{Clip, Warning};
 
 use crate::cli::RetimeArgs;
-use crate::context::{clip_names, Context};
+use crate::context::Context;
 use crate::{input, output};
 
 /// Parses `START..END` seconds.
@@ -86,7 +86,7 @@ fn run_with(
                 Some(name) => format!("no clip named {name:?}"),
                 None => "the rig has no clip to retime".into(),
             },
-            clip_names(&asset)
+            rigport_pipeline::clip_names(&asset)
         );
     };
     let before = &asset.clips[index];

@@ -19,6 +19,7 @@ mod grid;
 pub use grid::{FrameGrid, MAX_FRAMES};
 
 use glam::{Quat, Vec3};
+use rigport_model::interp::{self, Keys, VALUE};
 use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget, Transform};
 
 /// Key times closer than this (seconds) are one frame in [`CompiledClip::key_times`].
@@ -509,153 +510,32 @@ pub fn sample_weights(track: &Track, time: f32, out: &mut [f32]) -> Result<(), S
     if !time.is_finite() {
         return Err(SampleError::NonFiniteSampleTime { time });
     }
-    let span = locate(&track.times, time);
-    for (c, o) in out.iter_mut().enumerate() {
-        *o = sample_component(track, components, span, c);
-    }
+    Keys::of(track).sample(time, out);
     Ok(())
 }
 
-/// Where a time falls among a track's keys.
-#[derive(Clone, Copy, Debug)]
-enum Span {
-    /// Exactly the value of key `k` (before the first key, after the last, or a STEP hold
-    /// decided later).
-    Key(usize),
-    /// Between keys `k` and `k + 1`: `u` in `[0, 1)` is the normalized position, `dt` the
-    /// interval in seconds (the tangent scale of glTF's cubic spline).
-    Between { k: usize, u: f32, dt: f32 },
-}
-
-/// Finds the key interval holding `time` by binary search.
-fn locate(times: &[f32], time: f32) -> Span {
-    let after = times.partition_point(|&t| t <= time);
-    if after == 0 {
-        return Span::Key(0);
-    }
-    let k = after - 1;
-    match (times.get(k), times.get(after)) {
-        (Some(&t0), Some(&t1)) if t1 > t0 => Span::Between {
-            k,
-            u: ((time - t0) / (t1 - t0)).clamp(0.0, 1.0),
-            dt: t1 - t0,
-        },
-        _ => Span::Key(k),
-    }
-}
-
-/// Element slots of a cubic-spline key (glTF: `[in_tangent, value, out_tangent]`).
-const IN_TANGENT: usize = 0;
-const VALUE: usize = 1;
-const OUT_TANGENT: usize = 2;
-
-/// Component `c` of element `element` (a cubic-spline slot; ignored otherwise) of key `k`,
-/// 0 if out of range (only for unchecked tracks given to [`sample_weights`]).
-fn component(track: &Track, components: usize, k: usize, element: usize, c: usize) -> f32 {
-    let slot = match track.interpolation {
-        Interpolation::CubicSpline => 3 * k + element,
-        _ => k,
-    };
-    track
-        .values
-        .get(slot * components + c)
-        .copied()
-        .unwrap_or(0.0)
-}
-
-/// Component `c` of `track` at `span`, per glTF 2.0 Appendix C.
-fn sample_component(track: &Track, components: usize, span: Span, c: usize) -> f32 {
-    let at = |k, element| component(track, components, k, element, c);
-    match span {
-        Span::Key(k) => at(k, VALUE),
-        Span::Between { k, u, dt } => match track.interpolation {
-            Interpolation::Step => at(k, VALUE),
-            Interpolation::Linear => {
-                let (a, b) = (at(k, VALUE), at(k + 1, VALUE));
-                a + (b - a) * u
-            }
-            Interpolation::CubicSpline => hermite(
-                at(k, VALUE),
-                dt * at(k, OUT_TANGENT),
-                at(k + 1, VALUE),
-                dt * at(k + 1, IN_TANGENT),
-                u,
-            ),
-        },
-    }
-}
-
-/// The cubic Hermite spline of glTF 2.0 Appendix C, with tangents already scaled by the
-/// key interval: `p(u) = (2u³-3u²+1)·v0 + (u³-2u²+u)·m0 + (-2u³+3u²)·v1 + (u³-u²)·m1`.
-fn hermite(v0: f32, m0: f32, v1: f32, m1: f32, u: f32) -> f32 {
-    let u2 = u * u;
-    let u3 = u2 * u;
-    (2.0 * u3 - 3.0 * u2 + 1.0) * v0
-        + (u3 - 2.0 * u2 + u) * m0
-        + (-2.0 * u3 + 3.0 * u2) * v1
-        + (u3 - u2) * m1
-}
-
-/// A 3-component track (translation, scale) at `time`, as the sampler evaluates it.
+/// A 3-component track (translation, scale) at `time`, as the sampler evaluates it
+/// (`rigport_model::interp`, the one keyframe interpolation).
 pub(crate) fn sample_vec3(track: &Track, time: f32) -> Vec3 {
-    let span = locate(&track.times, time);
-    Vec3::new(
-        sample_component(track, 3, span, 0),
-        sample_component(track, 3, span, 1),
-        sample_component(track, 3, span, 2),
-    )
+    let mut out = [0.0; 3];
+    Keys::of(track).sample(time, &mut out);
+    Vec3::from_array(out)
 }
 
 /// Element `element` of rotation key `k` as a (not necessarily unit) quaternion.
 fn quat_key(track: &Track, k: usize, element: usize) -> Quat {
-    let c = |i| component(track, 4, k, element, i);
-    Quat::from_xyzw(c(0), c(1), c(2), c(3))
+    Quat::from_array(Keys::of(track).quat_key(k, element))
 }
 
+/// A rotation track at `time`, unit length.
 fn sample_rotation(track: &Track, time: f32) -> Quat {
-    match (locate(&track.times, time), track.interpolation) {
-        (Span::Key(k), _) | (Span::Between { k, .. }, Interpolation::Step) => {
-            unit(quat_key(track, k, VALUE))
-        }
-        (Span::Between { k, u, .. }, Interpolation::Linear) => slerp(
-            unit(quat_key(track, k, VALUE)),
-            unit(quat_key(track, k + 1, VALUE)),
-            u,
-        ),
-        (span @ Span::Between { .. }, Interpolation::CubicSpline) => {
-            let c = |i| sample_component(track, 4, span, i);
-            unit(Quat::from_xyzw(c(0), c(1), c(2), c(3)))
-        }
-    }
-}
-
-/// `q / |q|`, or the identity for a zero or non-finite `q` (which checked keys never give,
-/// but a cubic spline's interpolated value could in principle pass through zero).
-pub(crate) fn unit(q: Quat) -> Quat {
-    let length = q.length();
-    if length > 0.0 && length.is_finite() {
-        q * (1.0 / length)
-    } else {
-        Quat::IDENTITY
-    }
+    Quat::from_array(Keys::of(track).sample_rotation(time))
 }
 
 /// Shortest-path spherical linear interpolation between unit quaternions, normalized
-/// (glTF 2.0 Appendix C, "Spherical Linear Interpolation").
-///
-/// The angle comes from Kahan's `2·atan2(|a−b|, |a+b|)`, which stays accurate for nearly
-/// equal quaternions where `acos(dot)` (and glam's `acos_approx`) lose digits.
+/// ([`interp::slerp`]).
 pub(crate) fn slerp(a: Quat, b: Quat, u: f32) -> Quat {
-    let b = if a.dot(b) < 0.0 { -b } else { b };
-    let theta = 2.0 * (a - b).length().atan2((a + b).length());
-    let sin_theta = theta.sin();
-    if sin_theta < 1e-6 {
-        // Within float noise of each other: lerp is exact to O(theta³).
-        return unit(a + (b - a) * u);
-    }
-    let wa = ((1.0 - u) * theta).sin() / sin_theta;
-    let wb = (u * theta).sin() / sin_theta;
-    unit(a * wa + b * wb)
+    Quat::from_array(interp::slerp(a.to_array(), b.to_array(), u))
 }
 
 /// Blends two local transforms with weight `w` on `b`: lerp translation and scale,

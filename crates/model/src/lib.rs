@@ -13,6 +13,7 @@ pub mod conventions;
 mod frame;
 mod handle;
 mod index;
+pub mod interp;
 mod keyed;
 mod material;
 mod mesh;

@@ -1,16 +1,11 @@
-//! A small private track sampler (the exporter does not depend on the evaluator).
-//!
-//! Semantics are glTF 2.0's (§3.11 "Animations" and Appendix C "Interpolation"), the
-//! model's own: before the first key the first value holds, after the last key the last;
-//! STEP holds each key's value until the next key; LINEAR lerps vectors and slerps
-//! rotations along the shortest arc; CUBICSPLINE is the cubic Hermite spline with tangents
-//! scaled by the key interval, rotations normalized afterwards. At a key time the key's
-//! value is returned exactly.
+//! The USD writer's view of a track: its keys in `f64`, sampled by the one keyframe
+//! interpolation of `rigport_model::interp` (the evaluator's, in `f64`).
 //!
 //! Rotation keys are normalized and made sign-continuous first, cubic tangents flipping
 //! with their value, exactly as the glTF exporter writes them, so a USD file and a glTF
-//! file of one asset show the same motion. Arithmetic is scalar `f64`.
+//! file of one asset show the same motion.
 
+use rigport_model::interp::Keys;
 use rigport_model::{Interpolation, Track, TrackTarget};
 
 /// A track prepared for sampling.
@@ -74,115 +69,32 @@ impl Sampler {
         self.components
     }
 
-    /// The value of key `k` (the middle element of a cubic key).
-    fn key(&self, k: usize) -> &[f64] {
-        let c = self.components;
-        let start = match self.interpolation {
-            Interpolation::CubicSpline => (3 * k + 1) * c,
-            _ => k * c,
-        };
-        self.values.get(start..start + c).unwrap_or(&[])
-    }
-
     /// Writes the value at `t` seconds into `out` (`components()` floats; a shorter `out`
     /// gets a prefix). A track without keys leaves `out` unchanged.
     pub(crate) fn sample(&self, t: f64, out: &mut [f64]) {
-        let n = self.times.len();
-        if n == 0 {
+        if self.times.is_empty() {
             return;
         }
-        // Keys at or before t.
-        let after = self.times.partition_point(|&k| k <= t);
-        let copy = |out: &mut [f64], src: &[f64]| {
-            for (o, s) in out.iter_mut().zip(src) {
-                *o = *s;
-            }
+        let keys = Keys {
+            interpolation: self.interpolation,
+            times: &self.times,
+            values: &self.values,
+            components: self.components,
         };
-        if after == 0 {
-            return copy(out, self.key(0));
-        }
-        let i = after - 1;
-        if after == n || self.times[i] == t || self.interpolation == Interpolation::Step {
-            return copy(out, self.key(i));
-        }
-        let (t0, t1) = (self.times[i], self.times[i + 1]);
-        let dt = t1 - t0;
-        let s = (t - t0) / dt;
-        let c = self.components;
-        match self.interpolation {
-            Interpolation::Step => copy(out, self.key(i)),
-            Interpolation::Linear if self.rotation => {
-                let (a, b) = (quat(self.key(i)), quat(self.key(i + 1)));
-                copy(out, &slerp(a, b, s));
+        if self.rotation {
+            let q = keys.sample_rotation(t);
+            for (o, c) in out.iter_mut().zip(q) {
+                *o = c;
             }
-            Interpolation::Linear => {
-                let (a, b) = (self.key(i), self.key(i + 1));
-                for (o, (x, y)) in out.iter_mut().zip(a.iter().zip(b)) {
-                    *o = x + (y - x) * s;
-                }
-            }
-            Interpolation::CubicSpline => {
-                let (s2, s3) = (s * s, s * s * s);
-                let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-                let h10 = s3 - 2.0 * s2 + s;
-                let h01 = -2.0 * s3 + 3.0 * s2;
-                let h11 = s3 - s2;
-                let at = |k: usize, part: usize| {
-                    let start = (3 * k + part) * c;
-                    self.values.get(start..start + c).unwrap_or(&[])
-                };
-                // Key i's value and out-tangent, key i+1's in-tangent and value.
-                let (v0, b0, a1, v1) = (at(i, 1), at(i, 2), at(i + 1, 0), at(i + 1, 1));
-                for (k, o) in out.iter_mut().enumerate().take(c) {
-                    let g = |v: &[f64]| v.get(k).copied().unwrap_or(0.0);
-                    *o = h00 * g(v0) + h10 * dt * g(b0) + h01 * g(v1) + h11 * dt * g(a1);
-                }
-                if self.rotation && out.len() >= 4 {
-                    let q = quat(out);
-                    let len = dot(q, q).sqrt();
-                    if len > 0.0 {
-                        copy(out, &q.map(|x| x / len));
-                    }
-                }
-            }
+        } else {
+            keys.sample(t, out);
         }
     }
-}
-
-/// The first four floats as a quaternion (zeros when shorter).
-fn quat(v: &[f64]) -> [f64; 4] {
-    std::array::from_fn(|k| v.get(k).copied().unwrap_or(0.0))
 }
 
 /// Dot product of two quaternions.
 pub(crate) fn dot(a: [f64; 4], b: [f64; 4]) -> f64 {
     a.iter().zip(&b).map(|(x, y)| x * y).sum()
-}
-
-/// Shortest-arc spherical interpolation of unit quaternions, `s` in `[0, 1]`.
-///
-/// The angle comes from `2·atan2(|b − a|, |b + a|)`, accurate at every angle (acos of the
-/// dot product loses half the digits near 0); below 1e-9 rad, where the sine weights are
-/// 0/0-prone, a normalized lerp is exact to f64 precision.
-pub(crate) fn slerp(a: [f64; 4], b: [f64; 4], s: f64) -> [f64; 4] {
-    let b = if dot(a, b) < 0.0 { b.map(|c| -c) } else { b };
-    let diff: [f64; 4] = std::array::from_fn(|k| b[k] - a[k]);
-    let sum: [f64; 4] = std::array::from_fn(|k| b[k] + a[k]);
-    let half = dot(diff, diff).sqrt().atan2(dot(sum, sum).sqrt());
-    let theta = 2.0 * half;
-    let (wa, wb) = if theta < 1e-9 {
-        (1.0 - s, s)
-    } else {
-        let sin = theta.sin();
-        (((1.0 - s) * theta).sin() / sin, (s * theta).sin() / sin)
-    };
-    let q: [f64; 4] = std::array::from_fn(|k| wa * a[k] + wb * b[k]);
-    let len = dot(q, q).sqrt();
-    if len > 0.0 {
-        q.map(|c| c / len)
-    } else {
-        a
-    }
 }
 
 #[cfg(test)]
@@ -203,6 +115,11 @@ mod tests {
             times: times.to_vec(),
             values: values.to_vec(),
         }
+    }
+
+    /// The first four floats as a quaternion.
+    fn quat(v: &[f64]) -> [f64; 4] {
+        std::array::from_fn(|k| v[k])
     }
 
     fn at(s: &Sampler, t: f64) -> Vec<f64> {
@@ -251,7 +168,8 @@ mod tests {
         assert!((dot(quat(&end), quat(&end)) - 1.0).abs() < 1e-12);
         assert!(dot(quat(&at(&s, 0.0)), quat(&end)) > 0.0);
         // Tiny angles: no 0/0.
-        let q = slerp([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1e-12, 1.0], 0.5);
+        let q: [f64; 4] =
+            rigport_model::interp::slerp([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1e-12, 1.0], 0.5);
         assert!(q.iter().all(|c| c.is_finite()));
     }
 

@@ -1,0 +1,249 @@
+//! `rigport demo`'s pipeline: the built-in character (`rigport_demo`) written as glTF and
+//! USD, its twist with DQS baked into morph targets, its wave with a simulated skirt
+//! (`rigport_demo::skirt`, morph targets), its pictures, the example keys and
+//! handles files, and one picture per corpus family.
+//!
+//! [`prepare`] builds everything that is checked before writing (warnings included), and
+//! [`PreparedDemo::write`] writes it:
+//!
+//! ```no_run
+//! use rigport_pipeline::demo;
+//!
+//! let dir = std::path::Path::new("rigport-demo");
+//! let prepared = demo::prepare(1, dir, &|step| eprintln!("{step}"))?;
+//! assert!(prepared.warnings().is_empty());
+//! let written = prepared.write(None, &|_| {})?;
+//! assert!(written.glb.is_file() && written.usd.is_file());
+//! # Ok::<(), rigport_pipeline::PipelineError>(())
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use rigport_demo::{clips, corpus, pictures, Demo};
+use rigport_export::{GltfOptions, PreparedGltf, PreparedUsd, UsdOptions};
+use rigport_model::{Asset, Warning};
+
+use crate::outputs::write_file;
+use crate::PipelineError;
+
+/// The demo built in memory, ready to be written.
+pub struct PreparedDemo {
+    demo: Demo,
+    out: PathBuf,
+    gltf: PreparedGltf,
+    usd: PreparedUsd,
+    dqs: PreparedGltf,
+    bake_reports: Vec<String>,
+    skirt: PreparedGltf,
+    skirt_asset: Asset,
+    skirt_report: String,
+    warnings: Vec<Warning>,
+}
+
+/// What [`PreparedDemo::write`] wrote.
+pub struct WrittenDemo {
+    /// The demo (its character and clips).
+    pub demo: Demo,
+    /// The example files: `wave.keys.json`, `reach.handles.json`, `twist.keys.json`.
+    pub keys: [PathBuf; 3],
+    /// `demo.glb`, `demo.usda` and `twist_dqs.glb`.
+    pub glb: PathBuf,
+    /// `demo.usda`.
+    pub usd: PathBuf,
+    /// `twist_dqs.glb`.
+    pub dqs: PathBuf,
+    /// The DQS bake's report, one line each.
+    pub bake_lines: Vec<String>,
+    /// `skirt.glb`: the wave clip with the skirt simulated on it.
+    pub skirt: PathBuf,
+    /// The cloth simulation's report.
+    pub skirt_report: String,
+    /// Each picture written, with what it shows.
+    pub pictures: Vec<(PathBuf, String)>,
+    /// One line per corpus picture written (or why there is none).
+    pub corpus_lines: Vec<String>,
+    /// Corpus rigs skipped, with why (warnings).
+    pub corpus_skipped: Vec<String>,
+}
+
+/// Builds the demo character at `detail`, writes the example keys and handles files into
+/// `out` (created), and builds the glTF, USD and DQS-baked glTF in memory; `progress` is
+/// told each long step.
+///
+/// # Errors
+/// `out` cannot be created or written; a demo or export failure (a rigport bug).
+pub fn prepare(
+    detail: u32,
+    out: &Path,
+    progress: &dyn Fn(&str),
+) -> Result<PreparedDemo, PipelineError> {
+    progress("building the demo character");
+    let demo = rigport_demo::build(detail)?;
+    std::fs::create_dir_all(out).map_err(|e| PipelineError::output(out, e))?;
+    let keys = example_files(out);
+    let examples = [
+        clips::WAVE_KEYS_JSON,
+        clips::REACH_HANDLES_JSON,
+        clips::TWIST_KEYS_JSON,
+    ];
+    for (path, text) in keys.iter().zip(examples) {
+        write_file(path, text.as_bytes())?;
+    }
+    let gltf =
+        rigport_export::prepare_gltf(&demo.asset, &out.join("demo.glb"), &GltfOptions::default())?;
+    let usd =
+        rigport_export::prepare_usd(&demo.asset, &out.join("demo.usda"), &UsdOptions::default())?;
+    let mut warnings = demo.warnings.clone();
+    warnings.extend(gltf.warnings().iter().cloned());
+    warnings.extend(usd.warnings().iter().cloned());
+    let limit = usize::from(rigport_demo::DQS_INFLUENCES);
+    progress("baking DQS correctives");
+    let (twist, reports) = rigport_demo::twist_dqs(
+        &demo,
+        |skeleton, skin| rigport_export::gltf_influences(skeleton, skin, limit),
+        &mut warnings,
+    )?;
+    let options = GltfOptions {
+        max_influences: limit,
+    };
+    let dqs = rigport_export::prepare_gltf(&twist, &out.join("twist_dqs.glb"), &options)?;
+    warnings.extend(dqs.warnings().iter().cloned());
+    let bake_reports = reports.iter().map(ToString::to_string).collect();
+    progress("simulating the skirt");
+    let (skirt_asset, skirt_report) = rigport_demo::skirt::bake(&demo, &mut warnings, |_, _| {})?;
+    let skirt = rigport_export::prepare_gltf(
+        &skirt_asset,
+        &out.join("skirt.glb"),
+        &GltfOptions::default(),
+    )?;
+    warnings.extend(skirt.warnings().iter().cloned());
+    Ok(PreparedDemo {
+        demo,
+        out: out.to_path_buf(),
+        gltf,
+        usd,
+        dqs,
+        bake_reports,
+        skirt,
+        skirt_asset,
+        skirt_report: skirt_report.to_string(),
+        warnings,
+    })
+}
+
+/// The example files' paths in `out`.
+fn example_files(out: &Path) -> [PathBuf; 3] {
+    ["wave.keys.json", "reach.handles.json", "twist.keys.json"].map(|f| out.join(f))
+}
+
+impl PreparedDemo {
+    /// Every warning so far (the IK solve's, the writers', the bake's).
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+
+    /// Writes the files, renders and writes the pictures, and with `corpus` one picture
+    /// per corpus family into `corpus/` (a missing folder or a rig that fails is a line,
+    /// not an error); `progress` is told each long step.
+    ///
+    /// # Errors
+    /// A file cannot be written; a picture fails to render (a rigport bug).
+    pub fn write(
+        self,
+        corpus: Option<&Path>,
+        progress: &dyn Fn(&str),
+    ) -> Result<WrittenDemo, PipelineError> {
+        let out = &self.out;
+        let (glb, usd, dqs, skirt) = (
+            out.join("demo.glb"),
+            out.join("demo.usda"),
+            out.join("twist_dqs.glb"),
+            out.join("skirt.glb"),
+        );
+        for (prepared, path) in [(&self.gltf, &glb), (&self.dqs, &dqs), (&self.skirt, &skirt)] {
+            prepared
+                .write()
+                .map_err(|e| PipelineError::output(path, e))?;
+        }
+        self.usd
+            .write()
+            .map_err(|e| PipelineError::output(&usd, e))?;
+        progress("rendering pictures");
+        let mut pictures = Vec::new();
+        let mut all = pictures::pictures(&self.demo)?;
+        all.push(pictures::skirt_picture(&self.skirt_asset)?);
+        for picture in all {
+            let path = out.join(&picture.file);
+            write_file(&path, &picture.bytes)?;
+            pictures.push((path, picture.what));
+        }
+        let (mut corpus_lines, mut corpus_skipped) = (Vec::new(), Vec::new());
+        match corpus {
+            None => {}
+            Some(dir) if !dir.is_dir() => corpus_lines.push(format!(
+                "corpus: {} not found; no corpus pictures (--corpus DIR to point at it)",
+                dir.display()
+            )),
+            Some(dir) => {
+                progress("rendering corpus rigs");
+                (corpus_lines, corpus_skipped) = corpus_pictures(dir, out)?;
+            }
+        }
+        Ok(WrittenDemo {
+            keys: example_files(out),
+            demo: self.demo,
+            glb,
+            usd,
+            dqs,
+            bake_lines: (self.bake_reports.iter())
+                .flat_map(|r| r.lines().map(String::from).collect::<Vec<_>>())
+                .collect(),
+            skirt,
+            skirt_report: self.skirt_report,
+            pictures,
+            corpus_lines,
+            corpus_skipped,
+        })
+    }
+}
+
+/// Renders one rig of each corpus family to `out/corpus/<family>.png` (Model1's keys
+/// beside it as an example). Returns one line per picture written, and one per rig that
+/// failed to load or render.
+fn corpus_pictures(corpus: &Path, out: &Path) -> Result<(Vec<String>, Vec<String>), PipelineError> {
+    let out = out.join("corpus");
+    std::fs::create_dir_all(&out).map_err(|e| PipelineError::output(&out, e))?;
+    let (mut lines, mut skipped) = (Vec::new(), Vec::new());
+    for rig in &corpus::CORPUS_RIGS {
+        let first = rig.files.first().copied().unwrap_or(rig.family);
+        let picture = match corpus::picture(corpus, rig) {
+            Ok(picture) => picture,
+            Err(e) => {
+                let why = crate::chain(&e);
+                skipped.push(format!(
+                    "corpus {}: skipped: {why}",
+                    corpus.join(first).display()
+                ));
+                continue;
+            }
+        };
+        if rig.model1_keys {
+            let keys = out.join(format!("{}.keys.json", rig.family));
+            write_file(&keys, clips::MODEL1_KEYS_JSON.as_bytes())?;
+        }
+        let path = out.join(format!("{}.png", rig.family));
+        write_file(&path, &picture.png)?;
+        let what = match &picture.clip {
+            Some(name) => format!("clip {name:?}"),
+            None => "rest pose".into(),
+        };
+        lines.push(format!(
+            "wrote {} ({}, {what}, {} of {} frames)",
+            path.display(),
+            picture.label,
+            picture.frames_drawn,
+            picture.frames
+        ));
+    }
+    Ok((lines, skipped))
+}

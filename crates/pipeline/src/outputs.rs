@@ -1,0 +1,134 @@
+//! Outputs: the format an output path asks for, and the checks made before any work, so a
+//! special file, a `.gltf` link or an input given as output fail at once, not after a long
+//! computation.
+//!
+//! ```
+//! use std::path::Path;
+//! use rigport_pipeline::outputs::{check_outputs, format_of, Format};
+//!
+//! assert_eq!(format_of(Path::new("a.GLB"))?, Format::Gltf);
+//! assert!(format_of(Path::new("a.usdc")).is_err_and(|e| e.is_usage()));
+//! let input = Path::new("../../fixtures/bvh/end_sites.bvh");
+//! let err = check_outputs(&[input], &[input.to_path_buf()]).unwrap_err();
+//! assert!(err.to_string().contains("this output is one of the inputs"));
+//! # Ok::<(), rigport_pipeline::PipelineError>(())
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use rigport_export::ExportError;
+
+use crate::{Message, PipelineError};
+
+/// The model file formats rigport writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// `.glb` or `.gltf` (+ `.bin`).
+    Gltf,
+    /// `.usda`.
+    Usda,
+}
+
+/// The format an output path asks for.
+///
+/// # Errors
+/// An extension rigport does not write (a usage error).
+pub fn format_of(path: &Path) -> Result<Format, PipelineError> {
+    Ok(match extension(path).as_str() {
+        "glb" | "gltf" => Format::Gltf,
+        "usda" => Format::Usda,
+        "usd" | "usdc" | "usdz" => return Err(PipelineError::Usage(format!(
+            "{}: rigport writes USD as text; use the .usda extension (usdcat converts it to .usdc/.usdz)",
+            path.display()
+        ))),
+        _ => {
+            return Err(PipelineError::Usage(format!(
+                "{}: unknown output type; expected .glb, .gltf or .usda",
+                path.display()
+            )))
+        }
+    })
+}
+
+/// The lower-case extension of `path` ("" when none).
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// Checks the outputs of a command before any work is done: each (and the `.bin` beside a
+/// `.gltf`) must be a regular file or absent, symbolic links followed, and a `.gltf` must
+/// not be a symbolic link (see `rigport_export::PreparedGltf::write`) (an output error
+/// else), and none may be one of `inputs`, compared by file identity (device and inode on
+/// Unix), so a link or a second path to an input counts (a usage error).
+///
+/// # Errors
+/// As above.
+pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<(), PipelineError> {
+    for &output in outputs {
+        let mut files = vec![output.to_path_buf()];
+        rigport_export::check_output(output).map_err(|e| PipelineError::output(output, e))?;
+        if extension(output) == "gltf" {
+            if std::fs::symlink_metadata(output).is_ok_and(|m| m.file_type().is_symlink()) {
+                return Err(PipelineError::output(output, Message(
+                    "it is a symbolic link, and a .gltf finds its .bin relative to its own folder; write to the link's target or to a .glb".into(),
+                )));
+            }
+            let bin = output.with_extension("bin");
+            rigport_export::check_output(&bin).map_err(|e| PipelineError::output(&bin, e))?;
+            files.push(bin);
+        }
+        for file in &files {
+            if let Some(input) = inputs.iter().find(|i| same_file(file, i)) {
+                let also = if input == file {
+                    String::new()
+                } else {
+                    format!(" ({})", input.display())
+                };
+                return Err(PipelineError::Usage(format!(
+                    "{}: this output is one of the inputs{also}; write to another file",
+                    file.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether two paths name the same existing file (after symbolic links).
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt as _;
+        match (std::fs::metadata(a), std::fs::metadata(b)) {
+            (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        }
+    }
+}
+
+/// An export's write failure as an output error that names the file once (the file that
+/// failed: `path` or one written beside it).
+pub fn write_failure(err: ExportError, path: &Path) -> PipelineError {
+    match err {
+        ExportError::Io { path, source } => PipelineError::output(&path, source),
+        other => PipelineError::output(path, other),
+    }
+}
+
+/// Writes `bytes` to `path` atomically (an output error naming `path` on failure).
+///
+/// # Errors
+/// The file cannot be written.
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
+    rigport_export::write_atomic(path, bytes).map_err(|e| PipelineError::output(path, e))
+}

@@ -1,0 +1,259 @@
+//! Writing an asset: key reduction, the memory check, the influence fit and the writer the
+//! output's extension names. Warnings come back before anything is written
+//! ([`Prepared::warnings`]), so a caller can refuse to write.
+//!
+//! ```
+//! use std::num::NonZeroUsize;
+//! use rigport_pipeline::outputs::Format;
+//! use rigport_pipeline::write::{self, InfluencesFit, WriteOptions};
+//! use rigport_pipeline::{load, MemoryBudget};
+//!
+//! let dir = tempfile::tempdir()?;
+//! let out = dir.path().join("rig.glb");
+//! let plan = load::Source::Bvh("../../fixtures/bvh/end_sites.bvh".into());
+//! let mut asset = load::load(&plan, true, &MemoryBudget::UNLIMITED)?.asset;
+//! let mut warnings = Vec::new();
+//! write::reduce_clips(&mut asset, 1e-4, &mut warnings)?;
+//! write::check_memory(&asset, &out, Format::Gltf, &MemoryBudget::UNLIMITED)?;
+//! let opts = WriteOptions { max_influences: Some(2), influences_fit: InfluencesFit::Refit, ..WriteOptions::default() };
+//! // The bone mesh has one influence per vertex: nothing to fit.
+//! assert!(write::fit_influences(&asset, &opts, Format::Gltf)?.is_none());
+//! let prepared = write::prepare(&asset, &out, Format::Gltf, &opts)?;
+//! warnings.extend(prepared.warnings().iter().cloned());
+//! prepared.write()?;
+//! assert_eq!(&std::fs::read(&out)?[..4], b"glTF");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::num::NonZeroUsize;
+use std::path::{Path, PathBuf};
+
+use rigport_eval::refit::{self, asset::AssetRefit, asset::PoseSet};
+use rigport_export::{GltfOptions, PreparedGltf, PreparedUsd, UsdOptions};
+use rigport_model::{Asset, MemoryBudget, OverBudget, SkinningMethod, UpAxis, Warning};
+
+use crate::outputs::{write_failure, Format};
+use crate::PipelineError;
+
+/// How influences beyond the per-vertex limit are dropped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum InfluencesFit {
+    /// Keep the largest weights, renormalized (what Blender, gltfpack and Assimp do).
+    #[default]
+    Truncate,
+    /// Fit the kept weights to the full deformation over a pose set
+    /// (`rigport_eval::refit::asset`).
+    Refit,
+}
+
+/// How an asset is written.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WriteOptions {
+    /// Influences kept per vertex (glTF: 4 when `None`; USD: all when `None`).
+    pub max_influences: Option<usize>,
+    /// How a vertex with more influences than the limit drops the rest.
+    pub influences_fit: InfluencesFit,
+    /// The skinning method a `.usda` declares (`None`: each skin's own). glTF is LBS.
+    pub skinning: Option<SkinningMethod>,
+    /// The `upAxis` a `.usda` declares (`None`: the asset's).
+    pub up_axis: Option<UpAxis>,
+    /// The `metersPerUnit` a `.usda` declares (`None`: the asset's).
+    pub meters_per_unit: Option<f64>,
+    /// A `.usda` writes unskinned morph-animated meshes as `points.timeSamples`
+    /// ([`UsdOptions::morphs_as_points`]).
+    pub morphs_as_points: bool,
+}
+
+/// Reduces the keys of every clip while every joint's world position stays within
+/// `tolerance` (`rigport_eval::reduce`), adding a note per clip.
+///
+/// # Errors
+/// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
+pub fn reduce_clips(
+    asset: &mut Asset,
+    tolerance: f32,
+    warnings: &mut Vec<Warning>,
+) -> Result<(), PipelineError> {
+    for clip in &mut asset.clips {
+        let (reduced, stats) = rigport_eval::reduce::reduce(clip, &asset.skeleton, tolerance)
+            .map_err(|e| PipelineError::step(format!("cannot reduce clip {:?}", clip.name), e))?;
+        warnings.push(Warning::Note {
+            location: format!("clip {:?}", clip.name),
+            message: format!(
+                "key reduction kept {} of {} keys (largest joint position error {:.3e}, tolerance {tolerance:.3e})",
+                stats.keys_after, stats.keys_before, stats.max_error
+            ),
+        });
+        *clip = reduced;
+    }
+    Ok(())
+}
+
+/// Checks that writing `asset` to `path` as `format` fits `budget`.
+///
+/// # Errors
+/// An [`OverBudget`] saying what would be written.
+pub fn check_memory(
+    asset: &Asset,
+    path: &Path,
+    format: Format,
+    budget: &MemoryBudget,
+) -> Result<(), OverBudget> {
+    use rigport_export::estimate;
+    let (needed, as_what) = match format {
+        Format::Gltf => (estimate::gltf_memory(asset), "glTF"),
+        Format::Usda => (estimate::usd_memory(asset), "USD text"),
+    };
+    let what = format!(
+        "{}: writing {} joints x {} samples and {} vertices as {as_what}",
+        path.display(),
+        asset.skeleton.len(),
+        estimate::max_clip_samples(asset),
+        asset
+            .meshes
+            .iter()
+            .map(|m| m.positions.len())
+            .sum::<usize>()
+    );
+    budget.check(what, needed)
+}
+
+/// An asset with its influences fitted to the writer's limit.
+#[derive(Clone, Debug)]
+pub struct Fitted {
+    /// The asset, at most the limit of influences per vertex.
+    pub asset: Asset,
+    /// With [`InfluencesFit::Refit`]: each skin's deviations, truncation against refit.
+    pub refit: Option<AssetRefit>,
+}
+
+/// The asset with at most `opts.max_influences` per vertex as `opts.influences_fit` asks
+/// (glTF: 4 by default; USD: all unless given), or `None` when the writer's own limiting
+/// (glTF truncation) does or nothing exceeds the limit.
+///
+/// # Errors
+/// A limit of 0, or a refit whose clips or skins do not fit the skeleton.
+pub fn fit_influences(
+    asset: &Asset,
+    opts: &WriteOptions,
+    format: Format,
+) -> Result<Option<Fitted>, PipelineError> {
+    let k = match (format, opts.max_influences) {
+        (Format::Usda, None) => return Ok(None),
+        (_, limit) => limit.unwrap_or(4),
+    };
+    let k = NonZeroUsize::new(k)
+        .ok_or_else(|| PipelineError::Invalid("keep at least 1 influence per vertex".into()))?;
+    if asset
+        .skins
+        .iter()
+        .all(|s| s.influences.max_per_vertex() <= k.get())
+    {
+        return Ok(None);
+    }
+    let mut fitted = asset.clone();
+    let refit = match opts.influences_fit {
+        InfluencesFit::Truncate if format == Format::Gltf => return Ok(None),
+        InfluencesFit::Truncate => {
+            for skin in &mut fitted.skins {
+                skin.influences = rigport_model::Influences::from_rows(
+                    skin.influences
+                        .rows()
+                        .map(|r| refit::truncate_row(r, k.get())),
+                );
+            }
+            None
+        }
+        InfluencesFit::Refit => Some(refit::asset::refit_asset(&mut fitted, k)?),
+    };
+    Ok(Some(Fitted {
+        asset: fitted,
+        refit,
+    }))
+}
+
+/// One line per refitted skin: its deviation from all weights, truncation against refit,
+/// relative to the mesh's bounding-box diagonal.
+pub fn describe_refit(report: &AssetRefit, k: usize) -> Vec<String> {
+    let poses = match report.pose_set {
+        PoseSet::Clips => "the clips' frames",
+        PoseSet::RangeOfMotion => "a range of motion",
+    };
+    report.skins.iter().map(|s| {
+        let rel = |d: f64| d / s.diagonal.max(f64::MIN_POSITIVE);
+        format!(
+            "skin {} refitted to {k} per vertex over {} poses ({poses}): deviation from all weights, max {:.2e} -> {:.2e}, RMS {:.2e} -> {:.2e} of the diagonal (truncation -> refit); {} vertices changed",
+            s.skin, report.poses, rel(s.truncated.max), rel(s.refit.max),
+            rel(s.truncated.rms), rel(s.refit.rms), s.changed
+        )
+    }).collect()
+}
+
+/// A file built in memory, ready to be written.
+pub struct Prepared {
+    file: PreparedFile,
+    path: PathBuf,
+}
+
+/// The writers' prepared files.
+enum PreparedFile {
+    Gltf(PreparedGltf),
+    Usd(PreparedUsd),
+}
+
+impl Prepared {
+    /// The writer's warnings (lossy or repairing steps), before anything is written.
+    pub fn warnings(&self) -> &[Warning] {
+        match &self.file {
+            PreparedFile::Gltf(p) => p.warnings(),
+            PreparedFile::Usd(p) => p.warnings(),
+        }
+    }
+
+    /// Writes the file (and those beside it) atomically.
+    ///
+    /// # Errors
+    /// An output error naming the file that failed.
+    pub fn write(self) -> Result<(), PipelineError> {
+        match self.file {
+            PreparedFile::Gltf(p) => p.write(),
+            PreparedFile::Usd(p) => p.write(),
+        }
+        .map_err(|e| write_failure(e, &self.path))
+    }
+}
+
+/// Builds `asset` as `format` for `path` in memory (the influences as the writer limits
+/// them; see [`fit_influences`] for a fit first).
+///
+/// # Errors
+/// The asset cannot be exported (the message names it).
+pub fn prepare(
+    asset: &Asset,
+    path: &Path,
+    format: Format,
+    opts: &WriteOptions,
+) -> Result<Prepared, PipelineError> {
+    let failed = |e| PipelineError::step(format!("cannot export {:?}", asset.name), e);
+    let file = match format {
+        Format::Gltf => {
+            let opts = GltfOptions {
+                max_influences: opts.max_influences.unwrap_or(4),
+            };
+            PreparedFile::Gltf(rigport_export::prepare_gltf(asset, path, &opts).map_err(failed)?)
+        }
+        Format::Usda => {
+            let opts = UsdOptions {
+                skinning: opts.skinning,
+                up_axis: opts.up_axis,
+                meters_per_unit: opts.meters_per_unit,
+                morphs_as_points: opts.morphs_as_points,
+            };
+            PreparedFile::Usd(rigport_export::prepare_usd(asset, path, &opts).map_err(failed)?)
+        }
+    };
+    Ok(Prepared {
+        file,
+        path: path.to_path_buf(),
+    })
+}
