@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use super::crate_file;
 use super::parse::{self, Layer};
-use crate::{utf8, ImportError, Location};
+use crate::error::{utf8, Location, UsdError};
 
 /// The first bytes of a zip archive (a local file header).
 const ZIP_MAGIC: &[u8; 4] = b"PK\x03\x04";
@@ -22,14 +22,14 @@ const ZIP_MAGIC: &[u8; 4] = b"PK\x03\x04";
 /// # Errors
 /// The reader's errors; for a package, those of its root layer name the member
 /// (`pack.usdz[root.usdc]`).
-pub(crate) fn read_layer(bytes: &[u8], path: &Path) -> Result<Layer, ImportError> {
+pub fn read_layer(bytes: &[u8], path: &Path) -> Result<Layer, UsdError> {
     if bytes.starts_with(crate_file::MAGIC) {
         crate_file::read(bytes, path)
     } else if bytes.starts_with(ZIP_MAGIC) {
         let (member, data) = root_layer(bytes, path)?;
         let inner = PathBuf::from(format!("{}[{member}]", path.display()));
         if data.starts_with(ZIP_MAGIC) {
-            return Err(ImportError::invalid(
+            return Err(UsdError::invalid(
                 Location::file(&inner),
                 "the root layer of a .usdz is itself a package",
             ));
@@ -41,13 +41,13 @@ pub(crate) fn read_layer(bytes: &[u8], path: &Path) -> Result<Layer, ImportError
 }
 
 /// The name and bytes of a package's first member.
-fn root_layer(bytes: &[u8], path: &Path) -> Result<(String, Vec<u8>), ImportError> {
+fn root_layer(bytes: &[u8], path: &Path) -> Result<(String, Vec<u8>), UsdError> {
     let zip_error = |e: zip::result::ZipError| {
-        ImportError::invalid(Location::file(path), format!("not a readable .usdz: {e}"))
+        UsdError::invalid(Location::file(path), format!("not a readable .usdz: {e}"))
     };
     let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(zip_error)?;
     if archive.is_empty() {
-        return Err(ImportError::invalid(
+        return Err(UsdError::invalid(
             Location::file(path),
             "the .usdz package is empty (it needs a root layer)",
         ));
@@ -58,7 +58,7 @@ fn root_layer(bytes: &[u8], path: &Path) -> Result<(String, Vec<u8>), ImportErro
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     if !matches!(ext.as_deref(), Some("usd" | "usda" | "usdc")) {
-        return Err(ImportError::invalid(
+        return Err(UsdError::invalid(
             Location::file(path),
             format!(
                 "the first file of a .usdz must be its root layer (.usda/.usdc), found {name:?}"
@@ -69,7 +69,7 @@ fn root_layer(bytes: &[u8], path: &Path) -> Result<(String, Vec<u8>), ImportErro
     // The size comes from the archive's directory: never trust it for a reservation.
     let mut data = Vec::with_capacity((member.size() as usize).min(bytes.len()));
     member.read_to_end(&mut data).map_err(|e| {
-        ImportError::invalid(
+        UsdError::invalid(
             Location::byte(path, offset),
             format!("cannot read {name:?} from the package: {e}"),
         )
