@@ -385,3 +385,20 @@ fn list_op_paths(ops: Vec<(ListOp, Vec<Value>)>) -> Vec<String> {
         })
         .collect()
 }
+
+/// The reader's decoders, for the writer's tests to check its encoders against.
+#[cfg(test)]
+pub(crate) mod coding_for_tests {
+    pub(crate) use crate::crate_file::coding::half_to_f32;
+
+    /// `TfFastCompression` decoding of at most `max` bytes.
+    pub(crate) fn decompress(input: &[u8], max: usize) -> Result<Vec<u8>, String> {
+        crate::crate_file::coding::decompress_prefix(input, max).map_err(|e| e.0)
+    }
+
+    /// 32-bit integer decoding.
+    pub(crate) fn decode_ints(data: &[u8], n: usize) -> Result<Vec<i64>, String> {
+        use crate::crate_file::coding::{decode_ints, Width};
+        decode_ints(data, n, Width::W32).map_err(|e| e.0)
+    }
+}
