@@ -17,7 +17,7 @@ use crate::input::{self, Plan};
 pub enum Format {
     /// `.glb` or `.gltf` (+ `.bin`).
     Gltf,
-    /// `.usda`.
+    /// `.usda`, `.usdc` or `.usdz` (the encoding by the extension).
     Usda,
 }
 
@@ -28,15 +28,17 @@ pub enum Format {
 pub fn format_of(path: &Path) -> Result<Format> {
     Ok(match extension(path).as_str() {
         "glb" | "gltf" => Format::Gltf,
-        "usda" => Format::Usda,
-        "usd" | "usdc" | "usdz" => return Err(UsageError(format!(
-            "{}: rigport writes USD as text; use the .usda extension (usdcat converts it to .usdc/.usdz)",
-            path.display()
-        ))
-        .into()),
+        "usda" | "usdc" | "usdz" => Format::Usda,
+        "usd" => {
+            return Err(UsageError(format!(
+                "{}: say which USD encoding: .usda (text), .usdc (binary) or .usdz (package)",
+                path.display()
+            ))
+            .into())
+        }
         _ => {
             return Err(UsageError(format!(
-                "{}: unknown output type; expected .glb, .gltf or .usda",
+                "{}: unknown output type; expected .glb, .gltf, .usda, .usdc or .usdz",
                 path.display()
             ))
             .into())

@@ -38,3 +38,4 @@ mod usd_blendshapes;
 mod usd_import;
 mod usd_root_motion;
 mod usd_topology;
+mod usdz;

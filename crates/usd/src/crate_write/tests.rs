@@ -268,3 +268,24 @@ fn usd_core_reads_our_crate_file_as_the_text() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn our_reader_reads_usd_cores_crate_file_and_ours_alike() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let usda = dir.path().join("sample.usda");
+    let theirs = dir.path().join("theirs.usdc");
+    std::fs::write(&usda, SAMPLE).unwrap();
+    let status = std::process::Command::new(python)
+        .arg("-c")
+        .arg("import sys; from pxr import Sdf; assert Sdf.Layer.FindOrOpen(sys.argv[1]).Export(sys.argv[2])")
+        .arg(&usda)
+        .arg(&theirs)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let ours = write(&parse(SAMPLE, &usda).unwrap(), &usda).unwrap();
+    let a = crate::crate_file::read(&std::fs::read(&theirs).unwrap(), &theirs).unwrap();
+    let b = crate::crate_file::read(&ours, Path::new("ours.usdc")).unwrap();
+    assert_eq!(a, b);
+}
