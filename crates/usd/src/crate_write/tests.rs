@@ -105,6 +105,9 @@ def SkelRoot "Root" (
             elementSize = 2
             interpolation = "vertex"
         )
+        int[] primvars:rigport:sourceVertex = [0, 1, 2, 3, 3, 3, 4, -5, 70000, -2147483648, 2147483647, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16] (
+            interpolation = "vertex"
+        )
         uniform token primvars:skel:skinningMethod = "dualQuaternion"
         uniform token subdivisionScheme = "none"
         double3 xformOp:translate = (1, 2, 3)

@@ -3,7 +3,9 @@
 //!
 //! Type numbers are `crateDataTypes.h`'s; scalars of at most 4 bytes, tokens, strings,
 //! asset paths and enums are inlined in the representation as `crateFile.cpp` does;
-//! everything else is written to the heap uncompressed (which every crate reader reads).
+//! everything else is written to the heap, `int[]`/`uint[]` of 16 or more elements with
+//! integer coding as usd-core writes them, other arrays uncompressed (which every crate
+//! reader reads).
 
 use super::tables::{put_u64, Tables};
 use crate::parse::{ListOp, Value};
@@ -44,6 +46,12 @@ pub(crate) mod ty {
     pub const VALUE_BLOCK: u8 = 51;
     pub const TIME_CODE: u8 = 56;
 }
+
+/// Arrays of at least this many integers are written compressed (`MinCompressedArraySize`).
+const MIN_COMPRESSED_ARRAY: usize = 16;
+
+/// The "compressed" flag of a value representation.
+const COMPRESSED: u64 = 1 << 61;
 
 /// A value representation: type, array/inlined flags and a 48-bit payload.
 pub(crate) fn rep(t: u8, array: bool, inlined: bool, payload: u64) -> u64 {
@@ -206,6 +214,30 @@ impl Tables {
             };
             if items.is_empty() {
                 return Ok(rep(t, true, false, 0));
+            }
+            if matches!(t, ty::INT | ty::UINT) && items.len() >= MIN_COMPRESSED_ARRAY {
+                // Integer coding, as `crateFile.cpp` compresses `int[]` (and `uint[]`) of 16
+                // elements or more: the count, then the compressed integers.
+                let mut ints = Vec::with_capacity(items.len());
+                for item in items {
+                    let mut n = Vec::new();
+                    flatten(item, &mut n)?;
+                    let [x] = n[..] else {
+                        return Err(format!("expected a number, found {item:?}"));
+                    };
+                    ints.push(if t == ty::INT {
+                        x as i32
+                    } else {
+                        x as u32 as i32
+                    });
+                }
+                let packed = super::encode::compress_ints(&ints);
+                let mut buf = Vec::new();
+                put_u64(&mut buf, items.len() as u64);
+                put_u64(&mut buf, packed.len() as u64);
+                buf.extend_from_slice(&packed);
+                let at = self.heap(&buf);
+                return Ok(rep(t, true, false, at) | COMPRESSED);
             }
             let mut buf = Vec::new();
             put_u64(&mut buf, items.len() as u64);
