@@ -147,7 +147,7 @@ pub struct BatchArgs {
     /// The report (default: OUT_DIR/.rigport-batch/report-I-of-N.jsonl).
     #[arg(long, value_name = "R.jsonl")]
     pub report: Option<PathBuf>,
-    /// For a folder: the output extension of its items (glb, gltf or usda).
+    /// For a folder: the output extension of its items (glb, gltf, usda, usdc or usdz).
     #[arg(long, default_value = "glb", value_name = "EXT")]
     pub to: String,
     /// For a folder: options every item gets, split on spaces ("--fps 30").
@@ -200,7 +200,7 @@ pub struct InputArgs {
 /// Where and how an asset is written.
 #[derive(Debug, Args)]
 pub struct OutputArgs {
-    /// Output file: .glb, .gltf (+ a .bin of the same stem beside it) or .usda.
+    /// Output file: .glb, .gltf (+ a .bin of the same stem beside it), .usda, .usdc or .usdz.
     #[arg(long, short, value_name = "OUT")]
     pub output: PathBuf,
     /// Influences kept per vertex: 1 to 8 (glTF default 4; above 4, vertices with more get
@@ -565,7 +565,7 @@ pub struct ClothArgs {
     /// The garment: the name of an unskinned mesh of the input, or an .obj file.
     #[arg(long, value_name = "GARMENT")]
     pub garment: String,
-    /// Output file: .glb, .gltf (+ .bin) or .usda.
+    /// Output file: .glb, .gltf (+ .bin), .usda, .usdc or .usdz.
     #[arg(long, short, value_name = "OUT")]
     pub output: PathBuf,
     /// The clip to simulate (default: the first).

@@ -40,3 +40,4 @@ mod usd_frames;
 mod usd_import;
 mod usd_root_motion;
 mod usd_topology;
+mod usdz;

@@ -37,6 +37,9 @@ pub enum ExportError {
     /// The glTF JSON could not be serialized.
     #[error("cannot serialize the glTF JSON")]
     Json(#[from] serde_json::Error),
+    /// The USD layer could not be encoded as a `.usdc` / `.usdz`.
+    #[error("cannot encode the USD layer")]
+    Usd(#[from] rigport_usd::UsdError),
     /// Writing an output file failed.
     #[error("cannot write {}", path.display())]
     Io {

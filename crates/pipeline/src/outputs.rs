@@ -25,7 +25,7 @@ use crate::{Message, PipelineError};
 pub enum Format {
     /// `.glb` or `.gltf` (+ `.bin`).
     Gltf,
-    /// `.usda`.
+    /// `.usda`, `.usdc` or `.usdz` (the encoding by the extension).
     Usda,
 }
 
@@ -36,14 +36,16 @@ pub enum Format {
 pub fn format_of(path: &Path) -> Result<Format, PipelineError> {
     Ok(match extension(path).as_str() {
         "glb" | "gltf" => Format::Gltf,
-        "usda" => Format::Usda,
-        "usd" | "usdc" | "usdz" => return Err(PipelineError::Usage(format!(
-            "{}: rigport writes USD as text; use the .usda extension (usdcat converts it to .usdc/.usdz)",
-            path.display()
-        ))),
+        "usda" | "usdc" | "usdz" => Format::Usda,
+        "usd" => {
+            return Err(PipelineError::Usage(format!(
+                "{}: say which USD encoding: .usda (text), .usdc (binary) or .usdz (package)",
+                path.display()
+            )))
+        }
         _ => {
             return Err(PipelineError::Usage(format!(
-                "{}: unknown output type; expected .glb, .gltf or .usda",
+                "{}: unknown output type; expected .glb, .gltf, .usda, .usdc or .usdz",
                 path.display()
             )))
         }

@@ -1,4 +1,5 @@
-//! Asset -> USD text (`.usda`) with UsdSkel.
+//! Asset -> USD text (`.usda`) with UsdSkel; the same layer as a crate file (`.usdc`) or a
+//! package (`.usdz`, with the textures) through `rigport-usd` (`encode.rs`).
 //!
 //! What the stage holds (`<root>` is the asset name made an identifier, `rig` when empty):
 //! - layer metadata: `defaultPrim = "<root>"`, `upAxis` (the asset's
@@ -129,6 +130,7 @@
 
 mod anim;
 mod checks;
+mod encode;
 mod material;
 mod mesh;
 mod names;
@@ -145,6 +147,7 @@ use std::path::{Path, PathBuf};
 
 use rigport_model::{Asset, UpAxis, Warning};
 
+use self::encode::Encoding;
 use crate::ExportError;
 
 /// The skinning method a USD reader should use for skinned meshes: the model's
@@ -237,11 +240,14 @@ pub struct PreparedUsd {
     text: String,
     images: Vec<crate::ImageFile>,
     warnings: Vec<Warning>,
+    /// The `.usdc` or `.usdz` bytes; `None` for text.
+    encoded: Option<Vec<u8>>,
 }
 
 /// Builds the export of `asset` to `path` in memory. The extension must be `.usda` or
-/// `.usd` (case-insensitive; a `.usd` file may hold text). Nothing is written until
-/// [`PreparedUsd::write`].
+/// `.usd` (case-insensitive; a `.usd` file may hold text), `.usdc` (the same layer as a
+/// crate file) or `.usdz` (a package: that crate file as `<stem>.usdc`, then the
+/// textures). Nothing is written until [`PreparedUsd::write`].
 ///
 /// # Errors
 /// [`ExportError::UnsupportedExtension`] for any other extension (checked before any
@@ -251,25 +257,32 @@ pub fn prepare_usd(
     path: &Path,
     options: &UsdOptions,
 ) -> Result<PreparedUsd, ExportError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("usda" | "usd")) {
+    let Some(encoding) = Encoding::of(path) else {
         return Err(ExportError::UnsupportedExtension {
             path: path.to_path_buf(),
         });
-    }
+    };
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let out = to_usda_with_stem(asset, options, &stem)?;
+    let encoded = match encoding {
+        Encoding::Text => None,
+        Encoding::Crate => Some(encode::crate_file(&out.text, path)?),
+        Encoding::Package => Some(encode::package(&out.text, &out.images, &stem, path)?),
+    };
     Ok(PreparedUsd {
         path: path.to_path_buf(),
         text: out.text,
-        images: out.images,
+        // A package holds its textures.
+        images: if encoding == Encoding::Package {
+            Vec::new()
+        } else {
+            out.images
+        },
         warnings: out.warnings,
+        encoded,
     })
 }
 
@@ -284,7 +297,8 @@ impl PreparedUsd {
         &self.path
     }
 
-    /// The USDA text that [`PreparedUsd::write`] writes.
+    /// The USDA text that [`PreparedUsd::write`] writes (for a `.usdc` or `.usdz`, the
+    /// text of the layer it encodes).
     pub fn text(&self) -> &str {
         &self.text
     }
@@ -302,7 +316,8 @@ impl PreparedUsd {
             crate::write_atomic(&path, &image.bytes)
                 .map_err(|source| ExportError::Io { path, source })?;
         }
-        crate::write_atomic(&self.path, self.text.as_bytes()).map_err(|source| ExportError::Io {
+        let bytes = self.encoded.as_deref().unwrap_or(self.text.as_bytes());
+        crate::write_atomic(&self.path, bytes).map_err(|source| ExportError::Io {
             path: self.path.clone(),
             source,
         })

@@ -466,7 +466,7 @@ fn dropped_tracks_are_reported() {
 fn prepare_and_write() {
     let dir = tempfile::tempdir().unwrap();
     let asset = sample::two_roots();
-    let err = prepare_usd(&asset, &dir.path().join("x.usdz"), &UsdOptions::default()).unwrap_err();
+    let err = prepare_usd(&asset, &dir.path().join("x.glb"), &UsdOptions::default()).unwrap_err();
     assert!(matches!(err, ExportError::UnsupportedExtension { .. }));
     let path = dir.path().join("out.USDA");
     let prepared = prepare_usd(&asset, &path, &UsdOptions::default()).unwrap();

@@ -99,36 +99,37 @@
 //! wrong type.
 //!
 //! # Files
-//! Reading: `lex.rs`, `parse.rs` (text), `crate_file/` (`.usdc`), `usdz.rs` (packages),
-//! `stage.rs` (composing one layer), `values.rs` (typed values), `xform.rs` (transforms).
+//! Reading a layer is `rigport-usd`'s: the text parser, the crate-file (`.usdc`) and
+//! package (`.usdz`) readers, one layer composed (`stage`), typed values (`values`).
 //! Building the asset: `importer.rs` (the `Importer` state and shared helpers),
 //! `assemble.rs` (`Importer::run`), `metadata.rs` (layer metadata, composition warnings),
-//! `skeleton.rs`, `skin.rs` (bindings, influence primvars), `blend.rs` (blend shapes and their weights; `shapes.rs` the channels they share with the
-//! importer state), `mesh.rs` (topology, primvars,
-//! static meshes), `anim.rs` (SkelAnimations to clips), `root_motion.rs` (animated
-//! transforms above the skeleton) and `implicit.rs` (implicit surfaces as polygons).
+//! `xform.rs` (transforms), `skeleton.rs`, `skin.rs` (bindings, influence primvars),
+//! `blend.rs` (blend shapes and their weights; `shapes.rs` the channels they share with
+//! the importer state), `mesh.rs` (topology, primvars, static meshes), `anim.rs`
+//! (SkelAnimations to clips), `root_motion.rs` (animated transforms above the skeleton)
+//! and `implicit.rs` (implicit surfaces as polygons); `crate_tests.rs` checks the import
+//! of binary and packaged layers against their text.
 
 mod anim;
 mod assemble;
 mod blend;
-mod crate_file;
+#[cfg(test)]
+mod crate_tests;
 mod implicit;
 mod importer;
-mod lex;
 mod material;
 mod mesh;
 mod metadata;
-mod parse;
 mod root_motion;
 mod shapes;
 mod skeleton;
 mod skin;
-mod stage;
 #[cfg(test)]
 mod tests;
-mod usdz;
-mod values;
 mod xform;
+
+// The generic layer code lives in `rigport-usd`; these names keep the mapping's paths.
+use rigport_usd::{parse, stage, usdz, values};
 
 use std::path::Path;
 
@@ -138,7 +139,7 @@ use rigport_model::UpAxis;
 use self::importer::Importer;
 pub use self::metadata::{DEFAULT_METERS_PER_UNIT, DEFAULT_TIME_CODES_PER_SECOND};
 use self::stage::Stage;
-use crate::{read_file, ImportError, Imported};
+use crate::{read_file, ImportError, Imported, Location, Problem};
 
 /// Imports a `.usda` file.
 ///
@@ -176,4 +177,27 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
         asset,
         warnings: importer.warnings,
     })
+}
+
+impl From<rigport_usd::UsdError> for ImportError {
+    /// The same location and problem (a USD layer error names a file and a line and
+    /// column, or a byte offset).
+    fn from(e: rigport_usd::UsdError) -> Self {
+        let at = &e.location;
+        let location = Location {
+            byte_offset: at.byte_offset,
+            ..match (at.line, at.column) {
+                (Some(l), Some(c)) => Location::line_column(&at.path, l, c),
+                (Some(l), None) => Location::line(&at.path, l),
+                _ => Location::file(&at.path),
+            }
+        };
+        let problem = match e.problem {
+            rigport_usd::Problem::Empty => Problem::Empty,
+            rigport_usd::Problem::Syntax { expected, found } => Problem::Syntax { expected, found },
+            rigport_usd::Problem::Invalid(m) => Problem::Invalid(m),
+            rigport_usd::Problem::Truncated(m) => Problem::Truncated(m),
+        };
+        ImportError::new(location, problem)
+    }
 }

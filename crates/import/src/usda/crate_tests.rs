@@ -4,8 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use super::super::{import, import_slice};
-use super::*;
+use super::{import, import_slice};
+use rigport_usd::crate_file::{read, MAGIC};
+use rigport_usd::parse::{ListOp, PropKind, Specifier, Value};
 
 fn corpus(rel: &str) -> Option<PathBuf> {
     rigport_testkit::corpus(&format!("6_usd/{rel}"))
@@ -191,13 +192,13 @@ fn binary_imports_equal_text_imports() {
 /// the text parser's `f64`).
 fn normalized(v: &Value, type_name: &str) -> Value {
     let base = type_name.trim_end_matches("[]");
-    let half = crate::usda::values::is_half_type(type_name);
+    let half = rigport_usd::values::is_half_type(type_name);
     let double = base == "double"
         || base == "timecode"
         || (base.ends_with('d') && base != "float" && !base.starts_with("bool"));
     match v {
         Value::Number(x) if half => {
-            Value::Number(f64::from(crate::usda::values::round_to_half(*x as f32)))
+            Value::Number(f64::from(rigport_usd::values::round_to_half(*x as f32)))
         }
         Value::Number(x) if !double => Value::Number(f64::from(*x as f32)),
         Value::Ident(s) if s != "true" && s != "false" => Value::Str(s.clone()),
@@ -219,7 +220,7 @@ fn binary_layer_equals_text_layer_for_every_value_type() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/usdc/all_types.usda");
     convert(&python, dir.path(), std::slice::from_ref(&src));
     let text_layer =
-        crate::usda::parse::parse(&std::fs::read_to_string(&src).unwrap(), &src).unwrap();
+        rigport_usd::parse::parse(&std::fs::read_to_string(&src).unwrap(), &src).unwrap();
     let usdc = dir.path().join("c/all_types.usdc");
     let bin_layer = read(&std::fs::read(&usdc).unwrap(), &usdc).unwrap();
     for key in [
@@ -247,9 +248,9 @@ fn binary_layer_equals_text_layer_for_every_value_type() {
     forced.push(Some(("/Rig", "clip", "run")));
     forced.push(Some(("/Rig", "look", "bold")));
     for force in forced {
-        let t = crate::usda::stage::Stage::compose(&text_layer.root, force);
-        let b = crate::usda::stage::Stage::compose(&bin_layer.root, force);
-        let paths = |s: &crate::usda::stage::Stage<'_>| -> Vec<String> {
+        let t = rigport_usd::stage::Stage::compose(&text_layer.root, force);
+        let b = rigport_usd::stage::Stage::compose(&bin_layer.root, force);
+        let paths = |s: &rigport_usd::stage::Stage<'_>| -> Vec<String> {
             s.prims.iter().map(|p| p.path.clone()).collect()
         };
         let mut tp = paths(&t);
@@ -279,7 +280,7 @@ fn binary_layer_equals_text_layer_for_every_value_type() {
                     bprop.default.map(|v| normalized(v, ty)),
                     "{at}"
                 );
-                let samples = |p: &crate::usda::stage::Prop<'_>| {
+                let samples = |p: &rigport_usd::stage::Prop<'_>| {
                     p.samples.as_ref().map(|s| {
                         s.iter()
                             .map(|(t, v)| (*t, normalized(v, ty)))
@@ -354,9 +355,9 @@ fn corpus_crate_files_equal_their_text_export() {
 // The committed fixture, and corrupt files: errors with byte offsets, never a panic.
 // ---------------------------------------------------------------------------------------
 
-const ALL_TYPES_USDA: &str = include_str!("../../../../../fixtures/usdc/all_types.usda");
-const ALL_TYPES_USDC: &[u8] = include_bytes!("../../../../../fixtures/usdc/all_types.usdc");
-const ALL_TYPES_USDZ: &[u8] = include_bytes!("../../../../../fixtures/usdc/all_types.usdz");
+const ALL_TYPES_USDA: &str = include_str!("../../../../fixtures/usdc/all_types.usda");
+const ALL_TYPES_USDC: &[u8] = include_bytes!("../../../../fixtures/usdc/all_types.usdc");
+const ALL_TYPES_USDZ: &[u8] = include_bytes!("../../../../fixtures/usdc/all_types.usdz");
 
 #[test]
 fn committed_fixture_imports_like_its_text() {

@@ -6,16 +6,16 @@
 
 use super::coding::{self, Width};
 use super::layout::{CrateFile, Cursor, MAX_VALUE_DEPTH};
-use crate::usda::parse::{ListOp, Value};
-use crate::ImportError;
+use crate::error::UsdError;
+use crate::parse::{ListOp, Value};
 
 /// A crate type number (`Usd_CrateFile::TypeEnum`).
-pub(super) type TypeId = u8;
+pub(crate) type TypeId = u8;
 
 mod ty {
     // Named from the crate root: tools/module_cycles.py reads a `super::` in an inline
     // module as the file's parent (mod.rs), which would count as a dependency on it.
-    use crate::usda::crate_file::value::TypeId;
+    use crate::crate_file::value::TypeId;
     pub const BOOL: TypeId = 1;
     pub const UCHAR: TypeId = 2;
     pub const INT: TypeId = 3;
@@ -71,7 +71,7 @@ const MIN_COMPRESSED_ARRAY: usize = 16;
 
 /// A decoded field value.
 #[derive(Clone, Debug, PartialEq)]
-pub(super) enum Decoded {
+pub(crate) enum Decoded {
     /// A value as the text format would write it.
     Value(Value),
     /// A list op: its non-empty operations, in the order the text writes them.
@@ -164,7 +164,7 @@ fn bool_value(b: bool) -> Value {
 
 impl CrateFile<'_> {
     /// Decodes the value representation `bits`; `depth` counts enclosing values.
-    pub(super) fn value(&self, bits: u64, depth: usize) -> Result<Decoded, ImportError> {
+    pub(crate) fn value(&self, bits: u64, depth: usize) -> Result<Decoded, UsdError> {
         let rep = Rep::new(bits);
         if depth > MAX_VALUE_DEPTH {
             return Err(self.invalid(
@@ -231,7 +231,7 @@ impl CrateFile<'_> {
     }
 
     /// A value stored at the payload's byte offset.
-    fn heap_value(&self, rep: Rep, depth: usize) -> Result<Decoded, ImportError> {
+    fn heap_value(&self, rep: Rep, depth: usize) -> Result<Decoded, UsdError> {
         let c = &mut Cursor { pos: rep.payload };
         let v = match rep.ty {
             ty::DOUBLE | ty::TIME_CODE => Value::Number(self.f64(c)?),
@@ -311,7 +311,7 @@ impl CrateFile<'_> {
 
     /// A `VtValue` in a stream: an `i64` offset (from its own position) to a value
     /// representation, which is decoded; the cursor ends after that representation.
-    fn vt_value(&self, c: &mut Cursor, depth: usize) -> Result<Decoded, ImportError> {
+    fn vt_value(&self, c: &mut Cursor, depth: usize) -> Result<Decoded, UsdError> {
         let start = c.pos;
         let offset = self.i64(c)?;
         c.pos = start
@@ -322,13 +322,13 @@ impl CrateFile<'_> {
     }
 
     /// A string written in a stream: a `u32` string index.
-    fn stream_string(&self, c: &mut Cursor) -> Result<Value, ImportError> {
+    fn stream_string(&self, c: &mut Cursor) -> Result<Value, UsdError> {
         let at = c.pos;
         let i = self.u32(c)?;
         Ok(Value::Str(self.string(at, i)?.to_string()))
     }
 
-    fn layer_offset(&self, c: &mut Cursor) -> Result<Value, ImportError> {
+    fn layer_offset(&self, c: &mut Cursor) -> Result<Value, UsdError> {
         let offset = self.f64(c)?;
         let scale = self.f64(c)?;
         Ok(Value::Dict(vec![
@@ -337,7 +337,7 @@ impl CrateFile<'_> {
         ]))
     }
 
-    fn dictionary(&self, c: &mut Cursor, depth: usize) -> Result<Value, ImportError> {
+    fn dictionary(&self, c: &mut Cursor, depth: usize) -> Result<Value, UsdError> {
         let n = self.count(c, true)?;
         let mut out = Vec::new();
         for _ in 0..n {
@@ -354,7 +354,7 @@ impl CrateFile<'_> {
         Ok(Value::Dict(out))
     }
 
-    fn payload(&self, c: &mut Cursor) -> Result<Value, ImportError> {
+    fn payload(&self, c: &mut Cursor) -> Result<Value, UsdError> {
         let at = c.pos;
         let asset = self.u32(c)?;
         let prim = self.u32(c)?;
@@ -365,7 +365,7 @@ impl CrateFile<'_> {
     }
 
     /// A reference or payload target: `@asset@</prim>`, or `</prim>` inside the layer.
-    fn arc(&self, at: u64, asset: u32, prim: u32) -> Result<Value, ImportError> {
+    fn arc(&self, at: u64, asset: u32, prim: u32) -> Result<Value, UsdError> {
         let asset = self.string(at, asset)?.to_string();
         let prim = self.path_at(at, prim).ok().map(str::to_string);
         Ok(match (asset.is_empty(), prim) {
@@ -380,7 +380,7 @@ impl CrateFile<'_> {
         t: TypeId,
         c: &mut Cursor,
         depth: usize,
-    ) -> Result<Vec<(ListOp, Vec<Value>)>, ImportError> {
+    ) -> Result<Vec<(ListOp, Vec<Value>)>, UsdError> {
         let bits = self.u8(c)?;
         // `_ListOpHeader` bits, and the order the vectors follow in.
         let is_explicit = bits & 1 != 0;
@@ -404,7 +404,7 @@ impl CrateFile<'_> {
     }
 
     /// A `u64` count and that many items of a list op's item type.
-    fn items(&self, t: TypeId, c: &mut Cursor, depth: usize) -> Result<Vec<Value>, ImportError> {
+    fn items(&self, t: TypeId, c: &mut Cursor, depth: usize) -> Result<Vec<Value>, UsdError> {
         let n = self.count(c, true)?;
         let mut out = Vec::with_capacity(n.min(1 << 16));
         for _ in 0..n {
@@ -441,7 +441,7 @@ impl CrateFile<'_> {
         Ok(out)
     }
 
-    fn time_samples(&self, c: &mut Cursor, depth: usize) -> Result<Decoded, ImportError> {
+    fn time_samples(&self, c: &mut Cursor, depth: usize) -> Result<Decoded, UsdError> {
         // An offset to the times' representation, then an offset to the values'.
         let start = c.pos;
         let jump = self.i64(c)?;
@@ -484,7 +484,7 @@ impl CrateFile<'_> {
     }
 
     /// One element of a fixed-size type read from a stream.
-    fn element(&self, t: TypeId, c: &mut Cursor) -> Result<Value, ImportError> {
+    fn element(&self, t: TypeId, c: &mut Cursor) -> Result<Value, UsdError> {
         Ok(match t {
             ty::BOOL => bool_value(self.u8(c)? != 0),
             ty::UCHAR => Value::Number(f64::from(self.u8(c)?)),
@@ -520,7 +520,7 @@ impl CrateFile<'_> {
         })
     }
 
-    fn scalar(&self, s: Scalar, c: &mut Cursor) -> Result<f64, ImportError> {
+    fn scalar(&self, s: Scalar, c: &mut Cursor) -> Result<f64, UsdError> {
         Ok(match s {
             Scalar::Half => f64::from(coding::half_to_f32(self.u16(c)?)),
             Scalar::Float => f64::from(self.f32(c)?),
@@ -545,7 +545,7 @@ impl CrateFile<'_> {
     }
 
     /// An array value; `None` for an element type this reader does not know.
-    fn array_value(&self, rep: Rep) -> Result<Option<Value>, ImportError> {
+    fn array_value(&self, rep: Rep) -> Result<Option<Value>, UsdError> {
         let Some(size) = Self::element_size(rep.ty) else {
             return Ok(None);
         };

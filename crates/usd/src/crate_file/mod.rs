@@ -52,14 +52,15 @@ mod value;
 
 use std::path::Path;
 
-pub(crate) use self::layout::MAGIC;
-use self::layout::{child_path, CrateFile};
+pub(crate) use self::layout::child_path;
+use self::layout::CrateFile;
+pub use self::layout::MAGIC;
 use self::value::Decoded;
 use super::parse::{
     Layer, ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifier, Value, VariantSetSpec,
     MAX_DEPTH,
 };
-use crate::ImportError;
+use crate::error::UsdError;
 
 /// `SdfSpecType` values used here.
 mod spec_type {
@@ -76,7 +77,7 @@ mod spec_type {
 /// # Errors
 /// A truncated file, an offset or index out of range, corrupt compressed data or an
 /// unsupported version, at the byte offset where it was found.
-pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<Layer, ImportError> {
+pub fn read(bytes: &[u8], path: &Path) -> Result<Layer, UsdError> {
     let file = CrateFile::open(bytes, path)?;
     file.layer()
 }
@@ -84,7 +85,7 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<Layer, ImportError> {
 /// The spec walk: specs to the layer's prims, properties and variants.
 impl CrateFile<'_> {
     /// The value of a field that holds a token list (`primChildren`, `properties`, ...).
-    fn names(&self, fields: &[(&str, u64)], key: &str) -> Result<Vec<String>, ImportError> {
+    fn names(&self, fields: &[(&str, u64)], key: &str) -> Result<Vec<String>, UsdError> {
         let Some(&(_, rep)) = fields.iter().find(|(k, _)| *k == key) else {
             return Ok(Vec::new());
         };
@@ -102,7 +103,7 @@ impl CrateFile<'_> {
         Ok(out)
     }
 
-    fn layer(&self) -> Result<Layer, ImportError> {
+    fn layer(&self) -> Result<Layer, UsdError> {
         let mut layer = Layer::default();
         let Some(root) = self.spec("/") else {
             return Ok(layer);
@@ -123,7 +124,7 @@ impl CrateFile<'_> {
     }
 
     /// Metadata items of a spec, all fields but `skip`, with the text format's names.
-    fn metadata(&self, fields: &[(&str, u64)], skip: &[&str]) -> Result<Vec<Meta>, ImportError> {
+    fn metadata(&self, fields: &[(&str, u64)], skip: &[&str]) -> Result<Vec<Meta>, UsdError> {
         let mut out = Vec::new();
         for &(key, rep) in fields {
             if skip.contains(&key) {
@@ -161,7 +162,7 @@ impl CrateFile<'_> {
         name: String,
         depth: usize,
         walk: &mut Walk,
-    ) -> Result<Option<PrimSpec>, ImportError> {
+    ) -> Result<Option<PrimSpec>, UsdError> {
         let Some(spec) = self.spec(path) else {
             return Ok(None);
         };
@@ -206,7 +207,7 @@ impl CrateFile<'_> {
         fields: &[(&str, u64)],
         depth: usize,
         walk: &mut Walk,
-    ) -> Result<PrimBody, ImportError> {
+    ) -> Result<PrimBody, UsdError> {
         let mut body = PrimBody::default();
         for name in self.names(fields, "properties")? {
             let prop_path = format!("{path}.{name}");
@@ -258,7 +259,7 @@ impl CrateFile<'_> {
         Ok(body)
     }
 
-    fn property(&self, path: &str, name: String) -> Result<Option<PropSpec>, ImportError> {
+    fn property(&self, path: &str, name: String) -> Result<Option<PropSpec>, UsdError> {
         let Some(spec) = self.spec(path) else {
             return Ok(None);
         };
@@ -364,9 +365,6 @@ impl Walk {
     }
 }
 
-#[cfg(test)]
-mod tests;
-
 /// The paths a path list op holds: its explicit items, else the prepended, added and
 /// appended ones (relationship targets, attribute connections).
 fn list_op_paths(ops: Vec<(ListOp, Vec<Value>)>) -> Vec<String> {
@@ -386,4 +384,21 @@ fn list_op_paths(ops: Vec<(ListOp, Vec<Value>)>) -> Vec<String> {
             _ => None,
         })
         .collect()
+}
+
+/// The reader's decoders, for the writer's tests to check its encoders against.
+#[cfg(test)]
+pub(crate) mod coding_for_tests {
+    pub(crate) use crate::crate_file::coding::half_to_f32;
+
+    /// `TfFastCompression` decoding of at most `max` bytes.
+    pub(crate) fn decompress(input: &[u8], max: usize) -> Result<Vec<u8>, String> {
+        crate::crate_file::coding::decompress_prefix(input, max).map_err(|e| e.0)
+    }
+
+    /// 32-bit integer decoding.
+    pub(crate) fn decode_ints(data: &[u8], n: usize) -> Result<Vec<i64>, String> {
+        use crate::crate_file::coding::{decode_ints, Width};
+        decode_ints(data, n, Width::W32).map_err(|e| e.0)
+    }
 }

@@ -1,11 +1,13 @@
 //! Typed reads of parsed values: numbers, tuples, matrices, tokens, and the rounding of
 //! `half` values.
 
+pub use super::parse::narrow_to_type;
 use super::parse::Value;
+pub use super::precision::{is_float_type, is_half_type, round_to_half};
 use super::stage::Prop;
 
 /// A list of numbers (`int[]`, `float[]`).
-pub(crate) fn numbers(v: &Value) -> Option<Vec<f64>> {
+pub fn numbers(v: &Value) -> Option<Vec<f64>> {
     match v {
         Value::List(items) => items
             .iter()
@@ -19,7 +21,7 @@ pub(crate) fn numbers(v: &Value) -> Option<Vec<f64>> {
 }
 
 /// One number.
-pub(crate) fn number(v: &Value) -> Option<f64> {
+pub fn number(v: &Value) -> Option<f64> {
     match v {
         Value::Number(n) => Some(*n),
         _ => None,
@@ -27,7 +29,7 @@ pub(crate) fn number(v: &Value) -> Option<f64> {
 }
 
 /// An `N`-tuple of numbers.
-pub(crate) fn tuple<const N: usize>(v: &Value) -> Option<[f64; N]> {
+pub fn tuple<const N: usize>(v: &Value) -> Option<[f64; N]> {
     let Value::Tuple(items) = v else {
         return None;
     };
@@ -42,7 +44,7 @@ pub(crate) fn tuple<const N: usize>(v: &Value) -> Option<[f64; N]> {
 }
 
 /// A list of `N`-tuples (`point3f[]`, `quatf[]`).
-pub(crate) fn tuples<const N: usize>(v: &Value) -> Option<Vec<[f64; N]>> {
+pub fn tuples<const N: usize>(v: &Value) -> Option<Vec<[f64; N]>> {
     match v {
         Value::List(items) => items.iter().map(tuple::<N>).collect(),
         _ => None,
@@ -50,7 +52,7 @@ pub(crate) fn tuples<const N: usize>(v: &Value) -> Option<Vec<[f64; N]>> {
 }
 
 /// A `matrix4d` as its four rows, as written.
-pub(crate) fn matrix(v: &Value) -> Option<[[f64; 4]; 4]> {
+pub fn matrix(v: &Value) -> Option<[[f64; 4]; 4]> {
     let Value::Tuple(rows) = v else {
         return None;
     };
@@ -65,7 +67,7 @@ pub(crate) fn matrix(v: &Value) -> Option<[[f64; 4]; 4]> {
 }
 
 /// A `matrix4d[]`.
-pub(crate) fn matrices(v: &Value) -> Option<Vec<[[f64; 4]; 4]>> {
+pub fn matrices(v: &Value) -> Option<Vec<[[f64; 4]; 4]>> {
     match v {
         Value::List(items) => items.iter().map(matrix).collect(),
         _ => None,
@@ -73,7 +75,7 @@ pub(crate) fn matrices(v: &Value) -> Option<Vec<[[f64; 4]; 4]>> {
 }
 
 /// A token or string.
-pub(crate) fn token(v: &Value) -> Option<&str> {
+pub fn token(v: &Value) -> Option<&str> {
     match v {
         Value::Str(s) | Value::Ident(s) => Some(s),
         _ => None,
@@ -81,84 +83,16 @@ pub(crate) fn token(v: &Value) -> Option<&str> {
 }
 
 /// A `token[]` (quoted or bare items).
-pub(crate) fn tokens(v: &Value) -> Option<Vec<&str>> {
+pub fn tokens(v: &Value) -> Option<Vec<&str>> {
     match v {
         Value::List(items) => items.iter().map(token).collect(),
         _ => None,
     }
 }
 
-/// Whether a value type stores IEEE half floats (`half`, `half3[]`, `quath`,
-/// `texCoord2h`, ...), whose values must be rounded as USD rounds them when it reads them.
-pub(crate) fn is_half_type(type_name: &str) -> bool {
-    let base = type_name.trim_end_matches("[]");
-    base.starts_with("half")
-        || base == "quath"
-        || (base.ends_with('h')
-            && base
-                .chars()
-                .rev()
-                .nth(1)
-                .is_some_and(|c| c.is_ascii_digit()))
-}
-
-/// Whether a value type stores IEEE single floats (`float`, `float3[]`, `point3f`,
-/// `normal3f[]`, `quatf`, `texCoord2f`, ...).
-pub(crate) fn is_float_type(type_name: &str) -> bool {
-    let base = type_name.trim_end_matches("[]");
-    base.starts_with("float")
-        || base == "quatf"
-        || (base.ends_with('f')
-            && base
-                .chars()
-                .rev()
-                .nth(1)
-                .is_some_and(|c| c.is_ascii_digit()))
-}
-
-/// A parsed value narrowed to the precision its attribute type holds: numbers of `half`
-/// types rounded to binary16 and of `float` types to binary32, as USD stores them when it
-/// reads a layer (so text and binary layers give the same numbers). Other types are kept.
-pub(crate) fn narrow_to_type(value: &mut Value, type_name: &str) {
-    let round: fn(f64) -> f64 = if is_half_type(type_name) {
-        |x| f64::from(round_to_half(x as f32))
-    } else if is_float_type(type_name) {
-        |x| f64::from(x as f32)
-    } else {
-        return;
-    };
-    fn walk(v: &mut Value, round: fn(f64) -> f64) {
-        match v {
-            Value::Number(x) => *x = round(*x),
-            Value::Tuple(items) | Value::List(items) => {
-                items.iter_mut().for_each(|i| walk(i, round));
-            }
-            _ => {}
-        }
-    }
-    walk(value, round);
-}
-
-/// `x` rounded to the nearest IEEE 754 binary16 value (ties to even), as a `half`
-/// attribute holds it; magnitudes beyond the largest half round to infinity.
-pub(crate) fn round_to_half(x: f32) -> f32 {
-    if !x.is_finite() || x == 0.0 {
-        return x;
-    }
-    // 65520 is halfway between the largest half (65504) and the next power of two: from
-    // there on, rounding gives infinity.
-    if x.abs() >= 65520.0 {
-        return f32::INFINITY.copysign(x);
-    }
-    let exponent = ((x.abs().to_bits() >> 23) & 0xff) as i32 - 127;
-    // Halves have 10 fraction bits; below 2^-14 they are subnormal with a fixed step 2^-24.
-    let step = 2f32.powi(exponent.max(-14) - 10);
-    (x / step).round_ties_even() * step
-}
-
 /// The value of an attribute that rigport reads without time: its default, or else its
 /// first time sample (and whether it had to take a sample).
-pub(crate) fn static_value<'l>(prop: &Prop<'l>) -> Option<(&'l Value, bool)> {
+pub fn static_value<'l>(prop: &Prop<'l>) -> Option<(&'l Value, bool)> {
     match prop.default {
         Some(v) if *v != Value::None => Some((v, false)),
         _ => prop

@@ -13,11 +13,11 @@
 
 use std::path::Path;
 
-use crate::{ImportError, Location};
+use crate::error::{Location, UsdError};
 
 /// What a token is.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) enum Tok<'a> {
+pub enum Tok<'a> {
     /// An identifier or keyword, namespaces included (`primvars:skel:jointIndices`).
     Ident(&'a str),
     /// A number (integers too; `inf`, `-inf` and `nan` included).
@@ -36,7 +36,7 @@ pub(crate) enum Tok<'a> {
 
 /// A token and where it is in the text.
 #[derive(Clone, Debug)]
-pub(crate) struct Token<'a> {
+pub struct Token<'a> {
     /// What.
     pub tok: Tok<'a>,
     /// Byte offset of its first character.
@@ -48,7 +48,7 @@ pub(crate) struct Token<'a> {
 }
 
 /// Reads tokens from a `.usda` text.
-pub(crate) struct Lexer<'a> {
+pub struct Lexer<'a> {
     text: &'a str,
     bytes: &'a [u8],
     pos: usize,
@@ -123,15 +123,15 @@ impl<'a> Lexer<'a> {
     }
 
     /// A syntax error at `token`.
-    pub fn expected(&self, token: &Token<'_>, expected: &str) -> ImportError {
-        ImportError::syntax(self.location(token.start), expected, &self.describe(token))
+    pub fn expected(&self, token: &Token<'_>, expected: &str) -> UsdError {
+        UsdError::syntax(self.location(token.start), expected, &self.describe(token))
     }
 
     /// The next token, without consuming it.
     ///
     /// # Errors
     /// A malformed token (unterminated string, stray character, bad number).
-    pub fn peek(&mut self) -> Result<&Token<'a>, ImportError> {
+    pub fn peek(&mut self) -> Result<&Token<'a>, UsdError> {
         if self.peeked.is_none() {
             let t = self.lex()?;
             self.peeked = Some(t);
@@ -139,14 +139,14 @@ impl<'a> Lexer<'a> {
         // Just filled above.
         self.peeked
             .as_ref()
-            .ok_or_else(|| ImportError::invalid(Location::file(self.path), "lexer state"))
+            .ok_or_else(|| UsdError::invalid(Location::file(self.path), "lexer state"))
     }
 
     /// The next token, consumed.
     ///
     /// # Errors
     /// As [`Lexer::peek`].
-    pub fn next_token(&mut self) -> Result<Token<'a>, ImportError> {
+    pub fn next_token(&mut self) -> Result<Token<'a>, UsdError> {
         match self.peeked.take() {
             Some(t) => Ok(t),
             None => self.lex(),
@@ -162,11 +162,11 @@ impl<'a> Lexer<'a> {
         }
     }
 
-    fn error_at(&self, at: usize, expected: &str, found: &str) -> ImportError {
-        ImportError::syntax(self.location(at), expected, found)
+    fn error_at(&self, at: usize, expected: &str, found: &str) -> UsdError {
+        UsdError::syntax(self.location(at), expected, found)
     }
 
-    fn skip_space_and_comments(&mut self) -> Result<(), ImportError> {
+    fn skip_space_and_comments(&mut self) -> Result<(), UsdError> {
         loop {
             let Some(&b) = self.bytes.get(self.pos) else {
                 return Ok(());
@@ -202,7 +202,7 @@ impl<'a> Lexer<'a> {
         }
     }
 
-    fn lex(&mut self) -> Result<Token<'a>, ImportError> {
+    fn lex(&mut self) -> Result<Token<'a>, UsdError> {
         self.skip_space_and_comments()?;
         let start = self.pos;
         let line = self.line;
@@ -275,7 +275,7 @@ impl<'a> Lexer<'a> {
         }
     }
 
-    fn number(&mut self) -> Result<Tok<'a>, ImportError> {
+    fn number(&mut self) -> Result<Tok<'a>, UsdError> {
         let start = self.pos;
         let mut i = start;
         let negative = self.bytes.get(i) == Some(&b'-');
@@ -339,7 +339,7 @@ impl<'a> Lexer<'a> {
     }
 
     /// A quoted string starting at `self.pos` with quote `q` (single or triple).
-    fn string(&mut self, q: u8) -> Result<String, ImportError> {
+    fn string(&mut self, q: u8) -> Result<String, UsdError> {
         let start = self.pos;
         let triple = self.bytes.get(start + 1) == Some(&q) && self.bytes.get(start + 2) == Some(&q);
         let mut i = start + if triple { 3 } else { 1 };
@@ -430,7 +430,7 @@ impl<'a> Lexer<'a> {
     }
 
     /// `@path@` or `@@@path@@@` (which may hold `@`), starting at `self.pos`.
-    fn asset(&mut self) -> Result<String, ImportError> {
+    fn asset(&mut self) -> Result<String, UsdError> {
         let start = self.pos;
         let rest = self.text.get(start..).unwrap_or_default();
         let (open, close) = if rest.starts_with("@@@") {

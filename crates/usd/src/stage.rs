@@ -12,7 +12,7 @@ use super::parse::{ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifi
 
 /// A composed property.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct Prop<'l> {
+pub struct Prop<'l> {
     /// Value type for attributes (`point3f[]`); `None` for relationships.
     pub type_name: Option<&'l str>,
     /// The default value (`Value::None` when blocked).
@@ -41,7 +41,7 @@ impl<'l> Prop<'l> {
 
 /// A composed prim.
 #[derive(Clone, Debug)]
-pub(crate) struct Prim<'l> {
+pub struct Prim<'l> {
     /// Absolute path (`/Root/Skel`).
     pub path: String,
     /// The prim name.
@@ -83,7 +83,7 @@ impl<'l> Prim<'l> {
 
 /// The composed prims of one layer.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct Stage<'l> {
+pub struct Stage<'l> {
     /// Every prim, parents before children, in namespace (document) order.
     pub prims: Vec<Prim<'l>>,
     /// Root prim indices.
@@ -92,7 +92,7 @@ pub(crate) struct Stage<'l> {
 }
 
 /// A variant selection to impose instead of the authored one: (prim path, set, variant).
-pub(crate) type Override<'a> = (&'a str, &'a str, &'a str);
+pub type Override<'a> = (&'a str, &'a str, &'a str);
 
 impl<'l> Stage<'l> {
     /// Composes the root prims of a layer; `force` replaces one prim's selection in one
@@ -288,7 +288,7 @@ fn selection<'l>(metas: &[&'l Meta], set: &str) -> Option<&'l str> {
 }
 
 /// The items of a list value, or the value itself when it is a single item.
-pub(crate) fn list_items(value: &Value) -> &[Value] {
+pub fn list_items(value: &Value) -> &[Value] {
     match value {
         Value::List(items) => items,
         Value::None => &[],

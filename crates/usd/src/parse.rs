@@ -24,17 +24,17 @@
 use std::path::Path;
 
 use super::lex::{Lexer, Tok, Token};
-use super::values::narrow_to_type;
-use crate::{ImportError, Location, Problem};
+use super::precision::{is_float_type, is_half_type, round_to_half};
+use crate::error::{Location, Problem, UsdError};
 
 /// Deepest nesting of prims, variants and values accepted. Real layers nest prims a few
 /// dozen levels and values three (a matrix in a list); 200 is far beyond both and keeps
 /// the recursion well inside a 2 MiB thread stack.
-pub(crate) const MAX_DEPTH: usize = 200;
+pub const MAX_DEPTH: usize = 200;
 
 /// A value as written.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) enum Value {
+pub enum Value {
     /// `None`: a blocked value.
     None,
     /// A number (`true`/`false` are kept as identifiers).
@@ -57,7 +57,7 @@ pub(crate) enum Value {
 
 /// A list-editing operation on a metadata field or property (`prepend apiSchemas = ...`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum ListOp {
+pub enum ListOp {
     /// Plain `key = value`.
     Explicit,
     /// `prepend`.
@@ -87,7 +87,7 @@ impl ListOp {
 
 /// One metadata field (`key = value`; a bare doc string has the key `doc`).
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Meta {
+pub struct Meta {
     /// The field name.
     pub key: String,
     /// The list operation it is written with.
@@ -100,7 +100,7 @@ pub(crate) struct Meta {
 
 /// `def`, `over` or `class`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Specifier {
+pub enum Specifier {
     /// `def`: defines the prim.
     Def,
     /// `over`: only overrides opinions.
@@ -111,7 +111,7 @@ pub(crate) enum Specifier {
 
 /// A prim as written in the layer.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct PrimSpec {
+pub struct PrimSpec {
     /// `def`, `over` or `class`.
     pub specifier: Specifier,
     /// The schema type (`Mesh`, `Skeleton`, ...), if written.
@@ -128,7 +128,7 @@ pub(crate) struct PrimSpec {
 
 /// What a prim (or a variant) holds.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub(crate) struct PrimBody {
+pub struct PrimBody {
     /// Property statements in file order (one property may be written several times:
     /// `points` and `points.timeSamples`).
     pub props: Vec<PropSpec>,
@@ -140,7 +140,7 @@ pub(crate) struct PrimBody {
 
 /// `variantSet "name" = { "a" { ... } "b" { ... } }`.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct VariantSetSpec {
+pub struct VariantSetSpec {
     /// The set's name.
     pub name: String,
     /// Each variant: name, metadata, body.
@@ -151,7 +151,7 @@ pub(crate) struct VariantSetSpec {
 
 /// One property statement.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct PropSpec {
+pub struct PropSpec {
     /// Full name (`primvars:skel:jointIndices`).
     pub name: String,
     /// Attribute or relationship data.
@@ -166,7 +166,7 @@ pub(crate) struct PropSpec {
 
 /// Attribute or relationship.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) enum PropKind {
+pub enum PropKind {
     /// An attribute.
     Attr {
         /// Value type (`point3f[]`; `[]` kept).
@@ -193,7 +193,7 @@ pub(crate) enum PropKind {
 
 /// A parsed layer.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub(crate) struct Layer {
+pub struct Layer {
     /// Layer metadata in file order.
     pub meta: Vec<Meta>,
     /// Root prims (and any root-level statements `Sdf` allows there).
@@ -204,7 +204,7 @@ pub(crate) struct Layer {
 ///
 /// # Errors
 /// The first syntax error, at its line and column; a missing `#usda 1.0` header at 1:1.
-pub(crate) fn parse(text: &str, path: &Path) -> Result<Layer, ImportError> {
+pub fn parse(text: &str, path: &Path) -> Result<Layer, UsdError> {
     let mut p = Parser {
         lx: Lexer::new(text, path),
         depth: 0,
@@ -238,20 +238,20 @@ struct Parser<'a> {
 }
 
 impl<'a> Parser<'a> {
-    fn header(&mut self) -> Result<(), ImportError> {
+    fn header(&mut self) -> Result<(), UsdError> {
         let text = self.lx.text();
         let first = text.lines().next().unwrap_or_default();
         let mut words = first.split_ascii_whitespace();
         if words.next() != Some("#usda") {
             let shown = if text.trim().is_empty() {
-                return Err(ImportError::new(
+                return Err(UsdError::new(
                     Location::file(self.lx.path()),
                     Problem::Empty,
                 ));
             } else {
                 first
             };
-            return Err(ImportError::syntax(
+            return Err(UsdError::syntax(
                 Location::line_column(self.lx.path(), 1, 1),
                 "the header #usda 1.0",
                 shown,
@@ -259,7 +259,7 @@ impl<'a> Parser<'a> {
         }
         match words.next() {
             Some(v) if v.starts_with("1.") => Ok(()),
-            other => Err(ImportError::syntax(
+            other => Err(UsdError::syntax(
                 Location::line_column(self.lx.path(), 1, 7),
                 "version 1.0 after #usda",
                 other.unwrap_or("end of line"),
@@ -267,11 +267,11 @@ impl<'a> Parser<'a> {
         }
     }
 
-    fn is_punct(&mut self, c: char) -> Result<bool, ImportError> {
+    fn is_punct(&mut self, c: char) -> Result<bool, UsdError> {
         Ok(self.lx.peek()?.tok == Tok::Punct(c))
     }
 
-    fn expect_punct(&mut self, c: char) -> Result<Token<'a>, ImportError> {
+    fn expect_punct(&mut self, c: char) -> Result<Token<'a>, UsdError> {
         let t = self.lx.next_token()?;
         if t.tok == Tok::Punct(c) {
             Ok(t)
@@ -280,7 +280,7 @@ impl<'a> Parser<'a> {
         }
     }
 
-    fn ident(&mut self, what: &str) -> Result<(&'a str, Token<'a>), ImportError> {
+    fn ident(&mut self, what: &str) -> Result<(&'a str, Token<'a>), UsdError> {
         let t = self.lx.next_token()?;
         match t.tok {
             Tok::Ident(s) => Ok((s, t)),
@@ -288,7 +288,7 @@ impl<'a> Parser<'a> {
         }
     }
 
-    fn string(&mut self, what: &str) -> Result<String, ImportError> {
+    fn string(&mut self, what: &str) -> Result<String, UsdError> {
         let t = self.lx.next_token()?;
         match t.tok {
             Tok::Str(s) => Ok(s),
@@ -296,10 +296,10 @@ impl<'a> Parser<'a> {
         }
     }
 
-    fn enter(&mut self, at: &Token<'_>) -> Result<(), ImportError> {
+    fn enter(&mut self, at: &Token<'_>) -> Result<(), UsdError> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(ImportError::invalid(
+            return Err(UsdError::invalid(
                 self.lx.location(at.start),
                 format!("nested more than {MAX_DEPTH} levels deep"),
             ));
@@ -308,7 +308,7 @@ impl<'a> Parser<'a> {
     }
 
     /// Skips `;` separators.
-    fn separators(&mut self) -> Result<(), ImportError> {
+    fn separators(&mut self) -> Result<(), UsdError> {
         while self.is_punct(';')? {
             self.lx.next_token()?;
         }
@@ -316,7 +316,7 @@ impl<'a> Parser<'a> {
     }
 
     /// Metadata items up to and including `)`; the `(` is consumed.
-    fn metadata_block(&mut self) -> Result<Vec<Meta>, ImportError> {
+    fn metadata_block(&mut self) -> Result<Vec<Meta>, UsdError> {
         let mut out = Vec::new();
         loop {
             self.separators()?;
@@ -352,7 +352,7 @@ impl<'a> Parser<'a> {
     }
 
     /// `def|over|class [Type] "name" [( meta )] { body }`.
-    fn prim(&mut self) -> Result<PrimSpec, ImportError> {
+    fn prim(&mut self) -> Result<PrimSpec, UsdError> {
         let (word, start) = self.ident("def, over or class")?;
         self.enter(&start)?;
         let specifier = match word {
@@ -386,7 +386,7 @@ impl<'a> Parser<'a> {
     }
 
     /// Prim body items up to and including `}`; the `{` is consumed.
-    fn body(&mut self) -> Result<PrimBody, ImportError> {
+    fn body(&mut self) -> Result<PrimBody, UsdError> {
         let mut body = PrimBody::default();
         loop {
             self.separators()?;
@@ -423,7 +423,7 @@ impl<'a> Parser<'a> {
     /// The identifier after the peeked one, when the peeked token is `reorder`: only
     /// `reorder nameChildren` / `reorder properties` need two tokens of look-ahead, so this
     /// re-lexes from the peeked token's end instead of keeping a second buffer.
-    fn peek_second(&mut self) -> Result<Option<&'a str>, ImportError> {
+    fn peek_second(&mut self) -> Result<Option<&'a str>, UsdError> {
         let end = self.lx.peek()?.end;
         let rest = self.lx.text().get(end..).unwrap_or_default();
         let word = rest
@@ -437,7 +437,7 @@ impl<'a> Parser<'a> {
         }))
     }
 
-    fn variant_set(&mut self) -> Result<VariantSetSpec, ImportError> {
+    fn variant_set(&mut self) -> Result<VariantSetSpec, UsdError> {
         let (_, start) = self.ident("variantSet")?;
         self.enter(&start)?;
         let name = self.string("a quoted variant set name")?;
@@ -473,7 +473,7 @@ impl<'a> Parser<'a> {
         })
     }
 
-    fn property(&mut self) -> Result<PropSpec, ImportError> {
+    fn property(&mut self) -> Result<PropSpec, UsdError> {
         let (mut word, first) = self.ident("a property")?;
         if ListOp::parse(word).is_some() {
             word = self.ident("a property after the list operation")?.0;
@@ -605,7 +605,7 @@ impl<'a> Parser<'a> {
         })
     }
 
-    fn optional_metadata(&mut self) -> Result<Vec<Meta>, ImportError> {
+    fn optional_metadata(&mut self) -> Result<Vec<Meta>, UsdError> {
         if self.is_punct('(')? {
             self.lx.next_token()?;
             self.metadata_block()
@@ -615,7 +615,7 @@ impl<'a> Parser<'a> {
     }
 
     /// `{ time: value, ... }` after `.timeSamples =`.
-    fn time_samples(&mut self) -> Result<Vec<(f64, Value)>, ImportError> {
+    fn time_samples(&mut self) -> Result<Vec<(f64, Value)>, UsdError> {
         let open = self.expect_punct('{')?;
         self.enter(&open)?;
         let mut out = Vec::new();
@@ -635,7 +635,7 @@ impl<'a> Parser<'a> {
         Ok(out)
     }
 
-    fn value(&mut self) -> Result<Value, ImportError> {
+    fn value(&mut self) -> Result<Value, UsdError> {
         let t = self.lx.next_token()?;
         Ok(match t.tok {
             Tok::Number(n) => Value::Number(n),
@@ -697,7 +697,7 @@ impl<'a> Parser<'a> {
     }
 
     /// `{ type key = value ... }` (the `{` consumed); keys may be quoted.
-    fn dictionary(&mut self) -> Result<Value, ImportError> {
+    fn dictionary(&mut self) -> Result<Value, UsdError> {
         let mut entries = Vec::new();
         loop {
             self.separators()?;
@@ -723,6 +723,29 @@ impl<'a> Parser<'a> {
             }
         }
     }
+}
+
+/// A parsed value narrowed to the precision its attribute type holds: numbers of `half`
+/// types rounded to binary16 and of `float` types to binary32, as USD stores them when it
+/// reads a layer (so text and binary layers give the same numbers). Other types are kept.
+pub fn narrow_to_type(value: &mut Value, type_name: &str) {
+    let round: fn(f64) -> f64 = if is_half_type(type_name) {
+        |x| f64::from(round_to_half(x as f32))
+    } else if is_float_type(type_name) {
+        |x| f64::from(x as f32)
+    } else {
+        return;
+    };
+    fn walk(v: &mut Value, round: fn(f64) -> f64) {
+        match v {
+            Value::Number(x) => *x = round(*x),
+            Value::Tuple(items) | Value::List(items) => {
+                items.iter_mut().for_each(|i| walk(i, round));
+            }
+            _ => {}
+        }
+    }
+    walk(value, round);
 }
 
 #[cfg(test)]

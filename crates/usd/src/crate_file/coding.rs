@@ -7,13 +7,13 @@
 
 /// Why a compressed stream could not be decoded (the caller adds the byte offset).
 #[derive(Debug)]
-pub(super) struct CodingError(pub String);
+pub(crate) struct CodingError(pub String);
 
 /// Decompresses a `TfFastCompression` buffer holding exactly `out_len` bytes.
 ///
 /// The first byte counts chunks: 0 means the rest is one LZ4 block; otherwise each chunk
 /// is an `i32` size followed by an LZ4 block.
-pub(super) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, CodingError> {
+pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, CodingError> {
     let out = decompress_prefix(input, out_len)?;
     if out.len() != out_len {
         return Err(CodingError(format!(
@@ -26,7 +26,7 @@ pub(super) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, Coding
 
 /// Decompresses a `TfFastCompression` buffer of at most `max_len` bytes; returns what was
 /// written.
-pub(super) fn decompress_prefix(input: &[u8], max_len: usize) -> Result<Vec<u8>, CodingError> {
+pub(crate) fn decompress_prefix(input: &[u8], max_len: usize) -> Result<Vec<u8>, CodingError> {
     // An LZ4 block expands at most about 255 times (a match of 255-length runs per byte):
     // no corrupt size makes this allocate more than the input can fill.
     let out_len = max_len.min(input.len().saturating_mul(256).saturating_add(64));
@@ -70,7 +70,7 @@ pub(super) fn decompress_prefix(input: &[u8], max_len: usize) -> Result<Vec<u8>,
 /// The width of the integers of a compressed stream: 32-bit streams use 8/16/32-bit
 /// deltas, 64-bit streams 16/32/64-bit deltas.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Width {
+pub(crate) enum Width {
     /// `int32_t` / `uint32_t` values.
     W32,
     /// `int64_t` / `uint64_t` values.
@@ -88,7 +88,7 @@ impl Width {
 
 /// The largest encoded size of `count` integers (`_GetEncodedBufferSize`): the common
 /// value, 2 bits of code per integer, and at most one full integer each.
-pub(super) fn encoded_size(count: usize, width: Width) -> Option<usize> {
+pub(crate) fn encoded_size(count: usize, width: Width) -> Option<usize> {
     if count == 0 {
         return Some(0);
     }
@@ -101,7 +101,7 @@ pub(super) fn encoded_size(count: usize, width: Width) -> Option<usize> {
 
 /// Decodes `count` delta-coded integers (already LZ4-decompressed) as `i64`; 32-bit
 /// streams wrap as `int32_t` arithmetic does.
-pub(super) fn decode_ints(
+pub(crate) fn decode_ints(
     data: &[u8],
     count: usize,
     width: Width,
@@ -155,7 +155,7 @@ fn read_int(data: &[u8], at: usize, n: usize) -> Option<i64> {
 }
 
 /// An IEEE 754 binary16 value as `f32` (exact).
-pub(super) fn half_to_f32(bits: u16) -> f32 {
+pub(crate) fn half_to_f32(bits: u16) -> f32 {
     let sign = if bits & 0x8000 != 0 { -1.0 } else { 1.0 };
     let exponent = i32::from((bits >> 10) & 0x1f);
     let fraction = f32::from(bits & 0x3ff);

@@ -9,16 +9,16 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use super::coding::{self, Width};
-use crate::{ImportError, Location, Problem};
+use crate::error::{Location, Problem, UsdError};
 
 /// The 8 bytes every crate file starts with.
-pub(crate) const MAGIC: &[u8; 8] = b"PXR-USDC";
+pub const MAGIC: &[u8; 8] = b"PXR-USDC";
 
 /// Size of the bootstrap header (ident, version, TOC offset, 8 reserved words).
 const BOOTSTRAP_LEN: usize = 88;
 
 /// Deepest nesting of values inside values (dictionaries in dictionaries, `VtValue`s).
-pub(super) const MAX_VALUE_DEPTH: usize = 64;
+pub(crate) const MAX_VALUE_DEPTH: usize = 64;
 
 /// The field index that ends a field set (`FieldIndex()` is `~0`).
 const FIELD_SET_END: u32 = u32::MAX;
@@ -27,21 +27,21 @@ const FIELD_SET_END: u32 = u32::MAX;
 /// file of `len` bytes: 16 Mi plus 256 per byte. Honest files stay far below (a point
 /// takes 12 bytes for 3 elements; integer compression reaches about 4 elements per byte
 /// before LZ4), while a small corrupt file cannot claim gigabytes.
-pub(super) fn element_budget(len: usize) -> u64 {
+pub(crate) fn element_budget(len: usize) -> u64 {
     (16 << 20) + 256 * len as u64
 }
 
 /// A spec: where it is and what it holds.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Spec {
+pub(crate) struct Spec {
     path: u32,
     field_set: u32,
-    pub(super) kind: u32,
+    pub(crate) kind: u32,
 }
 
 /// The structural sections of an open crate file.
-pub(super) struct CrateFile<'a> {
-    pub(super) data: &'a [u8],
+pub(crate) struct CrateFile<'a> {
+    pub(crate) data: &'a [u8],
     path: &'a Path,
     version: (u8, u8, u8),
     tokens: Vec<String>,
@@ -57,13 +57,13 @@ pub(super) struct CrateFile<'a> {
 
 /// A position in the file for sequential reads.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Cursor {
-    pub(super) pos: u64,
+pub(crate) struct Cursor {
+    pub(crate) pos: u64,
 }
 
 impl<'a> CrateFile<'a> {
     /// Reads the bootstrap, the table of contents and every structural section.
-    pub(super) fn open(data: &'a [u8], path: &'a Path) -> Result<Self, ImportError> {
+    pub(crate) fn open(data: &'a [u8], path: &'a Path) -> Result<Self, UsdError> {
         let mut file = CrateFile {
             data,
             path,
@@ -132,12 +132,12 @@ impl<'a> CrateFile<'a> {
     // Errors and primitive reads
     // -------------------------------------------------------------------------------
 
-    pub(super) fn invalid(&self, at: u64, message: impl Into<String>) -> ImportError {
-        ImportError::invalid(Location::byte(self.path, at), message)
+    pub(crate) fn invalid(&self, at: u64, message: impl Into<String>) -> UsdError {
+        UsdError::invalid(Location::byte(self.path, at), message)
     }
 
-    pub(super) fn truncated(&self, at: u64, need: u64, what: &str) -> ImportError {
-        ImportError::new(
+    pub(crate) fn truncated(&self, at: u64, need: u64, what: &str) -> UsdError {
+        UsdError::new(
             Location::byte(self.path, at),
             Problem::Truncated(format!(
                 "{what} needs {need} bytes here, the file has {} in all",
@@ -147,7 +147,7 @@ impl<'a> CrateFile<'a> {
     }
 
     /// Takes `n` elements from the decoding budget.
-    pub(super) fn spend(&self, at: u64, n: u64) -> Result<(), ImportError> {
+    pub(crate) fn spend(&self, at: u64, n: u64) -> Result<(), UsdError> {
         let left = self.budget.get();
         if n > left {
             return Err(self.invalid(
@@ -165,7 +165,7 @@ impl<'a> CrateFile<'a> {
     }
 
     /// `n` bytes at the cursor, which moves past them.
-    fn bytes(&self, c: &mut Cursor, n: u64, what: &str) -> Result<&'a [u8], ImportError> {
+    fn bytes(&self, c: &mut Cursor, n: u64, what: &str) -> Result<&'a [u8], UsdError> {
         let start = usize::try_from(c.pos).ok();
         let end = start
             .zip(usize::try_from(n).ok())
@@ -179,39 +179,39 @@ impl<'a> CrateFile<'a> {
         }
     }
 
-    fn array<const N: usize>(&self, c: &mut Cursor) -> Result<[u8; N], ImportError> {
+    fn array<const N: usize>(&self, c: &mut Cursor) -> Result<[u8; N], UsdError> {
         let b = self.bytes(c, N as u64, "a value")?;
         b.try_into()
             .map_err(|_| self.truncated(c.pos, N as u64, "a value"))
     }
 
-    pub(super) fn u8(&self, c: &mut Cursor) -> Result<u8, ImportError> {
+    pub(crate) fn u8(&self, c: &mut Cursor) -> Result<u8, UsdError> {
         Ok(self.array::<1>(c)?[0])
     }
-    pub(super) fn u16(&self, c: &mut Cursor) -> Result<u16, ImportError> {
+    pub(crate) fn u16(&self, c: &mut Cursor) -> Result<u16, UsdError> {
         Ok(u16::from_le_bytes(self.array(c)?))
     }
-    pub(super) fn u32(&self, c: &mut Cursor) -> Result<u32, ImportError> {
+    pub(crate) fn u32(&self, c: &mut Cursor) -> Result<u32, UsdError> {
         Ok(u32::from_le_bytes(self.array(c)?))
     }
-    pub(super) fn i32(&self, c: &mut Cursor) -> Result<i32, ImportError> {
+    pub(crate) fn i32(&self, c: &mut Cursor) -> Result<i32, UsdError> {
         Ok(i32::from_le_bytes(self.array(c)?))
     }
-    pub(super) fn u64(&self, c: &mut Cursor) -> Result<u64, ImportError> {
+    pub(crate) fn u64(&self, c: &mut Cursor) -> Result<u64, UsdError> {
         Ok(u64::from_le_bytes(self.array(c)?))
     }
-    pub(super) fn i64(&self, c: &mut Cursor) -> Result<i64, ImportError> {
+    pub(crate) fn i64(&self, c: &mut Cursor) -> Result<i64, UsdError> {
         Ok(i64::from_le_bytes(self.array(c)?))
     }
-    pub(super) fn f32(&self, c: &mut Cursor) -> Result<f32, ImportError> {
+    pub(crate) fn f32(&self, c: &mut Cursor) -> Result<f32, UsdError> {
         Ok(f32::from_le_bytes(self.array(c)?))
     }
-    pub(super) fn f64(&self, c: &mut Cursor) -> Result<f64, ImportError> {
+    pub(crate) fn f64(&self, c: &mut Cursor) -> Result<f64, UsdError> {
         Ok(f64::from_le_bytes(self.array(c)?))
     }
 
     /// A count read at the cursor, checked against the budget.
-    pub(super) fn count(&self, c: &mut Cursor, wide: bool) -> Result<usize, ImportError> {
+    pub(crate) fn count(&self, c: &mut Cursor, wide: bool) -> Result<usize, UsdError> {
         let at = c.pos;
         let n = if wide {
             self.u64(c)?
@@ -222,11 +222,11 @@ impl<'a> CrateFile<'a> {
         usize::try_from(n).map_err(|_| self.invalid(at, format!("count {n} is too large")))
     }
 
-    pub(super) fn version_at_least(&self, minor: u8) -> bool {
+    pub(crate) fn version_at_least(&self, minor: u8) -> bool {
         self.version.1 >= minor
     }
 
-    pub(super) fn token(&self, at: u64, index: u32) -> Result<&str, ImportError> {
+    pub(crate) fn token(&self, at: u64, index: u32) -> Result<&str, UsdError> {
         self.tokens
             .get(index as usize)
             .map(String::as_str)
@@ -241,7 +241,7 @@ impl<'a> CrateFile<'a> {
             })
     }
 
-    pub(super) fn string(&self, at: u64, index: u32) -> Result<&str, ImportError> {
+    pub(crate) fn string(&self, at: u64, index: u32) -> Result<&str, UsdError> {
         let token = self.strings.get(index as usize).ok_or_else(|| {
             self.invalid(
                 at,
@@ -254,7 +254,7 @@ impl<'a> CrateFile<'a> {
         self.token(at, *token)
     }
 
-    pub(super) fn path_at(&self, at: u64, index: u32) -> Result<&str, ImportError> {
+    pub(crate) fn path_at(&self, at: u64, index: u32) -> Result<&str, UsdError> {
         match self.paths.get(index as usize) {
             Some(Some(p)) => Ok(p),
             _ => Err(self.invalid(
@@ -269,12 +269,12 @@ impl<'a> CrateFile<'a> {
 
     /// Reads `count` compressed integers (`_CompressedIntsReader`): a `u64` compressed
     /// size, then the LZ4-compressed coded integers.
-    pub(super) fn compressed_ints(
+    pub(crate) fn compressed_ints(
         &self,
         c: &mut Cursor,
         count: usize,
         width: Width,
-    ) -> Result<Vec<i64>, ImportError> {
+    ) -> Result<Vec<i64>, UsdError> {
         let at = c.pos;
         let size = self.u64(c)?;
         let bytes = self.bytes(c, size, "compressed integers")?;
@@ -290,7 +290,7 @@ impl<'a> CrateFile<'a> {
     // Structural sections
     // -------------------------------------------------------------------------------
 
-    fn sections(&self, toc: u64) -> Result<Vec<(String, u64)>, ImportError> {
+    fn sections(&self, toc: u64) -> Result<Vec<(String, u64)>, UsdError> {
         let mut c = Cursor { pos: toc };
         let n = self.u64(&mut c)?;
         if n > 64 {
@@ -308,7 +308,7 @@ impl<'a> CrateFile<'a> {
         Ok(out)
     }
 
-    fn read_tokens(&mut self, start: u64) -> Result<(), ImportError> {
+    fn read_tokens(&mut self, start: u64) -> Result<(), UsdError> {
         let mut c = Cursor { pos: start };
         let count = self.count(&mut c, true)?;
         let raw_len = self.count(&mut c, true)?;
@@ -335,7 +335,7 @@ impl<'a> CrateFile<'a> {
         Ok(())
     }
 
-    fn read_strings(&mut self, start: u64) -> Result<(), ImportError> {
+    fn read_strings(&mut self, start: u64) -> Result<(), UsdError> {
         let mut c = Cursor { pos: start };
         let count = self.count(&mut c, true)?;
         let mut strings = Vec::with_capacity(count.min(self.data.len() / 4));
@@ -346,7 +346,7 @@ impl<'a> CrateFile<'a> {
         Ok(())
     }
 
-    fn read_fields(&mut self, start: u64) -> Result<(), ImportError> {
+    fn read_fields(&mut self, start: u64) -> Result<(), UsdError> {
         let mut c = Cursor { pos: start };
         let count = self.count(&mut c, true)?;
         let names = self.compressed_ints(&mut c, count, Width::W32)?;
@@ -369,7 +369,7 @@ impl<'a> CrateFile<'a> {
         Ok(())
     }
 
-    fn read_field_sets(&mut self, start: u64) -> Result<(), ImportError> {
+    fn read_field_sets(&mut self, start: u64) -> Result<(), UsdError> {
         let mut c = Cursor { pos: start };
         let count = self.count(&mut c, true)?;
         let sets = self.compressed_ints(&mut c, count, Width::W32)?;
@@ -377,7 +377,7 @@ impl<'a> CrateFile<'a> {
         Ok(())
     }
 
-    fn read_paths(&mut self, start: u64) -> Result<(), ImportError> {
+    fn read_paths(&mut self, start: u64) -> Result<(), UsdError> {
         let mut c = Cursor { pos: start };
         let count = self.count(&mut c, true)?;
         let at = c.pos;
@@ -440,7 +440,7 @@ impl<'a> CrateFile<'a> {
         Ok(())
     }
 
-    fn read_specs(&mut self, start: u64) -> Result<(), ImportError> {
+    fn read_specs(&mut self, start: u64) -> Result<(), UsdError> {
         let mut c = Cursor { pos: start };
         let count = self.count(&mut c, true)?;
         let paths = self.compressed_ints(&mut c, count, Width::W32)?;
@@ -464,7 +464,7 @@ impl<'a> CrateFile<'a> {
     // -------------------------------------------------------------------------------
 
     /// The spec at `path`, if any.
-    pub(super) fn spec(&self, path: &str) -> Option<Spec> {
+    pub(crate) fn spec(&self, path: &str) -> Option<Spec> {
         self.by_path
             .get(path)
             .and_then(|&i| self.specs.get(i))
@@ -472,7 +472,7 @@ impl<'a> CrateFile<'a> {
     }
 
     /// The fields of a spec: (name, value representation), in file order.
-    pub(super) fn fields(&self, spec: Spec) -> Result<Vec<(&str, u64)>, ImportError> {
+    pub(crate) fn fields(&self, spec: Spec) -> Result<Vec<(&str, u64)>, UsdError> {
         let mut out = Vec::new();
         let mut i = spec.field_set as usize;
         loop {
@@ -503,7 +503,7 @@ impl<'a> CrateFile<'a> {
 }
 
 /// The path of prim `name` under `parent` (`/`, a prim, or a variant selection).
-pub(super) fn child_path(parent: &str, name: &str) -> String {
+pub(crate) fn child_path(parent: &str, name: &str) -> String {
     if parent == "/" || parent.ends_with('}') {
         format!("{parent}{name}")
     } else {

@@ -1,0 +1,33 @@
+//! USD layers for rigport, with no rig semantics: the `.usda` text format parsed into a
+//! [`Layer`] (`lex`, [`parse`]), one layer composed into prims ([`stage`]), typed reads of
+//! values ([`values`]), the binary crate format (`.usdc`) read into the same [`Layer`]
+//! ([`crate_file`]) and written from one ([`crate_write`]), and `.usdz` packages read and
+//! written ([`usdz`]).
+//!
+//! The dependencies inside the crate go one way: `precision` and `lex` <- [`parse`] <-
+//! [`stage`] <- [`values`]; [`crate_file`] and [`crate_write`] use [`parse`]'s layer;
+//! [`usdz`] uses both encodings.
+//!
+//! ```
+//! use std::path::Path;
+//! let text = "#usda 1.0\n(\n    upAxis = \"Z\"\n)\n\ndef Xform \"A\"\n{\n    double3 xformOp:translate = (1, 2, 3)\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}\n";
+//! let layer = rigport_usd::parse::parse(text, Path::new("a.usda")).unwrap();
+//! let usdc = rigport_usd::crate_write::write(&layer, Path::new("a.usda")).unwrap();
+//! let back = rigport_usd::read_layer(&usdc, Path::new("a.usdc")).unwrap();
+//! assert_eq!(back.root.children[0].name, "A");
+//! ```
+#![warn(missing_docs)]
+
+pub mod crate_file;
+pub mod crate_write;
+mod error;
+mod lex;
+pub mod parse;
+mod precision;
+pub mod stage;
+pub mod usdz;
+pub mod values;
+
+pub use error::{utf8, Location, Problem, UsdError};
+pub use parse::Layer;
+pub use usdz::read_layer;
