@@ -3,8 +3,6 @@ use std::path::{Path, PathBuf};
 
 use rigport_model::{AssetError, SkeletonProblem};
 
-use crate::text::NumberIssue;
-
 /// Where in an input a problem is: the file, and a line and column, a JSON path or a byte
 /// offset when known.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -271,6 +269,21 @@ impl ImportError {
             },
         )
     }
+}
+
+/// Why a token is not the number a format requires.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum NumberIssue {
+    /// Not a number at all.
+    #[error("is not a number")]
+    NotANumber,
+    /// A number beyond the range of the type it is read into (`1e39` for `f32`, an
+    /// integer with too many digits).
+    #[error("is out of range for {0}")]
+    OutOfRange(&'static str),
+    /// `nan`, `inf` or `infinity`.
+    #[error("is not finite")]
+    NotFinite,
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@
 
 use std::path::Path;
 
+pub use crate::error::NumberIssue;
 use crate::{ImportError, Location, Problem};
 
 /// The lines of a text and their 1-based numbers, without their line ends (LF, CRLF or a
@@ -192,21 +193,6 @@ impl<'a> Cursor<'a> {
             self.column_of(token.line_start, token.start),
         )
     }
-}
-
-/// Why a token is not the number a format requires.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum NumberIssue {
-    /// Not a number at all.
-    #[error("is not a number")]
-    NotANumber,
-    /// A number beyond the range of the type it is read into (`1e39` for `f32`, an
-    /// integer with too many digits).
-    #[error("is out of range for {0}")]
-    OutOfRange(&'static str),
-    /// `nan`, `inf` or `infinity`.
-    #[error("is not finite")]
-    NotFinite,
 }
 
 /// A number type the text importers read.
