@@ -9,7 +9,8 @@
 //!   and the writer chosen by the output's extension;
 //! - [`memory`]: this process's memory budget and the import check;
 //! - [`demo`]: the built-in demo character, written with its pictures;
-//! - [`dump`]: a rig posed or sampled, skinned and written as an `.npz` dump.
+//! - [`dump`]: a rig posed or sampled, skinned and written as an `.npz` dump;
+//! - [`retarget`]: a clip put onto another rig, and its report as JSON.
 //!
 //! A whole `convert`, from a BVH file to a `.usda`:
 //!
@@ -33,6 +34,7 @@ pub mod dump;
 pub mod load;
 pub mod memory;
 pub mod outputs;
+pub mod retarget;
 pub mod write;
 
 use std::error::Error as StdError;

@@ -7,7 +7,8 @@
 //! use rigport_pipeline::outputs::{check_outputs, format_of, Format};
 //!
 //! assert_eq!(format_of(Path::new("a.GLB"))?, Format::Gltf);
-//! assert!(format_of(Path::new("a.usdc")).is_err_and(|e| e.is_usage()));
+//! assert_eq!(format_of(Path::new("a.usdz"))?, Format::Usda);
+//! assert!(format_of(Path::new("a.usd")).is_err_and(|e| e.is_usage()));
 //! let input = Path::new("../../fixtures/bvh/end_sites.bvh");
 //! let err = check_outputs(&[input], &[input.to_path_buf()]).unwrap_err();
 //! assert!(err.to_string().contains("this output is one of the inputs"));
