@@ -556,6 +556,56 @@ mod tests {
     }
 
     #[test]
+    fn per_vertex_the_refit_is_never_worse_than_truncation_on_the_fit_poses() {
+        // 6 and 12 influences: the exhaustive and the swap-search paths.
+        for n in [6usize, 12] {
+            let mats = chain_poses(n, 30, 11 + n as u64);
+            let positions: Vec<Vec3> = (0..40)
+                .map(|i| Vec3::new(i as f32 * 0.3 % n as f32, 0.1 * (i % 3) as f32, 0.05))
+                .collect();
+            let rows: Vec<Vec<Influence>> = positions
+                .iter()
+                .map(|p| {
+                    let raw: Vec<f32> = (0..n)
+                        .map(|j| 1.0 / (1.0 + (p.x - j as f32).abs()))
+                        .collect();
+                    let sum: f32 = raw.iter().sum();
+                    (0..n).map(|j| inf(j as u32, raw[j] / sum)).collect()
+                })
+                .collect();
+            let full = Influences::from_rows(rows.clone());
+            let refit = RefitJob {
+                positions: &positions,
+                influences: &full,
+                pose_matrices: &mats,
+                palette_len: n,
+                max_influences: NonZeroUsize::new(3).expect("3 > 0"),
+            }
+            .run()
+            .expect("valid");
+            for (v, p) in positions.iter().enumerate() {
+                let one = |r: &[Influence]| Influences::from_rows([r.to_vec()]);
+                let t = truncate_row(&rows[v], 3);
+                let d_t = deviation(&[*p], &one(&rows[v]), &one(&t), &mats, n).expect("valid");
+                let d_r = deviation(
+                    &[*p],
+                    &one(&rows[v]),
+                    &one(refit.influences.vertex(v)),
+                    &mats,
+                    n,
+                )
+                .expect("valid");
+                assert!(refit.influences.vertex(v).len() <= 3);
+                assert!(
+                    d_r.max <= d_t.max * (1.0 + 1e-5) + 1e-9,
+                    "n {n} vertex {v}: {d_r:?} vs {d_t:?}"
+                );
+            }
+            assert!(refit.changed > 0, "n {n}");
+        }
+    }
+
+    #[test]
     fn simplex_qp_matches_brute_force_on_two_variables() {
         // min (c0 - 0.8)² + (c1 - 0.8)²·4 on the simplex: c1 = 1 - c0.
         let h = [1.0, 0.0, 0.0, 4.0];
