@@ -249,6 +249,15 @@ fn fit_influences(
         (_, limit) => limit.map_or(4, usize::from),
     };
     let k = std::num::NonZeroUsize::new(k).context("--max-influences is at least 1")?;
+    if k.get() > 4 && format == Format::Gltf && !ctx.quiet {
+        let eps = rigport_model::conventions::WEIGHT_EPSILON;
+        let over: usize = (asset.skins.iter().flat_map(|s| s.influences.rows()))
+            .filter(|r| r.iter().filter(|i| i.weight > eps).count() > 4)
+            .count();
+        if over > 0 {
+            eprintln!("influences: {over} vertices need more than 4 influences; three.js, model-viewer, Filament, Bevy and Unity read only JOINTS_0/WEIGHTS_0 (each vertex's 4 largest weights) and show them otherwise than Babylon.js, Godot 4 and the Khronos sample viewer, which read 8");
+        }
+    }
     if asset
         .skins
         .iter()
