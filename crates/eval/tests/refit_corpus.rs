@@ -214,3 +214,80 @@ fn refit_is_never_worse_than_truncation_on_held_out_poses_of_every_pinocchio_and
         );
     }
 }
+
+/// Timing only (`cargo test --release -p rigport-eval --test refit_corpus -- --ignored
+/// --nocapture`): the refit of human_model1 and of the same rig with edge midpoints added
+/// (weights: the mean of the two ends' rows) up to 40,000 vertices, on 2 threads.
+#[test]
+#[ignore = "timing, run by hand (BENCHMARKS.md)"]
+fn refit_speed_model1_and_40k_vertices() {
+    use refit::asset::{ROM_BENT_JOINTS, ROM_RANDOM_POSES, ROM_SEED};
+    use rigport_model::Influence;
+    let Some(c) = corpus() else { return };
+    let d = c.join("1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1");
+    let asset = rigport_import::pinocchio::import(
+        &d.join("Model1.obj"),
+        &d.join("skeleton.out"),
+        &d.join("attachment.out"),
+    )
+    .expect("corpus rig imports")
+    .asset;
+    let skin = &asset.skins[0];
+    let mesh = &asset.meshes[skin.mesh.get()];
+    let mut positions = mesh.positions.clone();
+    let mut rows: Vec<Vec<Influence>> = skin.influences.rows().map(<[_]>::to_vec).collect();
+    let mut seen = std::collections::BTreeSet::new();
+    'edges: for tri in &mesh.triangles {
+        for (a, b) in [(tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])] {
+            if positions.len() >= 40_000 {
+                break 'edges;
+            }
+            if !seen.insert((a.min(b), a.max(b))) {
+                continue;
+            }
+            let (a, b) = (a as usize, b as usize);
+            positions.push((positions[a] + positions[b]) * 0.5);
+            let mut mean = std::collections::BTreeMap::<u32, f32>::new();
+            for i in rows[a].iter().chain(&rows[b]) {
+                *mean.entry(i.joint).or_default() += 0.5 * i.weight;
+            }
+            rows.push(
+                mean.into_iter()
+                    .map(|(joint, weight)| Influence { joint, weight })
+                    .collect(),
+            );
+        }
+    }
+    let big = Influences::from_rows(rows);
+    let poses =
+        refit::range_of_motion(&asset.skeleton, ROM_RANDOM_POSES, ROM_BENT_JOINTS, ROM_SEED);
+    let m = pose_matrices(&asset, &poses);
+    let pool = rigport_eval::skinning::rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    for (label, p, inf) in [
+        ("model1", &mesh.positions, &skin.influences),
+        ("model1_40k", &positions, &big),
+    ] {
+        let t0 = std::time::Instant::now();
+        let r = pool.install(|| {
+            RefitJob {
+                positions: p,
+                influences: inf,
+                pose_matrices: &m,
+                palette_len: skin.joints.len(),
+                max_influences: NonZeroUsize::new(4).expect("4 > 0"),
+            }
+            .run()
+            .expect("valid")
+        });
+        println!(
+            "{label}: {} vertices, {} poses, refit on 2 threads {:.2} s ({} rows changed)",
+            p.len(),
+            poses.len(),
+            t0.elapsed().as_secs_f64(),
+            r.changed
+        );
+    }
+}
