@@ -1,8 +1,10 @@
 //! Influence refit on the real Pinocchio and CSCI 520 rigs of the corpus (issue 17): fitted
-//! on one seeded range-of-motion pose set, measured on a held-out one (another seed).
+//! on one seeded range-of-motion pose set, measured on held-out poses from the test's own
+//! seeded generator.
 //!
 //! Skips with a message when `../shared/corpus` is absent; fails then when `CI` is set.
-//! `cargo test -p rigport-eval --test refit_corpus -- --nocapture` prints the figures.
+//! `cargo test --release -p rigport-eval --test refit_corpus -- --nocapture` prints the
+//! figures; a dev build ignores the test (the refit of five rigs takes minutes unoptimized).
 
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
@@ -155,6 +157,10 @@ fn check(label: &str, asset: &Asset) -> (f64, f64) {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "minutes in a dev build: run with --release (BENCHMARKS.md has the command)"
+)]
 fn refit_is_never_worse_than_truncation_on_held_out_poses_of_every_pinocchio_and_csci520_rig() {
     let Some(c) = corpus() else { return };
     let pin = [
