@@ -108,6 +108,11 @@ pub fn write_asset_with(
         meters_per_unit: args.meters_per_unit,
         morphs_as_points: usd_point_caches,
     };
+    if format == Format::Gltf && opts.max_influences.is_some_and(|k| k > 4) && !ctx.quiet {
+        if let Some(note) = write::four_influence_note(asset) {
+            eprintln!("influences: {note}");
+        }
+    }
     let fitted = match opts.influences_fit {
         InfluencesFit::Refit => ctx.step("refitting influences", || {
             write::fit_influences(asset, &opts, format)

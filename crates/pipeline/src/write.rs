@@ -172,6 +172,16 @@ pub fn fit_influences(
     }))
 }
 
+/// With more than 4 influences kept for glTF, the note that most viewers read only the
+/// first set: `None` when no vertex of `asset` carries more than 4 weights.
+pub fn four_influence_note(asset: &Asset) -> Option<String> {
+    let eps = rigport_model::conventions::WEIGHT_EPSILON;
+    let over = (asset.skins.iter().flat_map(|s| s.influences.rows()))
+        .filter(|r| r.iter().filter(|i| i.weight > eps).count() > 4)
+        .count();
+    (over > 0).then(|| format!("{over} vertices need more than 4 influences; three.js, model-viewer, Filament, Bevy and Unity read only JOINTS_0/WEIGHTS_0 (each vertex's 4 largest weights) and show them otherwise than Babylon.js, Godot 4 and the Khronos sample viewer, which read 8"))
+}
+
 /// One line per refitted skin: its deviation from all weights, truncation against refit,
 /// relative to the mesh's bounding-box diagonal.
 pub fn describe_refit(report: &AssetRefit, k: usize) -> Vec<String> {
