@@ -456,7 +456,7 @@ fn bad_cloth_input_is_refused_or_warned_about_never_written_as_nan() {
     let o = cloth_on_fixture(&nan, &out, "2", &[]);
     assert!(!o.status.success());
     assert!(
-        stderr(&o).contains("nan is not a finite number"),
+        stderr(&o).contains("nan.obj:2:3: coordinate \"nan\" is not finite"),
         "{}",
         stderr(&o)
     );
