@@ -17,7 +17,7 @@
 use glam::{DMat4, DVec3};
 use rigport_model::Influence;
 
-use super::{simplex_qp, truncate_row, MAX_CANDIDATES};
+use super::row::{simplex_qp, truncate_row, MAX_CANDIDATES};
 
 /// Vertices with at most this many influences try every K-subset of them.
 pub const EXHAUSTIVE_MAX: usize = 10;
