@@ -84,7 +84,7 @@
 //! ```
 
 mod contacts;
-mod names;
+pub(crate) mod names;
 mod solve;
 #[cfg(test)]
 mod tests;

@@ -59,12 +59,23 @@ fn bare(name: &str) -> &str {
 }
 
 /// The joint whose bare name equals `wanted` (ignoring case); the first in skeleton order.
-fn find_bare(skeleton: &Skeleton, wanted: &str) -> Option<JointIndex> {
+pub(crate) fn find_bare(skeleton: &Skeleton, wanted: &str) -> Option<JointIndex> {
     skeleton
         .joints()
         .iter()
         .position(|j| bare(&j.name).eq_ignore_ascii_case(wanted))
         .map(|i| JointIndex(i as u32))
+}
+
+/// Whether `skeleton` is Pinocchio's human template, joint for joint ([`PINOCCHIO_HUMAN`]).
+pub(crate) fn is_pinocchio_human(skeleton: &Skeleton) -> bool {
+    skeleton.len() == PINOCCHIO_HUMAN.len() + 1
+        && PINOCCHIO_HUMAN.iter().all(|(joint, parent)| {
+            skeleton
+                .find(joint)
+                .and_then(|j| skeleton.joint(j).parent)
+                .is_some_and(|p| skeleton.joint(p).name == *parent)
+        })
 }
 
 /// The leg of an ankle: its parent (knee) and grandparent (hip).
@@ -131,13 +142,7 @@ pub fn find_feet(skeleton: &Skeleton) -> Result<(Vec<Leg>, &'static str), Footlo
             return Ok((legs, convention));
         }
     }
-    let is_human = skeleton.len() == PINOCCHIO_HUMAN.len() + 1
-        && PINOCCHIO_HUMAN.iter().all(|(joint, parent)| {
-            skeleton
-                .find(joint)
-                .and_then(|j| skeleton.joint(j).parent)
-                .is_some_and(|p| skeleton.joint(p).name == *parent)
-        });
+    let is_human = is_pinocchio_human(skeleton);
     if is_human {
         let mut legs = Vec::new();
         for (side, ankle) in [("left", "bone_7"), ("right", "bone_11")] {

@@ -6,6 +6,7 @@ use glam::Vec3;
 use rigport_model::{JointIndex, Skeleton};
 
 use super::RetargetError;
+use crate::footlock::names::{find_bare, is_pinocchio_human};
 
 /// One mapped joint: the target joint takes the source joint's world rotation (relative
 /// to rest, see the module docs of [`super`]).
@@ -271,52 +272,6 @@ pub const CONVENTIONS: [Convention; 6] = [
     RIGPORT_DEMO,
     PINOCCHIO_HUMAN,
 ];
-
-/// Pinocchio's human template: `(joint, parent)` for every joint but `root`.
-const PINOCCHIO_PARENTS: [(&str, &str); 17] = [
-    ("bone_1", "root"),
-    ("bone_2", "bone_1"),
-    ("bone_3", "root"),
-    ("bone_4", "bone_2"),
-    ("bone_5", "bone_4"),
-    ("bone_6", "bone_5"),
-    ("bone_7", "bone_6"),
-    ("bone_8", "bone_2"),
-    ("bone_9", "bone_8"),
-    ("bone_10", "bone_9"),
-    ("bone_11", "bone_10"),
-    ("bone_12", "root"),
-    ("bone_13", "bone_12"),
-    ("bone_14", "bone_13"),
-    ("bone_15", "root"),
-    ("bone_16", "bone_15"),
-    ("bone_17", "bone_16"),
-];
-
-/// A joint name without its namespace (`mixamorig:LeftFoot` -> `LeftFoot`).
-fn bare(name: &str) -> &str {
-    name.rsplit([':', '|']).next().unwrap_or(name)
-}
-
-/// The joint whose bare name equals `wanted` (ignoring case); the first in skeleton order.
-fn find_bare(skeleton: &Skeleton, wanted: &str) -> Option<JointIndex> {
-    skeleton
-        .joints()
-        .iter()
-        .position(|j| bare(&j.name).eq_ignore_ascii_case(wanted))
-        .map(|i| JointIndex(i as u32))
-}
-
-/// Whether `skeleton` is Pinocchio's human template, joint for joint.
-fn is_pinocchio_human(skeleton: &Skeleton) -> bool {
-    skeleton.len() == PINOCCHIO_PARENTS.len() + 1
-        && PINOCCHIO_PARENTS.iter().all(|(joint, parent)| {
-            skeleton
-                .find(joint)
-                .and_then(|j| skeleton.joint(j).parent)
-                .is_some_and(|p| skeleton.joint(p).name == *parent)
-        })
-}
 
 /// The joints of `skeleton` for each role of `convention` (roles whose joint is missing
 /// are left out). For Pinocchio's template the sides are swapped when its `l` limbs lie
