@@ -248,6 +248,7 @@ fn test_rename_delay() {
 }
 
 /// A temporary file that is deleted on drop unless [`TempFile::persist`] renamed it.
+#[derive(Debug)]
 pub(crate) struct TempFile {
     path: PathBuf,
     armed: bool,
@@ -268,6 +269,17 @@ impl TempFile {
         })?;
         file.write_all(bytes)?;
         Ok(tmp)
+    }
+
+    /// Creates a new, empty temporary file in `target`'s directory, open for writing, for
+    /// output written piece by piece (a long USD text).
+    ///
+    /// # Errors
+    /// As [`TempFile::create_beside`].
+    pub(crate) fn create_beside_open(target: &Path) -> io::Result<(Self, fs::File)> {
+        Self::fresh(target, |path| {
+            OpenOptions::new().write(true).create_new(true).open(path)
+        })
     }
 
     /// A second name (a hard link) for the existing file `target`, so that it can be put

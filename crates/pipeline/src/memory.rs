@@ -22,8 +22,8 @@ use rigport_model::budget::{self, MemoryBudget, OverBudget};
 const IMPORT_FACTOR: u64 = 5;
 
 /// The budget for `--max-memory` (bytes), or the default: 3/4 of the memory this process
-/// may use (the smallest of `MemTotal`, a cgroup `memory.max` and an address-space limit),
-/// or 8 GB when unknown.
+/// may use (the smallest of `MemTotal`, the memory limit of its cgroup or any cgroup above
+/// it, v1 or v2, and an address-space limit), or 8 GB when unknown.
 pub fn process_budget(max_memory: Option<u64>) -> MemoryBudget {
     match max_memory {
         Some(limit) => MemoryBudget {
@@ -58,15 +58,65 @@ fn machine_memory() -> Option<u64> {
         .parse()
         .ok()?;
     let total = total_kb.saturating_mul(1024);
-    let cgroup = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
-        .ok()
-        .and_then(|s| s.trim().parse::<u64>().ok());
+    let read = |path: &str| std::fs::read_to_string(path).ok();
     Some(
-        [cgroup, address_space_limit()]
+        [cgroup_limit(read), address_space_limit()]
             .into_iter()
             .flatten()
             .fold(total, u64::min),
     )
+}
+
+/// Limits at or above this are "no limit" (cgroup v1 writes `LONG_MAX` rounded to pages).
+const NO_CGROUP_LIMIT: u64 = 1 << 62;
+
+/// The smallest memory limit of the cgroups this process is in, read through `read` (a
+/// file's text by path): cgroup v2's `memory.max` and v1's `memory.limit_in_bytes`, in the
+/// process's own cgroup (from `/proc/self/cgroup`) and every cgroup above it (a limit on a
+/// parent binds its children), with the mount's root as a fallback (in a container
+/// without its own cgroup namespace the listed path does not exist under the mount).
+/// `None` when no limit is set or nothing can be read.
+fn cgroup_limit(read: impl Fn(&str) -> Option<String>) -> Option<u64> {
+    let own = read("/proc/self/cgroup").unwrap_or_default();
+    let mut files: Vec<String> = Vec::new();
+    let mut push_chain = |mount: &str, path: &str, file: &str| {
+        let mut dir = path.trim_end_matches('/').to_string();
+        loop {
+            files.push(format!("{mount}{dir}/{file}"));
+            match dir.rfind('/') {
+                Some(i) => dir.truncate(i),
+                None => break,
+            }
+        }
+    };
+    let mut seen_v1 = false;
+    for line in own.lines() {
+        let mut parts = line.splitn(3, ':');
+        let (Some(id), Some(controllers), Some(path)) = (parts.next(), parts.next(), parts.next())
+        else {
+            continue;
+        };
+        if id == "0" && controllers.is_empty() {
+            // v2: mounted at /sys/fs/cgroup (unified) or /sys/fs/cgroup/unified (hybrid).
+            push_chain("/sys/fs/cgroup", path, "memory.max");
+            push_chain("/sys/fs/cgroup/unified", path, "memory.max");
+        } else if controllers.split(',').any(|c| c == "memory") {
+            seen_v1 = true;
+            push_chain("/sys/fs/cgroup/memory", path, "memory.limit_in_bytes");
+        }
+    }
+    if own.is_empty() {
+        files.push("/sys/fs/cgroup/memory.max".into());
+    }
+    if !seen_v1 {
+        files.push("/sys/fs/cgroup/memory/memory.limit_in_bytes".into());
+    }
+    files
+        .iter()
+        .filter_map(|f| read(f))
+        .filter_map(|text| text.trim().parse::<u64>().ok())
+        .filter(|&limit| limit < NO_CGROUP_LIMIT)
+        .min()
 }
 
 /// The soft limit on this process's address space (`ulimit -v`, `prlimit --as`), from
@@ -98,4 +148,75 @@ pub fn check_import(plan: &Source, budget: &MemoryBudget) -> Result<(), OverBudg
         ),
         bytes.saturating_mul(IMPORT_FACTOR),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashMap;
+
+    fn limit(files: &[(&str, &str)]) -> Option<u64> {
+        let files: HashMap<String, String> = files
+            .iter()
+            .map(|(k, v)| ((*k).to_string(), (*v).to_string()))
+            .collect();
+        cgroup_limit(|path| files.get(path).cloned())
+    }
+
+    #[test]
+    fn cgroup_v2_limits_of_the_own_group_and_its_parents() {
+        let own = ("/proc/self/cgroup", "0::/user.slice/job.scope\n");
+        assert_eq!(
+            limit(&[
+                own,
+                (
+                    "/sys/fs/cgroup/user.slice/job.scope/memory.max",
+                    "2000000000\n"
+                )
+            ]),
+            Some(2_000_000_000)
+        );
+        // A parent's limit binds; "max" is none.
+        assert_eq!(
+            limit(&[
+                own,
+                ("/sys/fs/cgroup/user.slice/job.scope/memory.max", "max\n"),
+                ("/sys/fs/cgroup/user.slice/memory.max", "1000000000\n"),
+            ]),
+            Some(1_000_000_000)
+        );
+        assert_eq!(limit(&[own]), None);
+    }
+
+    #[test]
+    fn cgroup_v1_memory_controller_and_container_roots() {
+        let own = (
+            "/proc/self/cgroup",
+            "9:name=systemd:/\n4:memory:/rptest\n0::/\n",
+        );
+        assert_eq!(
+            limit(&[
+                own,
+                (
+                    "/sys/fs/cgroup/memory/rptest/memory.limit_in_bytes",
+                    "1999998976\n"
+                ),
+                (
+                    "/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                    "9223372036854771712\n"
+                ),
+            ]),
+            Some(1_999_998_976)
+        );
+        // A container without a cgroup namespace: the listed path is not under the mount,
+        // whose root holds the container's limit.
+        let docker = ("/proc/self/cgroup", "4:memory:/docker/abc\n");
+        assert_eq!(
+            limit(&[
+                docker,
+                ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "536870912\n"),
+            ]),
+            Some(536_870_912)
+        );
+    }
 }

@@ -102,7 +102,7 @@ pub fn check_memory(
     use rigport_export::estimate;
     let (needed, as_what) = match format {
         Format::Gltf => (estimate::gltf_memory(asset), "glTF"),
-        Format::Usda => (estimate::usd_memory(asset), "USD text"),
+        Format::Usda => (estimate::usd_memory_at(asset, path), "USD"),
     };
     let what = format!(
         "{}: writing {} joints x {} samples and {} vertices as {as_what}",
@@ -244,7 +244,12 @@ pub fn prepare(
     format: Format,
     opts: &WriteOptions,
 ) -> Result<Prepared, PipelineError> {
-    let failed = |e| PipelineError::step(format!("cannot export {:?}", asset.name), e);
+    // A long USD text is staged beside the output as it is built: failing to write it is
+    // an output error, like a failing write.
+    let failed = |e| match e {
+        e @ rigport_export::ExportError::Io { .. } => write_failure(e, path),
+        e => PipelineError::step(format!("cannot export {:?}", asset.name), e),
+    };
     let file = match format {
         Format::Gltf => {
             let opts = GltfOptions {

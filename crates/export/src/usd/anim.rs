@@ -22,14 +22,14 @@ const MAX_RESAMPLED_FRAMES: f64 = 1_000_000.0;
 const HALF_REPORT_TOLERANCE: f32 = 1e-5;
 
 /// One SkelAnimation as it will be written.
-pub(super) struct AnimPlan {
+pub(super) struct AnimPlan<'a> {
     pub(super) prim: String,
     /// Skeleton joints animated by the clip, in skeleton order.
     pub(super) joints: Vec<usize>,
     /// Translation, rotation (xyzw) and scale samplers per entry of `joints`.
-    pub(super) trs: Vec<[Option<Sampler>; 3]>,
+    pub(super) trs: Vec<[Option<Sampler<'a>>; 3]>,
     /// Morph-weight sampler per mesh (with blend shapes) animated by the clip.
-    pub(super) morphs: BTreeMap<usize, Sampler>,
+    pub(super) morphs: BTreeMap<usize, Sampler<'a>>,
     /// Key times in seconds (union over the kept tracks), ascending.
     pub(super) key_times: Vec<f64>,
     /// Whether a step or cubic-spline track needs extra samples between keys.
@@ -44,15 +44,15 @@ pub(super) struct AnimPlan {
 /// writes for every bone) is left out of the SkelAnimation's `joints`: UsdSkel then takes
 /// it from the Skeleton's `restTransforms`, the same transform in double precision and
 /// without half-precision scales. Its keys still count for the clip's times.
-pub(super) fn plan_clip(
+pub(super) fn plan_clip<'a>(
     asset: &Asset,
-    clip: &Clip,
+    clip: &'a Clip,
     prim: String,
     plans: &[MeshPlan],
     warnings: &mut Vec<Warning>,
-) -> AnimPlan {
+) -> AnimPlan<'a> {
     let location = format!("clip {:?}", clip.name);
-    let mut trs: BTreeMap<usize, [Option<&Track>; 3]> = BTreeMap::new();
+    let mut trs: BTreeMap<usize, [Option<&'a Track>; 3]> = BTreeMap::new();
     let mut morphs = BTreeMap::new();
     let mut seen = BTreeSet::new();
     let mut times: Vec<f32> = Vec::new();
@@ -294,7 +294,7 @@ fn snap(tc: f64) -> f64 {
 /// them (USD interpolates time samples linearly, slerping quaternions). Time codes that
 /// snap to the same value are written once, keys first.
 pub(super) fn sample_times(
-    anim: &AnimPlan,
+    anim: &AnimPlan<'_>,
     tcps: f64,
     resample_fps: f64,
     warnings: &mut Vec<Warning>,
@@ -357,8 +357,8 @@ fn put_quat(out: &mut String, q: [f32; 4]) {
     tuple(out, &[q[3], q[0], q[1], q[2]]);
 }
 
-/// One pose of an animation's joints: translations, rotations (xyzw), scales (as written,
-/// half-rounded).
+/// The rest pose of an animation's joints: translations, rotations (xyzw), scales (as
+/// written, half-rounded).
 struct PoseSample {
     t: Vec<[f32; 3]>,
     r: Vec<[f32; 4]>,
@@ -372,7 +372,7 @@ pub(super) fn write_animation(
     asset: &Asset,
     plans: &[MeshPlan],
     joint_tokens: &[String],
-    anim: &AnimPlan,
+    anim: &AnimPlan<'_>,
     times: &[(f64, f64)],
     warnings: &mut Vec<Warning>,
 ) {
@@ -394,60 +394,6 @@ pub(super) fn write_animation(
             .map(|r| half_error.round(r.scale.to_array()))
             .collect(),
     };
-    let mut poses: Vec<PoseSample> = Vec::with_capacity(times.len());
-    let mut value = [0.0_f64; 4];
-    for &(_, seconds) in times {
-        if anim.joints.is_empty() {
-            break;
-        }
-        let mut pose = PoseSample {
-            t: Vec::with_capacity(rest.len()),
-            r: Vec::with_capacity(rest.len()),
-            s: Vec::with_capacity(rest.len()),
-        };
-        for (k, (samplers, rest)) in anim.trs.iter().zip(&rest).enumerate() {
-            let [st, sr, ss] = samplers;
-            pose.t.push(match st {
-                Some(s) => {
-                    s.sample(seconds, &mut value);
-                    [value[0], value[1], value[2]].map(|v| v as f32)
-                }
-                None => rest.translation.to_array(),
-            });
-            let mut q = match sr {
-                Some(s) => {
-                    s.sample(seconds, &mut value);
-                    unit(value)
-                }
-                None => unit(rest.rotation.to_array().map(f64::from)),
-            };
-            // Sign-continuous samples, so any interpolation between them takes the short arc.
-            if let Some(prev) = poses.last().and_then(|p| p.r.get(k)) {
-                if dot(prev.map(f64::from), q.map(f64::from)) < 0.0 {
-                    q = q.map(|c| -c);
-                }
-            }
-            pose.r.push(q);
-            pose.s.push(match ss {
-                Some(s) => {
-                    s.sample(seconds, &mut value);
-                    half_error.round([value[0], value[1], value[2]].map(|v| v as f32))
-                }
-                None => half_error.round(rest.scale.to_array()),
-            });
-        }
-        poses.push(pose);
-    }
-    if half_error.worst > HALF_REPORT_TOLERANCE {
-        warnings.push(Warning::Repaired {
-            location: anim.location.clone(),
-            message: format!(
-                "{} scale values rounded to half precision (SkelAnimation scales are half3[]); largest relative change {:.2e}",
-                half_error.count, half_error.worst
-            ),
-        });
-    }
-
     // Blend-shape channels of every mesh, in mesh order.
     let channels: Vec<&String> = plans.iter().flat_map(|p| p.channels.iter()).collect();
     let default_weights: Vec<f32> = plans
@@ -506,37 +452,108 @@ pub(super) fn write_animation(
     array(line, &tokens, |s, t| quoted(s, t));
     doc.end();
 
-    type Put = fn(&mut String, &PoseSample);
-    let attributes: [(&str, Put); 3] = [
-        ("quatf[] rotations", |s, p| {
-            array(s, &p.r, |s, q| put_quat(s, *q))
-        }),
-        ("half3[] scales", |s, p| array(s, &p.s, |s, v| tuple(s, v))),
-        ("float3[] translations", |s, p| {
-            array(s, &p.t, |s, v| tuple(s, v))
-        }),
-    ];
-    for (decl, write) in attributes {
+    // Each attribute's time samples are computed as they are written (a pose at a time),
+    // so a clip of millions of frames never holds its poses.
+    let sampled = !anim.joints.is_empty() && !times.is_empty();
+    let mut value = [0.0_f64; 4];
+    let line_of = |doc: &mut Usda, tc: f64, write: &dyn Fn(&mut String)| {
         let line = doc.start();
-        line.push_str(decl);
-        line.push_str(" = ");
-        write(line, &rest_pose);
+        line.push_str("    ");
+        put(line, tc);
+        line.push_str(": ");
+        write(line);
+        line.push(',');
         doc.end();
-        if !poses.is_empty() {
-            doc.line(&format!("{decl}.timeSamples = {{"));
-            for (&(tc, _), pose) in times.iter().zip(&poses) {
-                let line = doc.start();
-                line.push_str("    ");
-                put(line, tc);
-                line.push_str(": ");
-                write(line, pose);
-                line.push(',');
-                doc.end();
+    };
+
+    let line = doc.start();
+    line.push_str("quatf[] rotations = ");
+    array(line, &rest_pose.r, |s, q| put_quat(s, *q));
+    doc.end();
+    if sampled {
+        doc.line("quatf[] rotations.timeSamples = {");
+        let mut previous: Vec<[f32; 4]> = Vec::new();
+        let mut current: Vec<[f32; 4]> = Vec::with_capacity(rest.len());
+        for &(tc, seconds) in times {
+            current.clear();
+            for (k, (samplers, rest)) in anim.trs.iter().zip(&rest).enumerate() {
+                let mut q = match &samplers[1] {
+                    Some(s) => {
+                        s.sample(seconds, &mut value);
+                        unit(value)
+                    }
+                    None => unit(rest.rotation.to_array().map(f64::from)),
+                };
+                // Sign-continuous samples, so any interpolation between them takes the
+                // short arc.
+                if let Some(prev) = previous.get(k) {
+                    if dot(prev.map(f64::from), q.map(f64::from)) < 0.0 {
+                        q = q.map(|c| -c);
+                    }
+                }
+                current.push(q);
             }
-            doc.line("}");
+            line_of(doc, tc, &|s| array(s, &current, |s, q| put_quat(s, *q)));
+            std::mem::swap(&mut previous, &mut current);
         }
+        doc.line("}");
+    }
+
+    let line = doc.start();
+    line.push_str("half3[] scales = ");
+    array(line, &rest_pose.s, |s, v| tuple(s, v));
+    doc.end();
+    if sampled {
+        doc.line("half3[] scales.timeSamples = {");
+        let mut current: Vec<[f32; 3]> = Vec::with_capacity(rest.len());
+        for &(tc, seconds) in times {
+            current.clear();
+            for (samplers, rest) in anim.trs.iter().zip(&rest) {
+                current.push(match &samplers[2] {
+                    Some(s) => {
+                        s.sample(seconds, &mut value);
+                        half_error.round([value[0], value[1], value[2]].map(|v| v as f32))
+                    }
+                    None => half_error.round(rest.scale.to_array()),
+                });
+            }
+            line_of(doc, tc, &|s| array(s, &current, |s, v| tuple(s, v)));
+        }
+        doc.line("}");
+    }
+
+    let line = doc.start();
+    line.push_str("float3[] translations = ");
+    array(line, &rest_pose.t, |s, v| tuple(s, v));
+    doc.end();
+    if sampled {
+        doc.line("float3[] translations.timeSamples = {");
+        let mut current: Vec<[f32; 3]> = Vec::with_capacity(rest.len());
+        for &(tc, seconds) in times {
+            current.clear();
+            for (samplers, rest) in anim.trs.iter().zip(&rest) {
+                current.push(match &samplers[0] {
+                    Some(s) => {
+                        s.sample(seconds, &mut value);
+                        [value[0], value[1], value[2]].map(|v| v as f32)
+                    }
+                    None => rest.translation.to_array(),
+                });
+            }
+            line_of(doc, tc, &|s| array(s, &current, |s, v| tuple(s, v)));
+        }
+        doc.line("}");
     }
     doc.close();
+    if half_error.worst > HALF_REPORT_TOLERANCE {
+        warnings.push(Warning::Repaired {
+            location: anim.location.clone(),
+            message: format!(
+                "{} scale values rounded to half precision (SkelAnimation scales are half3[]); largest relative change {:.2e}",
+                half_error.count, half_error.worst
+            ),
+        });
+    }
 }
 
 /// Tracks the largest relative change made by rounding scales to half precision.

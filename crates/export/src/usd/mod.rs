@@ -148,7 +148,16 @@ use std::path::{Path, PathBuf};
 use rigport_model::{Asset, UpAxis, Warning};
 
 use self::encode::Encoding;
+use self::text::{Finished, Usda};
+use crate::atomic::TempFile;
 use crate::ExportError;
+
+pub(crate) use self::text::SPILL_BYTES;
+
+/// Whether `path` asks for USD text (`.usda`, `.usd`), which is streamed when long.
+pub(crate) fn encode_is_text(path: &Path) -> bool {
+    Encoding::of(path) == Some(Encoding::Text)
+}
 
 /// The skinning method a USD reader should use for skinned meshes: the model's
 /// [`SkinningMethod`](rigport_model::SkinningMethod) (`Lbs` writes nothing, UsdSkel's
@@ -212,8 +221,23 @@ fn to_usda_with_stem(
     options: &UsdOptions,
     stem: &str,
 ) -> Result<ExportedUsd, ExportError> {
+    let (doc, images, warnings) = build_body(asset, options, stem, Usda::default())?;
+    Ok(ExportedUsd {
+        text: doc.into_text(),
+        images,
+        warnings,
+    })
+}
+
+/// Builds the stage into `doc`, with the texture files it names and the warnings.
+fn build_body(
+    asset: &Asset,
+    options: &UsdOptions,
+    stem: &str,
+    mut doc: Usda,
+) -> Result<(Usda, Vec<crate::ImageFile>, Vec<Warning>), ExportError> {
     let names = crate::gltf::material::image_file_names(stem, asset);
-    let (text, warnings) = stage::build(asset, options, &names)?;
+    let warnings = stage::build(asset, options, &names, &mut doc)?;
     let images = names
         .into_iter()
         .zip(&asset.images)
@@ -224,38 +248,66 @@ fn to_usda_with_stem(
             bytes: image.bytes.clone(),
         })
         .collect();
-    Ok(ExportedUsd {
-        text,
-        images,
-        warnings,
-    })
+    Ok((doc, images, warnings))
 }
 
-/// An export to a `.usda` file, built in memory and not yet written, so that the caller
-/// can look at the warnings (and, say, refuse to write under `--deny-warnings`) before any
-/// file changes.
-#[derive(Clone, Debug, PartialEq)]
+/// An export to a USD file, built and not yet in place, so that the caller can look at the
+/// warnings (and, say, refuse to write under `--deny-warnings`) before any file changes.
+///
+/// A `.usda` text is built in memory, except a long one (over 64 MiB: a clip of millions
+/// of frames; the environment variable `RIGPORT_TEST_USD_SPILL_BYTES` sets another size,
+/// for tests), which is streamed into a hidden temporary file beside the output as it is
+/// built and renamed over the output by [`PreparedUsd::write`] (or removed when this is
+/// dropped), so its memory does not grow with the file. `.usdc` and `.usdz` are encoded in
+/// memory.
+#[derive(Debug)]
 pub struct PreparedUsd {
     path: PathBuf,
-    text: String,
+    body: Body,
     images: Vec<crate::ImageFile>,
     warnings: Vec<Warning>,
-    /// The `.usdc` or `.usdz` bytes; `None` for text.
-    encoded: Option<Vec<u8>>,
 }
 
-/// Builds the export of `asset` to `path` in memory. The extension must be `.usda` or
-/// `.usd` (case-insensitive; a `.usd` file may hold text), `.usdc` (the same layer as a
-/// crate file) or `.usdz` (a package: that crate file as `<stem>.usdc`, then the
-/// textures). Nothing is written until [`PreparedUsd::write`].
+/// What [`PreparedUsd::write`] puts at the output.
+#[derive(Debug)]
+enum Body {
+    /// USDA text.
+    Text(String),
+    /// A `.usdc` or `.usdz` file's bytes.
+    Encoded(Vec<u8>),
+    /// USDA text already in a temporary file beside the target (a link's final target).
+    Staged { file: TempFile, target: PathBuf },
+}
+
+/// Builds the export of `asset` to `path`. The extension must be `.usda` or `.usd`
+/// (case-insensitive; a `.usd` file may hold text), `.usdc` (the same layer as a crate
+/// file) or `.usdz` (a package: that crate file as `<stem>.usdc`, then the textures).
+/// Nothing at `path` changes until [`PreparedUsd::write`].
 ///
 /// # Errors
 /// [`ExportError::UnsupportedExtension`] for any other extension (checked before any
-/// work), and the errors of [`to_usda`].
+/// work), the errors of [`to_usda`], and [`ExportError::Io`] when a long text cannot be
+/// staged beside `path` (its folder is missing or not writable, the output is not a
+/// regular file, the disk is full).
 pub fn prepare_usd(
     asset: &Asset,
     path: &Path,
     options: &UsdOptions,
+) -> Result<PreparedUsd, ExportError> {
+    // For tests of the streaming path on small files (as `RIGPORT_TEST_RENAME_DELAY_MS`).
+    let spill_at = std::env::var("RIGPORT_TEST_USD_SPILL_BYTES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(SPILL_BYTES);
+    prepare_usd_spilling_at(asset, path, options, spill_at)
+}
+
+/// [`prepare_usd`], a text staged once it holds `spill_at` bytes.
+fn prepare_usd_spilling_at(
+    asset: &Asset,
+    path: &Path,
+    options: &UsdOptions,
+    spill_at: usize,
 ) -> Result<PreparedUsd, ExportError> {
     let Some(encoding) = Encoding::of(path) else {
         return Err(ExportError::UnsupportedExtension {
@@ -266,23 +318,43 @@ pub fn prepare_usd(
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let out = to_usda_with_stem(asset, options, &stem)?;
-    let encoded = match encoding {
-        Encoding::Text => None,
-        Encoding::Crate => Some(encode::crate_file(&out.text, path)?),
-        Encoding::Package => Some(encode::package(&out.text, &out.images, &stem, path)?),
+    let io_error = |source| ExportError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let doc = match encoding {
+        // Where a long text goes: the file a link at `path` leads to. A path that cannot
+        // be written is reported when the text would be staged, else by `write`.
+        Encoding::Text => match crate::atomic::check_output(path) {
+            Ok(target) => Usda::spilling_to(&target, spill_at),
+            Err(_) => Usda::default(),
+        },
+        Encoding::Crate | Encoding::Package => Usda::default(),
+    };
+    let (doc, images, warnings) = build_body(asset, options, &stem, doc)?;
+    let (body, images) = match encoding {
+        Encoding::Text => {
+            let body = match doc.finish().map_err(io_error)? {
+                Finished::Text(text) => Body::Text(text),
+                Finished::Staged { file, target } => Body::Staged { file, target },
+            };
+            (body, images)
+        }
+        Encoding::Crate => (
+            Body::Encoded(encode::crate_file(&doc.into_text(), path)?),
+            images,
+        ),
+        // A package holds its textures.
+        Encoding::Package => (
+            Body::Encoded(encode::package(&doc.into_text(), &images, &stem, path)?),
+            Vec::new(),
+        ),
     };
     Ok(PreparedUsd {
         path: path.to_path_buf(),
-        text: out.text,
-        // A package holds its textures.
-        images: if encoding == Encoding::Package {
-            Vec::new()
-        } else {
-            out.images
-        },
-        warnings: out.warnings,
-        encoded,
+        body,
+        images,
+        warnings,
     })
 }
 
@@ -297,10 +369,13 @@ impl PreparedUsd {
         &self.path
     }
 
-    /// The USDA text that [`PreparedUsd::write`] writes (for a `.usdc` or `.usdz`, the
-    /// text of the layer it encodes).
-    pub fn text(&self) -> &str {
-        &self.text
+    /// The USDA text that [`PreparedUsd::write`] writes, when it is in memory: `None` for a
+    /// `.usdc` or `.usdz` and for a long text already staged in its temporary file.
+    pub fn text(&self) -> Option<&str> {
+        match &self.body {
+            Body::Text(text) => Some(text),
+            Body::Encoded(_) | Body::Staged { .. } => None,
+        }
     }
 
     /// Writes the file atomically (a temporary file in the same directory, renamed over the
@@ -316,10 +391,14 @@ impl PreparedUsd {
             crate::write_atomic(&path, &image.bytes)
                 .map_err(|source| ExportError::Io { path, source })?;
         }
-        let bytes = self.encoded.as_deref().unwrap_or(self.text.as_bytes());
-        crate::write_atomic(&self.path, bytes).map_err(|source| ExportError::Io {
+        let io_error = |source| ExportError::Io {
             path: self.path.clone(),
             source,
-        })
+        };
+        match self.body {
+            Body::Text(text) => crate::write_atomic(&self.path, text.as_bytes()).map_err(io_error),
+            Body::Encoded(bytes) => crate::write_atomic(&self.path, &bytes).map_err(io_error),
+            Body::Staged { file, target } => file.persist(&target).map_err(io_error),
+        }
     }
 }

@@ -8,58 +8,41 @@
 use rigport_model::interp::Keys;
 use rigport_model::{Interpolation, Track, TrackTarget};
 
-/// A track prepared for sampling.
+/// A track prepared for sampling. It borrows the track's `f32` keys and converts the one or
+/// two keys around a sample time to `f64` when sampling, so a clip of millions of keys
+/// costs one flag per rotation key, not a second copy of its keys.
 #[derive(Clone, Debug)]
-pub(crate) struct Sampler {
-    interpolation: Interpolation,
-    times: Vec<f64>,
-    /// Flat values in the track's layout (`[in, value, out]` per key for cubic splines).
-    values: Vec<f64>,
+pub(crate) struct Sampler<'a> {
+    track: &'a Track,
     components: usize,
     rotation: bool,
+    /// Per rotation key: whether its normalized quaternion (and its tangents) is negated to
+    /// be sign-continuous with the key before. Empty for other tracks.
+    flipped: Vec<bool>,
 }
 
-impl Sampler {
+impl<'a> Sampler<'a> {
     /// Prepares `track`, which must satisfy [`rigport_model::Asset::validate`] (value count
     /// matching the keys) with non-degenerate rotation keys.
-    pub(crate) fn new(track: &Track) -> Self {
+    pub(crate) fn new(track: &'a Track) -> Self {
         let components = track.components();
         let rotation = matches!(track.target, TrackTarget::Rotation(_));
-        let mut values: Vec<f64> = track.values.iter().map(|&v| f64::from(v)).collect();
-        let cubic = track.interpolation == Interpolation::CubicSpline;
+        let mut flipped = Vec::new();
         if rotation {
-            let (stride, offset) = if cubic { (12, 4) } else { (4, 0) };
+            flipped.reserve_exact(track.times.len());
             let mut previous: Option<[f64; 4]> = None;
-            for key in values.chunks_exact_mut(stride) {
-                let mut q = [
-                    key[offset],
-                    key[offset + 1],
-                    key[offset + 2],
-                    key[offset + 3],
-                ];
-                let len = dot(q, q).sqrt();
-                if len > 0.0 {
-                    q = q.map(|c| c / len);
-                }
+            for k in 0..track.times.len() {
+                let q = key_quat(track, k);
                 let flip = previous.is_some_and(|p| dot(p, q) < 0.0);
-                if flip {
-                    q = q.map(|c| -c);
-                    if cubic {
-                        for k in (0..4).chain(8..12) {
-                            key[k] = -key[k];
-                        }
-                    }
-                }
-                key[offset..offset + 4].copy_from_slice(&q);
-                previous = Some(q);
+                flipped.push(flip);
+                previous = Some(if flip { q.map(|c| -c) } else { q });
             }
         }
         Self {
-            interpolation: track.interpolation,
-            times: track.times.iter().map(|&t| f64::from(t)).collect(),
-            values,
+            track,
             components,
             rotation,
+            flipped,
         }
     }
 
@@ -72,13 +55,21 @@ impl Sampler {
     /// Writes the value at `t` seconds into `out` (`components()` floats; a shorter `out`
     /// gets a prefix). A track without keys leaves `out` unchanged.
     pub(crate) fn sample(&self, t: f64, out: &mut [f64]) {
-        if self.times.is_empty() {
+        let track_times = &self.track.times;
+        if track_times.is_empty() {
             return;
         }
+        // The keys around `t`: the span `locate` finds depends on these alone (one key
+        // before the first or after the last).
+        let after = track_times.partition_point(|&x| f64::from(x) <= t);
+        let first = after.saturating_sub(1);
+        let last = after.min(track_times.len() - 1);
+        let times: Vec<f64> = (first..=last).map(|k| f64::from(track_times[k])).collect();
+        let values: Vec<f64> = (first..=last).flat_map(|k| self.key(k)).collect();
         let keys = Keys {
-            interpolation: self.interpolation,
-            times: &self.times,
-            values: &self.values,
+            interpolation: self.track.interpolation,
+            times: &times,
+            values: &values,
             components: self.components,
         };
         if self.rotation {
@@ -89,6 +80,52 @@ impl Sampler {
         } else {
             keys.sample(t, out);
         }
+    }
+
+    /// Key `k`'s floats in `f64` in the track's layout (`[in, value, out]` for cubic
+    /// splines), a rotation normalized and sign-continuous, its tangents flipped with it.
+    fn key(&self, k: usize) -> Vec<f64> {
+        let c = self.components;
+        let cubic = self.track.interpolation == Interpolation::CubicSpline;
+        let stride = if cubic { 3 * c } else { c };
+        let mut key: Vec<f64> = (self.track.values)
+            .get(k * stride..(k + 1) * stride)
+            .unwrap_or_default()
+            .iter()
+            .map(|&v| f64::from(v))
+            .collect();
+        if self.rotation && key.len() == stride {
+            let offset = if cubic { 4 } else { 0 };
+            let mut q = key_quat(self.track, k);
+            if self.flipped.get(k).copied().unwrap_or(false) {
+                q = q.map(|x| -x);
+                if cubic {
+                    for i in (0..4).chain(8..12) {
+                        key[i] = -key[i];
+                    }
+                }
+            }
+            key[offset..offset + 4].copy_from_slice(&q);
+        }
+        key
+    }
+}
+
+/// Rotation key `k`'s value (xyzw) in `f64`, normalized (as is, when of zero length).
+fn key_quat(track: &Track, k: usize) -> [f64; 4] {
+    let cubic = track.interpolation == Interpolation::CubicSpline;
+    let (stride, offset) = if cubic { (12, 4) } else { (4, 0) };
+    let at = |i: usize| {
+        (track.values)
+            .get(k * stride + offset + i)
+            .map_or(0.0, |&v| f64::from(v))
+    };
+    let q = [at(0), at(1), at(2), at(3)];
+    let len = dot(q, q).sqrt();
+    if len > 0.0 {
+        q.map(|c| c / len)
+    } else {
+        q
     }
 }
 
@@ -131,21 +168,23 @@ mod tests {
     #[test]
     fn linear_step_and_clamping() {
         let tr = TrackTarget::Translation(JointIndex(0));
-        let lin = Sampler::new(&track(
+        let lin_track = track(
             tr,
             Interpolation::Linear,
             &[1.0, 3.0],
             &[0.0, 0.0, 0.0, 2.0, 4.0, 6.0],
-        ));
+        );
+        let lin = Sampler::new(&lin_track);
         assert_eq!(at(&lin, 0.0), vec![0.0, 0.0, 0.0]);
         assert_eq!(at(&lin, 2.0), vec![1.0, 2.0, 3.0]);
         assert_eq!(at(&lin, 9.0), vec![2.0, 4.0, 6.0]);
-        let step = Sampler::new(&track(
+        let step_track = track(
             tr,
             Interpolation::Step,
             &[0.0, 1.0],
             &[1.0, 1.0, 1.0, 5.0, 5.0, 5.0],
-        ));
+        );
+        let step = Sampler::new(&step_track);
         assert_eq!(at(&step, 0.999), vec![1.0; 3]);
         assert_eq!(at(&step, 1.0), vec![5.0; 3]);
     }
@@ -156,7 +195,8 @@ mod tests {
         let b = -Quat::from_rotation_z(1.0); // stored with the other sign
         let rot = TrackTarget::Rotation(JointIndex(0));
         let values: Vec<f32> = [a, b * 3.0].iter().flat_map(|q| q.to_array()).collect();
-        let s = Sampler::new(&track(rot, Interpolation::Linear, &[0.0, 1.0], &values));
+        let s_track = track(rot, Interpolation::Linear, &[0.0, 1.0], &values);
+        let s = Sampler::new(&s_track);
         let mid = at(&s, 0.5);
         let expect = Quat::from_rotation_z(0.6);
         let sign = if mid[3] < 0.0 { -1.0 } else { 1.0 };
@@ -177,12 +217,13 @@ mod tests {
     fn cubic_hermite_matches_the_formula() {
         // One component (morph weight): keys (t=0: v=0, out=1), (t=2: in=0, v=1).
         let w = TrackTarget::MorphWeights(rigport_model::MeshIndex(0));
-        let s = Sampler::new(&track(
+        let s_track = track(
             w,
             Interpolation::CubicSpline,
             &[0.0, 2.0],
             &[9.0, 0.0, 1.0, 0.0, 1.0, 9.0],
-        ));
+        );
+        let s = Sampler::new(&s_track);
         assert_eq!(s.components(), 1);
         let t = 0.5_f64;
         let u = t / 2.0;

@@ -34,7 +34,7 @@ const DEFAULT_TIME_CODES_PER_SECOND: f64 = 24.0;
 /// Sampling rate for cubic-spline and step tracks when the keys fit no frame rate.
 const FALLBACK_RESAMPLE_FPS: f64 = 30.0;
 
-/// The USDA text of `asset`, with the warnings of lossy steps.
+/// Writes the USDA text of `asset` into `doc`; returns the warnings of lossy steps.
 ///
 /// # Errors
 /// [`ExportError::Invalid`] listing every problem of the asset.
@@ -42,7 +42,8 @@ pub(crate) fn build(
     asset: &Asset,
     options: &UsdOptions,
     image_files: &[String],
-) -> Result<(String, Vec<Warning>), ExportError> {
+    doc: &mut Usda,
+) -> Result<Vec<Warning>, ExportError> {
     let problems = check(asset);
     if !problems.is_empty() {
         return Err(ExportError::Invalid { problems });
@@ -264,7 +265,6 @@ pub(crate) fn build(
     let root_path = format!("/{root_name}");
 
     // ------------------------------------------------------------------ text
-    let mut doc = Usda::default();
     let sampled: Vec<Vec<(f64, f64)>> = anims
         .iter()
         .map(|anim| sample_times(anim, tcps, resample_fps, &mut warnings))
@@ -345,7 +345,7 @@ pub(crate) fn build(
         doc.open(&header);
     }
     if root_xform != DMat4::IDENTITY {
-        write_matrices_one(&mut doc, "matrix4d xformOp:transform", &root_xform);
+        write_matrices_one(doc, "matrix4d xformOp:transform", &root_xform);
         doc.line("uniform token[] xformOpOrder = [\"xformOp:transform\"]");
         doc.blank();
     }
@@ -358,9 +358,9 @@ pub(crate) fn build(
             doc.close_meta();
             doc.open_body();
             let binds = skeleton_binds.get(k).map(Vec::as_slice).unwrap_or(&[]);
-            write_matrices(&mut doc, "uniform matrix4d[] bindTransforms", binds);
-            write_tokens(&mut doc, "uniform token[] joints", &joint_tokens);
-            write_matrices(&mut doc, "uniform matrix4d[] restTransforms", &rest_local);
+            write_matrices(doc, "uniform matrix4d[] bindTransforms", binds);
+            write_tokens(doc, "uniform token[] joints", &joint_tokens);
+            write_matrices(doc, "uniform matrix4d[] restTransforms", &rest_local);
             if rest_anim {
                 doc.line(&format!(
                     "rel skel:animationSource = <{root_path}/{ANIMATIONS}/{rest_anim_prim}>"
@@ -379,7 +379,7 @@ pub(crate) fn build(
                 }
                 first = false;
                 write_animation(
-                    &mut doc,
+                    doc,
                     asset,
                     &plans,
                     &joint_tokens,
@@ -399,7 +399,7 @@ pub(crate) fn build(
                     location: "default morph weights".into(),
                 };
                 write_animation(
-                    &mut doc,
+                    doc,
                     asset,
                     &plans,
                     &joint_tokens,
@@ -414,14 +414,14 @@ pub(crate) fn build(
     }
 
     let material_prims = material_prims(asset);
-    write_materials(&mut doc, asset, &root_path, &material_prims, image_files);
+    write_materials(doc, asset, &root_path, &material_prims, image_files);
     let material_paths: Vec<String> = material_prims
         .iter()
         .map(|p| format!("{root_path}/{MATERIALS}/{p}"))
         .collect();
     for (mi, (mesh, plan)) in asset.meshes.iter().zip(&plans).enumerate() {
         write_mesh(
-            &mut doc,
+            doc,
             asset,
             mi,
             mesh,
@@ -479,7 +479,7 @@ pub(crate) fn build(
         doc.line("}");
     }
     doc.close();
-    Ok((doc.finish(), warnings))
+    Ok(warnings)
 }
 
 /// Joints a rigidly attached mesh carries as its own `xformOp`s instead of a binding: root

@@ -472,7 +472,10 @@ fn prepare_and_write() {
     let prepared = prepare_usd(&asset, &path, &UsdOptions::default()).unwrap();
     assert!(prepared.warnings().is_empty(), "{:?}", prepared.warnings());
     assert_eq!(prepared.path(), path);
-    let text = prepared.text().to_owned();
+    let text = prepared
+        .text()
+        .expect("a short text is in memory")
+        .to_owned();
     prepared.write().unwrap();
     assert_eq!(std::fs::read_to_string(&path).unwrap(), text);
     let names: Vec<_> = std::fs::read_dir(dir.path())
@@ -487,6 +490,52 @@ fn prepare_and_write() {
     )
     .unwrap();
     assert!(matches!(missing.write(), Err(ExportError::Io { .. })));
+}
+
+/// A text longer than the spill size is staged in a temporary file as it is built: the
+/// same bytes as in memory, nothing at the output before `write`, no temporary file left
+/// after it or after a drop.
+#[test]
+fn a_long_text_is_streamed_to_its_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let asset = sample::two_roots();
+    assert!(!asset.clips.is_empty(), "the sample has a clip to stream");
+    let expected = to_usda(&asset, &UsdOptions::default()).unwrap().text;
+    let names = |dir: &Path| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let path = dir.path().join("two_roots.usda");
+    let prepared =
+        super::prepare_usd_spilling_at(&asset, &path, &UsdOptions::default(), 256).unwrap();
+    assert_eq!(prepared.text(), None, "spilled past 256 bytes");
+    let staged = names(dir.path());
+    assert_eq!(staged.len(), 1, "{staged:?}");
+    assert!(staged[0].starts_with(".two_roots.usda.") && staged[0].ends_with(".tmp"));
+    prepared.write().unwrap();
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), expected);
+    assert_eq!(names(dir.path()), ["two_roots.usda"]);
+    // Dropped (say, refused under --deny-warnings): the old file stays, the staged one goes.
+    let dropped =
+        super::prepare_usd_spilling_at(&asset, &path, &UsdOptions::default(), 256).unwrap();
+    drop(dropped);
+    assert_eq!(names(dir.path()), ["two_roots.usda"]);
+    // A folder that does not exist: an I/O error naming the output, at prepare time.
+    let missing = super::prepare_usd_spilling_at(
+        &asset,
+        &dir.path().join("no/such/dir/a.usda"),
+        &UsdOptions::default(),
+        256,
+    )
+    .unwrap_err();
+    match missing {
+        ExportError::Io { path, .. } => assert!(path.ends_with("no/such/dir/a.usda")),
+        other => panic!("{other:?}"),
+    }
 }
 
 // ------------------------------------------------------------------ usd-core round trips

@@ -7,23 +7,130 @@
 //! Everything is written in a fixed order, so the same input gives the same bytes.
 
 use std::fmt::{Display, Write as _};
+use std::fs::File;
+use std::io::{self, BufWriter, Write as _};
+use std::path::{Path, PathBuf};
 
 use glam::DMat4;
+
+use crate::atomic::TempFile;
 
 /// Spaces per indentation level (what `usdcat` writes).
 const INDENT: &str = "    ";
 
-/// A USDA document being written.
+/// Text held in memory before a spilling document moves it to its temporary file (and the
+/// size of each later write): long clips become files of gigabytes that never sit in memory
+/// whole, while every smaller file is built in memory as before.
+pub(crate) const SPILL_BYTES: usize = 64 << 20;
+
+/// A USDA document being written: in memory, or (with [`Usda::spilling_to`]) streamed to
+/// a temporary file beside the output once it outgrows [`SPILL_BYTES`].
 #[derive(Debug, Default)]
 pub(crate) struct Usda {
     out: String,
     depth: usize,
+    spill: Option<Spill>,
+}
+
+/// Where a spilling document goes.
+#[derive(Debug)]
+struct Spill {
+    /// The output the temporary file will be renamed to (links already followed).
+    target: PathBuf,
+    /// Text held before a spill ([`SPILL_BYTES`] but in tests).
+    at: usize,
+    /// Created at the first spill.
+    file: Option<(TempFile, BufWriter<File>)>,
+    /// The first I/O error; the text after it is dropped, since the export has failed.
+    error: Option<io::Error>,
+}
+
+/// A finished document.
+#[derive(Debug)]
+pub(crate) enum Finished {
+    /// All of it, in memory.
+    Text(String),
+    /// Written to a temporary file beside `target`, to be renamed over it.
+    Staged {
+        /// The temporary file (removed on drop unless persisted).
+        file: TempFile,
+        /// The output it replaces.
+        target: PathBuf,
+    },
 }
 
 impl Usda {
-    /// The text written so far.
-    pub(crate) fn finish(self) -> String {
+    /// A document that moves its text to a temporary file beside `target` (the output;
+    /// links already followed, see [`crate::atomic::check_output`]) once it holds more than
+    /// `at` bytes ([`SPILL_BYTES`]).
+    pub(crate) fn spilling_to(target: &Path, at: usize) -> Self {
+        Self {
+            spill: Some(Spill {
+                target: target.to_path_buf(),
+                at,
+                file: None,
+                error: None,
+            }),
+            ..Self::default()
+        }
+    }
+
+    /// The text of a document made without a spill target ([`Usda::default`]); for a
+    /// spilling one, the part not yet spilled.
+    pub(crate) fn into_text(self) -> String {
         self.out
+    }
+
+    /// The document: its text, or its temporary file when it spilled.
+    ///
+    /// # Errors
+    /// The first I/O error creating or writing the temporary file (then removed).
+    pub(crate) fn finish(mut self) -> io::Result<Finished> {
+        let Some(mut spill) = self.spill.take() else {
+            return Ok(Finished::Text(self.out));
+        };
+        if let Some(e) = spill.error.take() {
+            return Err(e);
+        }
+        match spill.file.take() {
+            None => Ok(Finished::Text(self.out)),
+            Some((file, mut writer)) => {
+                writer.write_all(self.out.as_bytes())?;
+                writer.flush()?;
+                drop(writer);
+                Ok(Finished::Staged {
+                    file,
+                    target: spill.target,
+                })
+            }
+        }
+    }
+
+    /// The text in memory when it ends a line, spilling it if it grew past [`SPILL_BYTES`].
+    fn maybe_spill(&mut self) {
+        let Some(spill) = self.spill.as_mut() else {
+            return;
+        };
+        if self.out.len() < spill.at {
+            return;
+        }
+        if spill.error.is_none() {
+            let result = match spill.file.as_mut() {
+                Some((_, writer)) => writer.write_all(self.out.as_bytes()),
+                None => TempFile::create_beside_open(&spill.target).and_then(|(tmp, file)| {
+                    let mut writer = BufWriter::with_capacity(1 << 20, file);
+                    writer.write_all(self.out.as_bytes())?;
+                    spill.file = Some((tmp, writer));
+                    Ok(())
+                }),
+            };
+            if let Err(e) = result {
+                spill.error = Some(e);
+                // The temporary file goes now; the export fails at `finish`.
+                spill.file = None;
+            }
+        }
+        self.out.clear();
     }
 
     /// Starts a line at the current indentation; the caller appends and ends it with
@@ -38,6 +145,7 @@ impl Usda {
     /// Ends the current line.
     pub(crate) fn end(&mut self) {
         self.out.push('\n');
+        self.maybe_spill();
     }
 
     /// One whole line.
@@ -49,6 +157,7 @@ impl Usda {
     /// An empty line.
     pub(crate) fn blank(&mut self) {
         self.out.push('\n');
+        self.maybe_spill();
     }
 
     /// Writes `header`, then `{` on its own line, and indents.
