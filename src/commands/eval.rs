@@ -1,13 +1,12 @@
 //! `rigport eval`: pose a rig and dump the skinned result as `.npz`
 //! (`rigport_pipeline::dump`).
 
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use rigport_model::SkinningMethod;
-use rigport_pipeline::dump::{eval_dump, DumpOptions};
+use rigport_pipeline::dump::{eval_dump_to, DumpOptions};
 
 use crate::cli::{EvalArgs, Skinning};
 use crate::context::Context;
-use crate::exit::OutputError;
 use crate::input;
 
 /// Runs `eval`.
@@ -26,10 +25,8 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
         }),
     };
     let budget = crate::memory::budget();
-    let dump = eval_dump(asset, &plan.label(), &opts, &args.output, &budget)?;
-    rigport_export::write_atomic(&args.output, &dump.bytes).with_context(|| OutputError {
-        path: args.output.display().to_string(),
-    })?;
+    // Streamed to the file: memory stays bounded whatever the clip's length.
+    let dump = eval_dump_to(asset, &plan.label(), &opts, &args.output, &budget)?;
     if !ctx.quiet {
         let what = match &dump.clip {
             Some(name) => format!(", clip {name:?}"),

@@ -222,14 +222,14 @@ fn exit_3_messages_name_the_file_once() {
     }
 }
 
-/// Starts `convert` with every rename delayed, waits for its temporary file, sends
-/// `signal`, and checks the exit code and that nothing is left.
+/// Starts `command` (writing `out_name`) with every rename delayed, waits for its
+/// temporary file, sends `signal`, and checks the exit code and that nothing is left.
 #[cfg(unix)]
-fn interrupt_while_writing(signal: &str, code: i32) {
+fn interrupt_while_writing(command: &str, out_name: &str, signal: &str, code: i32) {
     let dir = scratch();
-    let out = dir.path().join("out.gltf");
+    let out = dir.path().join(out_name);
     let mut child = Command::new(env!("CARGO_BIN_EXE_rigport"))
-        .arg("convert")
+        .arg(command)
         .args(rig())
         .arg("-o")
         .arg(&out)
@@ -257,20 +257,27 @@ fn interrupt_while_writing(signal: &str, code: i32) {
         .unwrap();
     assert!(killed.success());
     let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(code), "{signal}: {status}");
-    assert_eq!(names(dir.path()), Vec::<String>::new(), "{signal}");
+    assert_eq!(status.code(), Some(code), "{command} {signal}: {status}");
+    assert_eq!(
+        names(dir.path()),
+        Vec::<String>::new(),
+        "{command} {signal}"
+    );
 }
 
 #[cfg(unix)]
 #[test]
 fn sigterm_removes_temp_files_and_exits_143() {
-    interrupt_while_writing("-TERM", 143);
+    interrupt_while_writing("convert", "out.gltf", "-TERM", 143);
+    // eval streams its `.npz` into the temporary file: the same registry removes it.
+    interrupt_while_writing("eval", "out.npz", "-TERM", 143);
 }
 
 #[cfg(unix)]
 #[test]
 fn sigint_removes_temp_files_and_exits_130() {
-    interrupt_while_writing("-INT", 130);
+    interrupt_while_writing("convert", "out.gltf", "-INT", 130);
+    interrupt_while_writing("eval", "out.npz", "-INT", 130);
 }
 
 #[test]

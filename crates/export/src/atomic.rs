@@ -26,7 +26,7 @@
 //! written, so that a test can interrupt a write while the file exists.
 
 use std::ffi::OsString;
-use std::fs::{self, OpenOptions};
+use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -50,8 +50,33 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 /// [`io::ErrorKind::Interrupted`] after [`remove_temp_files`]. On error the temporary file
 /// has been removed and the target is unchanged.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    write_atomic_with(path, |file| file.write_all(bytes))
+}
+
+/// Writes `path` atomically with what `write` writes into the temporary file: for output
+/// too large to build in memory first. The rules of [`write_atomic`] apply (symbolic links,
+/// the temporary file's name, the registry that [`remove_temp_files`] empties, the sweep of
+/// stale files); `write` gets the file open for writing (and seeking) at its start.
+///
+/// ```
+/// use std::io::Write as _;
+///
+/// let dir = tempfile::tempdir()?;
+/// let path = dir.path().join("out.txt");
+/// rigport_export::write_atomic_with(&path, |file| file.write_all(b"streamed"))?;
+/// assert_eq!(std::fs::read(&path)?, b"streamed");
+/// # Ok::<(), std::io::Error>(())
+/// ```
+///
+/// # Errors
+/// Those of [`write_atomic`], and `write`'s own. On error the temporary file has been
+/// removed and the target is unchanged.
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut File) -> io::Result<()>,
+) -> io::Result<()> {
     let target = check_output(path)?;
-    TempFile::create_beside(&target, bytes)?.persist(&target)
+    TempFile::create_beside_with(&target, write)?.persist(&target)
 }
 
 /// The file that writing `path` replaces or creates: `path` itself, or the final target
@@ -264,10 +289,22 @@ impl TempFile {
     /// I/O errors; [`io::ErrorKind::InvalidInput`] when `target` has no file name;
     /// [`io::ErrorKind::Interrupted`] after [`remove_temp_files`].
     pub(crate) fn create_beside(target: &Path, bytes: &[u8]) -> io::Result<Self> {
+        Self::create_beside_with(target, |file| file.write_all(bytes))
+    }
+
+    /// Creates a new temporary file in `target`'s directory holding what `write` writes.
+    ///
+    /// # Errors
+    /// I/O errors, `write`'s among them; [`io::ErrorKind::InvalidInput`] when `target` has
+    /// no file name; [`io::ErrorKind::Interrupted`] after [`remove_temp_files`].
+    pub(crate) fn create_beside_with(
+        target: &Path,
+        write: impl FnOnce(&mut File) -> io::Result<()>,
+    ) -> io::Result<Self> {
         let (tmp, mut file) = Self::fresh(target, |path| {
             OpenOptions::new().write(true).create_new(true).open(path)
         })?;
-        file.write_all(bytes)?;
+        write(&mut file)?;
         Ok(tmp)
     }
 

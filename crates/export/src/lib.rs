@@ -46,7 +46,9 @@ mod weights;
 #[cfg(test)]
 mod sample;
 
-pub use atomic::{check_output, remove_temp_files, write_atomic, NotRegularFile};
+pub use atomic::{
+    check_output, remove_temp_files, write_atomic, write_atomic_with, NotRegularFile,
+};
 pub use error::{ExportError, Problem};
 pub use gltf::{
     prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, ImageFile,

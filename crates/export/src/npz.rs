@@ -5,11 +5,16 @@
 //! header dict padded with spaces to a multiple of 64 bytes and ending in `\n`, then the raw
 //! C-order data (numpy's `lib/format.py` documents it).
 
-use std::io::{Cursor, Write};
+use std::cell::Cell;
+use std::io::{self, Cursor, Seek, Write};
 
 mod dump;
+mod spill;
 
 pub use dump::EvalDump;
+pub use spill::SPILL_LIMIT;
+
+use spill::Spill;
 
 /// One array's element type and bytes.
 #[derive(Clone, Debug, PartialEq)]
@@ -22,8 +27,9 @@ pub enum Data {
     Str(Vec<String>),
 }
 
-/// Builds an `.npz` file in memory; arrays are stored uncompressed, in insertion order,
-/// with a fixed timestamp so the bytes are deterministic.
+/// Builds an `.npz` file; arrays are stored uncompressed, in insertion order, with a fixed
+/// timestamp so the bytes are deterministic. [`NpzWriter::finish`] returns the bytes,
+/// [`NpzWriter::write_to`] streams them into a file.
 ///
 /// ```
 /// use rigport_export::npz::{Data, NpzWriter};
@@ -37,40 +43,176 @@ pub enum Data {
 /// ```
 #[derive(Debug, Default)]
 pub struct NpzWriter {
-    arrays: Vec<(String, Vec<usize>, Data)>,
+    arrays: Vec<(String, Vec<usize>, Body)>,
+}
+
+/// An array's bytes: values, or little-endian f32 bytes appended to a [`Spill`].
+#[derive(Debug)]
+enum Body {
+    Data(Data),
+    F32Spill(Spill),
 }
 
 impl NpzWriter {
     /// Adds an array of the given shape (C order). The product of `shape` must equal the
     /// element count; the caller guarantees it.
     pub fn add(&mut self, name: &str, shape: &[usize], data: Data) {
-        self.arrays.push((name.to_string(), shape.to_vec(), data));
+        self.arrays
+            .push((name.to_string(), shape.to_vec(), Body::Data(data)));
+    }
+
+    /// Adds an f32 array whose bytes are in `spill`.
+    fn add_spill(&mut self, name: &str, shape: &[usize], spill: Spill) {
+        self.arrays
+            .push((name.to_string(), shape.to_vec(), Body::F32Spill(spill)));
     }
 
     /// The `.npz` bytes.
     ///
     /// # Errors
     /// The zip writer fails (in memory: only for an archive too large for zip64).
-    pub fn finish(self) -> std::io::Result<Vec<u8>> {
-        let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
-        let opts = zip::write::SimpleFileOptions::default()
-            .compression_method(zip::CompressionMethod::Stored);
-        for (name, shape, data) in &self.arrays {
-            let bytes = npy(shape, data);
-            // Zip64 only for an array of 4 GiB or more (numpy reads both); smaller ones keep
-            // the plain header, so their bytes do not change.
-            let large = u32::try_from(bytes.len()).is_err();
-            zip.start_file(format!("{name}.npy"), opts.large_file(large))
-                .map_err(std::io::Error::other)?;
-            zip.write_all(&bytes)?;
+    pub fn finish(self) -> io::Result<Vec<u8>> {
+        Ok(self.write_to(Cursor::new(Vec::new()))?.into_inner())
+    }
+
+    /// Writes the `.npz` to `sink` from its current position and returns it; the bytes are
+    /// those of [`NpzWriter::finish`]. Each array is copied in turn (a spilled one from its
+    /// temporary file), so memory does not grow with the arrays' sizes.
+    ///
+    /// # Errors
+    /// Writing or seeking `sink`; reading a spilled array back.
+    pub fn write_to<W: Write + Seek>(self, sink: W) -> io::Result<W> {
+        let abandoned = Cell::new(false);
+        let mut zip = zip::ZipWriter::new(Abandonable::new(sink, &abandoned)?);
+        if let Err(e) = self.write_entries(&mut zip) {
+            // The zip writer's drop would finish the archive into a sink that just failed,
+            // and print that failure to stderr: the caller reports the error once.
+            abandoned.set(true);
+            return Err(e);
         }
-        Ok(zip.finish().map_err(std::io::Error::other)?.into_inner())
+        Ok(zip.finish().map_err(io_error)?.inner)
+    }
+
+    /// Writes every array as an entry of `zip`.
+    fn write_entries<W: Write + Seek>(self, zip: &mut zip::ZipWriter<W>) -> io::Result<()> {
+        for (name, shape, body) in self.arrays {
+            match body {
+                Body::Data(data) => {
+                    let (descr, bytes) = npy_body(&data);
+                    let header = npy_header(&shape, &descr);
+                    start_entry(zip, &name, &header, bytes.len() as u64)?;
+                    zip.write_all(&bytes)?;
+                }
+                Body::F32Spill(spill) => {
+                    start_entry(zip, &name, &npy_header(&shape, "<f4"), spill.len())?;
+                    spill.copy_to(zip)?;
+                }
+            }
+        }
+        Ok(())
     }
 }
 
+/// A sink whose writes and seeks do nothing once `abandoned` is set (after a failed
+/// write: the output is discarded anyway), while still answering positions as if they
+/// had happened, so that the zip writer's own bookkeeping stays consistent.
+struct Abandonable<'a, W> {
+    inner: W,
+    abandoned: &'a Cell<bool>,
+    /// The position after the last write or seek.
+    pos: u64,
+    /// The furthest position written.
+    end: u64,
+}
+
+impl<'a, W: Seek> Abandonable<'a, W> {
+    fn new(mut inner: W, abandoned: &'a Cell<bool>) -> io::Result<Self> {
+        let pos = inner.stream_position()?;
+        Ok(Self {
+            inner,
+            abandoned,
+            pos,
+            end: pos,
+        })
+    }
+}
+
+impl<W: Write> Write for Abandonable<'_, W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = if self.abandoned.get() {
+            buf.len()
+        } else {
+            self.inner.write(buf)?
+        };
+        self.pos += n as u64;
+        self.end = self.end.max(self.pos);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        if self.abandoned.get() {
+            return Ok(());
+        }
+        self.inner.flush()
+    }
+}
+
+impl<W: Seek> Seek for Abandonable<'_, W> {
+    fn seek(&mut self, to: io::SeekFrom) -> io::Result<u64> {
+        self.pos = if self.abandoned.get() {
+            match to {
+                io::SeekFrom::Start(n) => n,
+                io::SeekFrom::Current(d) => self.pos.saturating_add_signed(d),
+                io::SeekFrom::End(d) => self.end.saturating_add_signed(d),
+            }
+        } else {
+            self.inner.seek(to)?
+        };
+        self.end = self.end.max(self.pos);
+        Ok(self.pos)
+    }
+}
+
+/// The I/O error inside a zip error (so "No space left on device" reads as such), or the
+/// zip error itself.
+fn io_error(e: zip::result::ZipError) -> io::Error {
+    match e {
+        zip::result::ZipError::Io(e) => e,
+        e => io::Error::other(e),
+    }
+}
+
+/// Starts the zip entry `<name>.npy` of `header` and `body_len` more bytes, and writes
+/// `header`.
+fn start_entry<W: Write + Seek>(
+    zip: &mut zip::ZipWriter<W>,
+    name: &str,
+    header: &[u8],
+    body_len: u64,
+) -> io::Result<()> {
+    let opts =
+        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    // Zip64 only for an array of 4 GiB or more (numpy reads both); smaller ones keep the
+    // plain header, so their bytes do not change.
+    let len = (header.len() as u64).saturating_add(body_len);
+    let large = u32::try_from(len).is_err();
+    zip.start_file(format!("{name}.npy"), opts.large_file(large))
+        .map_err(io_error)?;
+    zip.write_all(header)
+}
+
 /// One `.npy` file: header and C-order data.
+#[cfg(test)]
 fn npy(shape: &[usize], data: &Data) -> Vec<u8> {
-    let (descr, body) = match data {
+    let (descr, body) = npy_body(data);
+    let mut out = npy_header(shape, &descr);
+    out.extend_from_slice(&body);
+    out
+}
+
+/// An array's numpy type (`descr`) and C-order bytes.
+fn npy_body(data: &Data) -> (String, Vec<u8>) {
+    match data {
         Data::F32(v) => (
             "<f4".to_string(),
             v.iter().flat_map(|x| x.to_le_bytes()).collect(),
@@ -95,7 +237,12 @@ fn npy(shape: &[usize], data: &Data) -> Vec<u8> {
             }
             (format!("<U{width}"), body)
         }
-    };
+    }
+}
+
+/// The `.npy` header of an array of `shape` and numpy type `descr`: magic, version, length
+/// and the padded dict; the data follows it.
+fn npy_header(shape: &[usize], descr: &str) -> Vec<u8> {
     let shape_text = match shape {
         [n] => format!("({n},)"),
         dims => format!(
@@ -112,11 +259,10 @@ fn npy(shape: &[usize], data: &Data) -> Vec<u8> {
     let unpadded = 10 + header.len() + 1;
     header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
     header.push('\n');
-    let mut out = Vec::with_capacity(10 + header.len() + body.len());
+    let mut out = Vec::with_capacity(10 + header.len());
     out.extend_from_slice(b"\x93NUMPY\x01\x00");
     out.extend_from_slice(&(header.len() as u16).to_le_bytes());
     out.extend_from_slice(header.as_bytes());
-    out.extend_from_slice(&body);
     out
 }
 
@@ -140,5 +286,61 @@ mod tests {
             .unwrap()
             .contains("'<U2'"));
         assert_eq!(s.len(), 10 + hlen + 16);
+    }
+
+    /// A file that holds at most `room` bytes, like a full disk.
+    struct Full {
+        inner: Cursor<Vec<u8>>,
+        room: u64,
+    }
+
+    impl Write for Full {
+        fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+            if self.inner.position() + buf.len() as u64 > self.room {
+                return Err(io::Error::new(io::ErrorKind::StorageFull, "full"));
+            }
+            self.inner.write(buf)
+        }
+
+        fn flush(&mut self) -> io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl Seek for Full {
+        fn seek(&mut self, pos: io::SeekFrom) -> io::Result<u64> {
+            self.inner.seek(pos)
+        }
+    }
+
+    #[test]
+    fn streamed_bytes_are_the_in_memory_bytes_and_a_full_sink_fails() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let build = |spill_dir: Option<&std::path::Path>| {
+            let mut npz = NpzWriter::default();
+            npz.add("names", &[2], Data::Str(vec!["a".into(), "bc".into()]));
+            let mut spill = Spill::new(spill_dir);
+            spill.extend_f32(&[1.0, 2.0, 3.0, 4.0]).expect("append");
+            npz.add_spill("values", &[2, 2], spill);
+            npz.add("ids", &[1], Data::I32(vec![7]));
+            npz
+        };
+        let bytes = build(None).finish().expect("in memory");
+        let file = build(Some(dir.path()))
+            .write_to(tempfile::tempfile_in(dir.path()).expect("file"))
+            .expect("streamed");
+        let mut streamed = Vec::new();
+        let mut file = file;
+        file.seek(io::SeekFrom::Start(0)).expect("seek");
+        io::Read::read_to_end(&mut file, &mut streamed).expect("read");
+        assert_eq!(streamed, bytes);
+        for room in [0, 10, 100, bytes.len() as u64 - 1] {
+            let full = Full {
+                inner: Cursor::new(Vec::new()),
+                room,
+            };
+            let err = build(None).write_to(full).map(|_| ()).unwrap_err();
+            assert_eq!(err.kind(), io::ErrorKind::StorageFull, "room {room}: {err}");
+        }
     }
 }

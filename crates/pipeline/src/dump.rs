@@ -1,6 +1,7 @@
 //! `rigport eval`'s pipeline: a rig posed (rest or a `POSE.json`) or a clip sampled, each
-//! frame skinned, and the result as the bytes of an `.npz` dump
-//! (`rigport_export::npz::EvalDump`).
+//! frame skinned, and the result as an `.npz` dump (`rigport_export::npz::EvalDump`):
+//! written to a file in memory bounded whatever the clip's length ([`eval_dump_to`]), or
+//! as bytes ([`eval_dump`]).
 //!
 //! ```
 //! use rigport_pipeline::{dump, load, MemoryBudget};
@@ -11,15 +12,22 @@
 //! let out = dump::eval_dump(&asset, &plan.label(), &opts, "out.npz", &MemoryBudget::UNLIMITED)?;
 //! assert_eq!(&out.bytes[..2], b"PK");
 //! assert!(out.clip.is_some());
-//! # Ok::<(), rigport_pipeline::PipelineError>(())
+//!
+//! let dir = tempfile::tempdir()?;
+//! let path = dir.path().join("out.npz");
+//! let info = dump::eval_dump_to(&asset, &plan.label(), &opts, &path, &MemoryBudget::UNLIMITED)?;
+//! assert_eq!(std::fs::read(&path)?, out.bytes);
+//! assert_eq!(info.clip, out.clip);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use std::io::{BufWriter, Write as _};
 use std::path::Path;
 
 use rigport_eval::sample::{CompiledClip, FrameGrid, SampleJob};
 use rigport_eval::skinning::SkinningMethod;
 use rigport_eval::{Pose, Rig, RigOutput};
-use rigport_export::npz::EvalDump;
+use rigport_export::npz::{EvalDump, NpzWriter, SPILL_LIMIT};
 use rigport_model::{Asset, MemoryBudget};
 
 use crate::{clip_names, PipelineError};
@@ -48,18 +56,61 @@ pub struct Dump {
     pub clip: Option<String>,
 }
 
-/// Estimated peak bytes of a dump of `frames` frames: positions (f32 x 3 per vertex) and
-/// two 4x4 f32 matrices per joint, held as values and again as the `.npz` bytes (measured:
-/// a 676 MB dump at a 1.59 GB peak).
-fn dump_memory(frames: usize, vertices: usize, joints: usize) -> u64 {
-    let per_frame = (vertices as u64)
-        .saturating_mul(12)
-        .saturating_add((joints as u64).saturating_mul(128));
-    (frames as u64).saturating_mul(per_frame).saturating_mul(5) / 2
+/// A dump written to its file.
+#[derive(Clone, Debug)]
+pub struct DumpInfo {
+    /// The clip sampled, `None` for a single pose.
+    pub clip: Option<String>,
 }
 
-/// Evaluates `asset` as `opts` asks and builds the dump; `label` names the asset in
-/// messages and `output` the file in the memory check.
+/// Where the per-frame arrays wait until the `.npz` is written.
+#[derive(Clone, Copy, Debug)]
+enum Hold<'a> {
+    /// In memory, for [`eval_dump`]'s bytes.
+    Memory,
+    /// Beyond [`SPILL_LIMIT`] bytes per array, in unnamed temporary files in this folder.
+    Spill(&'a Path),
+}
+
+/// Bytes of one frame's arrays: positions (f32 x 3 per vertex) and two 4x4 f32 matrices
+/// per joint.
+fn frame_bytes(vertices: usize, joints: usize) -> u64 {
+    (vertices as u64)
+        .saturating_mul(12)
+        .saturating_add((joints as u64).saturating_mul(128))
+}
+
+/// Estimated peak bytes of a dump of `frames` frames held in memory: the arrays as values
+/// and again as the `.npz` bytes (measured: a 676 MB dump at a 1.59 GB peak).
+fn dump_memory(frames: usize, vertices: usize, joints: usize) -> u64 {
+    (frames as u64)
+        .saturating_mul(frame_bytes(vertices, joints))
+        .saturating_mul(5)
+        / 2
+}
+
+/// Estimated peak bytes of a dump of `frames` frames streamed to its file: each per-frame
+/// array in memory up to [`SPILL_LIMIT`], the frame times, three frames' worth of scratch
+/// (the evaluator's output, the dump's rows, the skinning's work) and the copy buffers
+/// (1 MiB each for reading a spill back and for writing the file).
+fn streamed_memory(frames: usize, vertices: usize, joints: usize) -> u64 {
+    let frames = frames as u64;
+    let held = |bytes_per_frame: u64| {
+        frames
+            .saturating_mul(bytes_per_frame)
+            .min(SPILL_LIMIT as u64)
+    };
+    let spills = held(4)
+        .saturating_add(held((vertices as u64).saturating_mul(12)))
+        .saturating_add(held((joints as u64).saturating_mul(64)).saturating_mul(2));
+    spills
+        .saturating_add(frames.saturating_mul(4))
+        .saturating_add(frame_bytes(vertices, joints).saturating_mul(3))
+        .saturating_add(2 << 20)
+}
+
+/// Evaluates `asset` as `opts` asks and builds the dump in memory; `label` names the asset
+/// in messages and `output` the file in the memory check.
 ///
 /// # Errors
 /// Nothing to skin, an unknown clip, a frame rate that is not positive, a pose file's
@@ -71,6 +122,56 @@ pub fn eval_dump(
     output: impl AsRef<Path>,
     budget: &MemoryBudget,
 ) -> Result<Dump, PipelineError> {
+    let output = output.as_ref();
+    let (npz, clip) = evaluate(asset, label, opts, output, budget, Hold::Memory)?;
+    let bytes = npz.finish().map_err(|e| PipelineError::output(output, e))?;
+    Ok(Dump { bytes, clip })
+}
+
+/// Evaluates `asset` as `opts` asks and writes the dump to `output` atomically
+/// (`rigport_export::write_atomic_with`); `label` names the asset in messages. Memory
+/// stays bounded whatever the clip's length: the per-frame arrays beyond
+/// [`SPILL_LIMIT`] bytes each wait in unnamed temporary files in `output`'s folder, and
+/// the `.npz` is streamed from them. The bytes are those of [`eval_dump`].
+///
+/// # Errors
+/// Those of [`eval_dump`]; [`PipelineError::Output`] when `output` is not a regular file
+/// (or absent), or a temporary file or the output cannot be written (nothing is left
+/// behind then).
+pub fn eval_dump_to(
+    asset: &Asset,
+    label: &str,
+    opts: &DumpOptions<'_>,
+    output: impl AsRef<Path>,
+    budget: &MemoryBudget,
+) -> Result<DumpInfo, PipelineError> {
+    let output = output.as_ref();
+    let target =
+        rigport_export::check_output(output).map_err(|e| PipelineError::output(output, e))?;
+    // The temporary files go where the output goes: its folder is on the disk meant to
+    // hold that many bytes, while the system's temporary folder may be a tmpfs in memory.
+    let dir = match target.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    let (npz, clip) = evaluate(asset, label, opts, output, budget, Hold::Spill(dir))?;
+    rigport_export::write_atomic_with(output, |file| {
+        npz.write_to(BufWriter::with_capacity(1 << 20, file))?
+            .flush()
+    })
+    .map_err(|e| PipelineError::output(output, e))?;
+    Ok(DumpInfo { clip })
+}
+
+/// The dump's arrays and the name of the clip sampled.
+fn evaluate(
+    asset: &Asset,
+    label: &str,
+    opts: &DumpOptions<'_>,
+    output: &Path,
+    budget: &MemoryBudget,
+    hold: Hold<'_>,
+) -> Result<(NpzWriter, Option<String>), PipelineError> {
     let mut limited = None;
     if let Some(max) = opts.max_influences {
         let mut copy = asset.clone();
@@ -96,6 +197,10 @@ pub fn eval_dump(
     };
     let rig = Rig::new(asset).map_err(|e| PipelineError::step("the rig cannot be evaluated", e))?;
     let mut dump = EvalDump::new(asset, |m| rig.skin_of_mesh(m), method_name);
+    if let Hold::Spill(dir) = hold {
+        dump = dump.spill_into(dir);
+    }
+    let spill_err = |e| PipelineError::output(output, e);
     let mut posed = RigOutput::default();
     let clip = match (opts.pose, opts.clip) {
         (Some(_), _) => None,
@@ -121,7 +226,8 @@ pub fn eval_dump(
                 pose.apply(&rigport_import::json::pose::read(path, &asset.skeleton)?);
             }
             rig.evaluate_with(&pose, method, &mut posed)?;
-            dump.push(0.0, &posed.joint_model, &posed.positions);
+            dump.push(0.0, &posed.joint_model, &posed.positions)
+                .map_err(spill_err)?;
         }
         Some(clip) => {
             let compiled = CompiledClip::new(clip, &asset.skeleton).map_err(|e| {
@@ -139,14 +245,18 @@ pub fn eval_dump(
                 }
             };
             let vertices: usize = asset.meshes.iter().map(|m| m.positions.len()).sum();
+            let joints = asset.skeleton.len();
+            let needed = match hold {
+                Hold::Memory => dump_memory(times.len(), vertices, joints),
+                Hold::Spill(_) => streamed_memory(times.len(), vertices, joints),
+            };
             budget.check(
                 format_args!(
-                    "{}: {} frames of {vertices} vertices and {} joints",
-                    output.as_ref().display(),
+                    "{}: {} frames of {vertices} vertices and {joints} joints",
+                    output.display(),
                     times.len(),
-                    asset.skeleton.len()
                 ),
-                dump_memory(times.len(), vertices, asset.skeleton.len()),
+                needed,
             )?;
             let rest = Pose::rest(&asset.skeleton);
             let mut pose = rest.clone();
@@ -159,14 +269,10 @@ pub fn eval_dump(
                 }
                 .run()?;
                 rig.evaluate_with(&pose, method, &mut posed)?;
-                dump.push(t, &posed.joint_model, &posed.positions);
+                dump.push(t, &posed.joint_model, &posed.positions)
+                    .map_err(spill_err)?;
             }
         }
     }
-    let bytes = (dump.finish(clip.is_some()).finish())
-        .map_err(|e| PipelineError::output(output.as_ref(), e))?;
-    Ok(Dump {
-        bytes,
-        clip: clip.map(|c| c.name.clone()),
-    })
+    Ok((dump.finish(clip.is_some()), clip.map(|c| c.name.clone())))
 }

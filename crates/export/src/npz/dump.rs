@@ -1,9 +1,12 @@
 //! The arrays of a `rigport eval` dump.
 
+use std::io;
+use std::path::Path;
+
 use glam::{Mat4, Vec3};
 use rigport_model::Asset;
 
-use super::{Data, NpzWriter};
+use super::{Data, NpzWriter, Spill};
 
 /// Row-major 4x4 (numpy's C order) of a column-vector matrix, so `M[j] @ p` works in numpy.
 fn push_row_major(out: &mut Vec<f32>, m: &Mat4) {
@@ -20,7 +23,11 @@ fn push_row_major(out: &mut Vec<f32>, m: &Mat4) {
 /// rigs: the `v` line order), taking the first output vertex made from each source vertex.
 /// `skin_matrices[j]` uses the inverse bind matrix of the first skin whose palette has
 /// joint `j`, or the inverse of its rest model matrix when no skin uses it.
-#[derive(Clone, Debug)]
+///
+/// The per-frame arrays are held in memory, or with [`EvalDump::spill_into`] up to
+/// [`SPILL_LIMIT`](super::SPILL_LIMIT) bytes each in memory and the rest in unnamed
+/// temporary files, so that a clip of any length dumps in bounded memory.
+#[derive(Debug)]
 pub struct EvalDump {
     /// Per dumped vertex: (mesh, mesh vertex).
     vertices: Vec<(usize, usize)>,
@@ -31,10 +38,14 @@ pub struct EvalDump {
     inv_bind: Vec<Mat4>,
     names: Vec<String>,
     skinning: &'static str,
-    times: Vec<f32>,
-    positions: Vec<f32>,
-    joint_world: Vec<f32>,
-    skin_matrices: Vec<f32>,
+    /// Frames pushed.
+    frames: usize,
+    times: Spill,
+    positions: Spill,
+    joint_world: Spill,
+    skin_matrices: Spill,
+    /// One frame's rows, reused: (positions, joint_world, skin_matrices).
+    scratch: (Vec<f32>, Vec<f32>, Vec<f32>),
 }
 
 impl EvalDump {
@@ -106,29 +117,60 @@ impl EvalDump {
                 .map(|j| j.name.clone())
                 .collect(),
             skinning,
-            times: Vec::new(),
-            positions: Vec::new(),
-            joint_world: Vec::new(),
-            skin_matrices: Vec::new(),
+            frames: 0,
+            times: Spill::new(None),
+            positions: Spill::new(None),
+            joint_world: Spill::new(None),
+            skin_matrices: Spill::new(None),
+            scratch: Default::default(),
         }
+    }
+
+    /// Moves the per-frame arrays beyond [`SPILL_LIMIT`](super::SPILL_LIMIT) bytes each
+    /// into unnamed temporary files in `dir` (best the output's own folder: the bytes then
+    /// land on the disk that is to hold the output, not on a `tmpfs` in memory). Call it
+    /// before the first [`EvalDump::push`].
+    #[must_use]
+    pub fn spill_into(mut self, dir: &Path) -> Self {
+        self.times = Spill::new(Some(dir));
+        self.positions = Spill::new(Some(dir));
+        self.joint_world = Spill::new(Some(dir));
+        self.skin_matrices = Spill::new(Some(dir));
+        self
     }
 
     /// Appends one evaluated frame at `time` seconds: `joint_model` has one model-space
     /// matrix per joint, `positions[m]` the posed model-space positions of mesh `m` (the
     /// evaluator's `RigOutput`).
     ///
+    /// # Errors
+    /// Creating or writing a temporary file ([`EvalDump::spill_into`]); never in memory.
+    ///
     /// # Panics
     /// If the sizes do not match the asset given to [`EvalDump::new`] (a caller bug).
-    pub fn push(&mut self, time: f32, joint_model: &[Mat4], positions: &[Vec<Vec3>]) {
-        self.times.push(time);
+    pub fn push(
+        &mut self,
+        time: f32,
+        joint_model: &[Mat4],
+        positions: &[Vec<Vec3>],
+    ) -> io::Result<()> {
+        let (rows, world, skin) = &mut self.scratch;
+        rows.clear();
+        world.clear();
+        skin.clear();
         for (j, ib) in self.inv_bind.iter().enumerate() {
-            push_row_major(&mut self.joint_world, &joint_model[j]);
-            push_row_major(&mut self.skin_matrices, &(joint_model[j] * *ib));
+            push_row_major(world, &joint_model[j]);
+            push_row_major(skin, &(joint_model[j] * *ib));
         }
         for &(m, v) in &self.vertices {
-            self.positions
-                .extend_from_slice(&positions[m][v].to_array());
+            rows.extend_from_slice(&positions[m][v].to_array());
         }
+        self.times.extend_f32(&[time])?;
+        self.positions.extend_f32(rows)?;
+        self.joint_world.extend_f32(world)?;
+        self.skin_matrices.extend_f32(skin)?;
+        self.frames += 1;
+        Ok(())
     }
 
     /// The `.npz` arrays; with `frames`, the per-frame arrays get a leading frame axis and
@@ -136,7 +178,7 @@ impl EvalDump {
     pub fn finish(self, frames: bool) -> NpzWriter {
         let v = self.vertices.len();
         let j = self.names.len();
-        let f = self.times.len();
+        let f = self.frames;
         let lead = |shape: &[usize]| -> Vec<usize> {
             if frames {
                 std::iter::once(f).chain(shape.iter().copied()).collect()
@@ -146,21 +188,13 @@ impl EvalDump {
         };
         let mut npz = NpzWriter::default();
         if frames {
-            npz.add("times", &[f], Data::F32(self.times));
+            npz.add_spill("times", &[f], self.times);
         }
-        npz.add("positions", &lead(&[v, 3]), Data::F32(self.positions));
+        npz.add_spill("positions", &lead(&[v, 3]), self.positions);
         npz.add("rest_positions", &[v, 3], Data::F32(self.rest_positions));
         npz.add("joint_names", &[j], Data::Str(self.names));
-        npz.add(
-            "joint_world",
-            &lead(&[j, 4, 4]),
-            Data::F32(self.joint_world),
-        );
-        npz.add(
-            "skin_matrices",
-            &lead(&[j, 4, 4]),
-            Data::F32(self.skin_matrices),
-        );
+        npz.add_spill("joint_world", &lead(&[j, 4, 4]), self.joint_world);
+        npz.add_spill("skin_matrices", &lead(&[j, 4, 4]), self.skin_matrices);
         let k = self.max_influences;
         npz.add(
             "influence_joints",
