@@ -189,6 +189,60 @@ fn the_default_budget_follows_an_address_space_limit() {
     assert!(!usda.exists());
 }
 
+/// A memory cgroup's limit lowers the default budget (cgroup v1 `memory.limit_in_bytes`,
+/// or v2 `memory.max`, of the process's own cgroup): the run is refused with a message
+/// instead of being killed by the kernel. Needs a writable cgroup file system (root);
+/// skips otherwise.
+#[test]
+fn the_default_budget_follows_a_cgroup_memory_limit() {
+    let name = format!("rigport-test-{}", std::process::id());
+    let v1 = Path::new("/sys/fs/cgroup/memory");
+    let v2 = Path::new("/sys/fs/cgroup");
+    let (group, limit_file) = if v1.join("memory.limit_in_bytes").exists() {
+        (v1.join(&name), "memory.limit_in_bytes")
+    } else if std::fs::read_to_string(v2.join("cgroup.subtree_control"))
+        .is_ok_and(|c| c.split_whitespace().any(|c| c == "memory"))
+    {
+        (v2.join(&name), "memory.max")
+    } else {
+        eprintln!("SKIPPED: no memory cgroup controller to make a group in");
+        return;
+    };
+    if std::fs::create_dir(&group).is_err()
+        || std::fs::write(group.join(limit_file), "200000000").is_err()
+    {
+        let _ = std::fs::remove_dir(&group);
+        eprintln!("SKIPPED: cannot make a memory cgroup (not root?)");
+        return;
+    }
+    let dir = scratch();
+    let (asf, amc) = long_motion(dir.path(), 200_000);
+    let usda = dir.path().join("long.usda");
+    let out = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("echo $$ > \"$0/cgroup.procs\" && exec \"$@\"")
+        .arg(&group)
+        .arg(env!("CARGO_BIN_EXE_rigport"))
+        .args([
+            "convert",
+            asf.to_str().unwrap(),
+            amc.to_str().unwrap(),
+            "-o",
+        ])
+        .arg(&usda)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir(&group);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    // The kernel rounds the limit down to pages: 199,999,488 bytes, 3/4 of it 150.0 MB.
+    assert!(
+        stderr.contains("limit of 150.0 MB (default: 3/4"),
+        "{stderr}"
+    );
+    assert!(!usda.exists());
+}
+
 /// Runs `rigport args` with `env` and returns its exit code (`None` when killed), its peak
 /// resident memory in bytes as the kernel measured it for that one process (`wait4`, from
 /// Python, since this crate forbids `unsafe`), and its stderr; `None` without `python3`.
