@@ -21,7 +21,11 @@ use clap::Parser;
 fn main() -> ExitCode {
     raise_malloc_mmap_threshold();
     let cli = cli::Cli::parse();
-    memory::set(cli.max_memory);
+    match &cli.command {
+        // Items run side by side on `--jobs` threads: each gets its share of the budget.
+        cli::Command::Batch(args) => memory::set_shared(cli.max_memory, args.jobs.unwrap_or(0)),
+        _ => memory::set(cli.max_memory),
+    }
     if !matches!(cli.command, cli::Command::Inspect(_)) {
         signals::remove_temp_files_on_interrupt();
     }

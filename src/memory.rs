@@ -13,6 +13,17 @@ pub fn set(max_memory: Option<u64>) {
     let _ = BUDGET.set(rigport_pipeline::memory::process_budget(max_memory));
 }
 
+/// Sets the budget as [`set`], shared by `workers` items running at once (`rigport batch
+/// --jobs`, 0: one per core), each getting an equal part.
+pub fn set_shared(max_memory: Option<u64>, workers: usize) {
+    let workers = match workers {
+        0 => std::thread::available_parallelism().map_or(1, usize::from),
+        n => n,
+    };
+    let whole = rigport_pipeline::memory::process_budget(max_memory);
+    let _ = BUDGET.set(rigport_pipeline::memory::shared(whole, workers));
+}
+
 /// This run's budget.
 pub fn budget() -> MemoryBudget {
     *BUDGET.get_or_init(|| rigport_pipeline::memory::DEFAULT)

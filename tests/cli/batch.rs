@@ -502,3 +502,33 @@ fn ray_shards_equal_one_run() {
         );
     }
 }
+
+/// The memory budget is shared by the items in flight: with `--jobs 2` each item is checked
+/// against half of `--max-memory` (the report names the share), with `--jobs 1` against all
+/// of it. A BVH whose glTF needs about 48 kB fits 60 kB alone, not 30 kB.
+#[test]
+fn the_memory_budget_is_shared_by_the_jobs() {
+    let dir = scratch();
+    let input = dir.path().join("in");
+    std::fs::create_dir(&input).unwrap();
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::fs::copy(
+        repo.join("fixtures/bvh/end_sites.bvh"),
+        input.join("end_sites.bvh"),
+    )
+    .unwrap();
+    let one = dir.path().join("one");
+    let r = batch(&[&input, &one], &["--jobs", "1", "--max-memory", "60000"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(one.join("end_sites.glb").exists());
+    let two = dir.path().join("two");
+    let r = batch(&[&input, &two], &["--jobs", "2", "--max-memory", "60000"]);
+    assert_eq!(r.status.code(), Some(1));
+    let rec = records(&report_of(&two));
+    let message = rec[0]["error"]["message"].as_str().unwrap();
+    assert!(
+        message.contains("over the limit of 30.0 kB (--max-memory, shared by the batch's --jobs items in flight)"),
+        "{message}"
+    );
+    assert!(!two.join("end_sites.glb").exists());
+}

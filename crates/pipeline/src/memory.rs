@@ -40,6 +40,36 @@ pub fn process_budget(max_memory: Option<u64>) -> MemoryBudget {
     }
 }
 
+/// `budget` shared by `workers` items in flight at once (`rigport batch --jobs`): each
+/// item gets an equal part, so that together they stay within the whole.
+///
+/// ```
+/// use rigport_pipeline::memory;
+///
+/// let whole = memory::process_budget(Some(2_000_000_000));
+/// let part = memory::shared(whole, 4);
+/// assert_eq!(part.limit, 500_000_000);
+/// assert!(part.origin.contains("--max-memory") && part.origin.contains("shared"));
+/// assert_eq!(memory::shared(whole, 1), whole);
+/// ```
+pub fn shared(budget: MemoryBudget, workers: usize) -> MemoryBudget {
+    let workers = workers.max(1) as u64;
+    if workers == 1 {
+        return budget;
+    }
+    let origin = match budget.origin {
+        "--max-memory" => "--max-memory, shared by the batch's --jobs items in flight",
+        o if o.starts_with("default: 3/4") => {
+            "default: 3/4 of the memory this process may use, shared by the batch's --jobs items in flight"
+        }
+        _ => "default, shared by the batch's --jobs items in flight",
+    };
+    MemoryBudget {
+        limit: budget.limit / workers,
+        origin,
+    }
+}
+
 /// The budget when nothing is known: 8 GB.
 pub const DEFAULT: MemoryBudget = MemoryBudget {
     limit: 8_000_000_000,
