@@ -165,11 +165,19 @@ fn the_default_budget_follows_an_address_space_limit() {
         eprintln!("SKIPPED: prlimit (util-linux) is not installed");
         return;
     }
+    let mut prlimit = std::process::Command::new("prlimit");
+    prlimit.arg("--as=200000000");
+    refused_under_150_mb(prlimit);
+}
+
+/// Runs `wrapper rigport convert` of a 200,000-frame motion to `.usda` (the wrapper limits
+/// the memory to 200 MB and execs the rest of its arguments) and checks the refusal: exit
+/// 1, the default budget of 150.0 MB named, no output.
+fn refused_under_150_mb(mut wrapper: std::process::Command) {
     let dir = scratch();
     let (asf, amc) = long_motion(dir.path(), 200_000);
     let usda = dir.path().join("long.usda");
-    let out = std::process::Command::new("prlimit")
-        .arg("--as=200000000")
+    let out = wrapper
         .arg(env!("CARGO_BIN_EXE_rigport"))
         .args([
             "convert",
@@ -215,32 +223,20 @@ fn the_default_budget_follows_a_cgroup_memory_limit() {
         eprintln!("SKIPPED: cannot make a memory cgroup (not root?)");
         return;
     }
-    let dir = scratch();
-    let (asf, amc) = long_motion(dir.path(), 200_000);
-    let usda = dir.path().join("long.usda");
-    let out = std::process::Command::new("sh")
-        .arg("-c")
+    /// Removes the group when the test ends, passed or failed.
+    struct Group(std::path::PathBuf);
+    impl Drop for Group {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir(&self.0);
+        }
+    }
+    let group = Group(group);
+    let mut sh = std::process::Command::new("sh");
+    sh.arg("-c")
         .arg("echo $$ > \"$0/cgroup.procs\" && exec \"$@\"")
-        .arg(&group)
-        .arg(env!("CARGO_BIN_EXE_rigport"))
-        .args([
-            "convert",
-            asf.to_str().unwrap(),
-            amc.to_str().unwrap(),
-            "-o",
-        ])
-        .arg(&usda)
-        .output()
-        .unwrap();
-    let _ = std::fs::remove_dir(&group);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
+        .arg(&group.0);
     // The kernel rounds the limit down to pages: 199,999,488 bytes, 3/4 of it 150.0 MB.
-    assert!(
-        stderr.contains("limit of 150.0 MB (default: 3/4"),
-        "{stderr}"
-    );
-    assert!(!usda.exists());
+    refused_under_150_mb(sh);
 }
 
 /// Runs `rigport args` with `env` and returns its exit code (`None` when killed), its peak

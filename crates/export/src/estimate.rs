@@ -46,6 +46,12 @@ pub fn usd_memory(asset: &Asset) -> u64 {
     let anim: u64 = clip_samples(asset)
         .map(|n| mul(n, joints).saturating_mul(USD_BYTES_PER_JOINT_SAMPLE as u64))
         .fold(0, u64::saturating_add);
+    anim.saturating_add(usd_geometry_text(asset))
+        .saturating_mul(USD_PEAK_OVER_TEXT)
+}
+
+/// USD text bytes of the meshes' points and influences.
+fn usd_geometry_text(asset: &Asset) -> u64 {
     let meshes: u64 = asset
         .meshes
         .iter()
@@ -56,9 +62,7 @@ pub fn usd_memory(asset: &Asset) -> u64 {
         .iter()
         .map(|s| mul(s.influences.entries().len(), USD_BYTES_PER_INFLUENCE))
         .fold(0, u64::saturating_add);
-    anim.saturating_add(meshes)
-        .saturating_add(influences)
-        .saturating_mul(USD_PEAK_OVER_TEXT)
+    meshes.saturating_add(influences)
 }
 
 /// Bytes per time sample a streaming `.usda` writer holds: the clip's key times (`f64`), the
@@ -96,23 +100,9 @@ fn usd_streamed_memory(asset: &Asset) -> u64 {
                 .saturating_add(mul(track_keys, 1).saturating_mul(USD_STREAMED_BYTES_PER_TRACK_KEY))
         })
         .fold(0, u64::saturating_add);
-    let meshes: u64 = asset
-        .meshes
-        .iter()
-        .map(|m| mul(m.positions.len(), USD_BYTES_PER_POINT))
-        .fold(0, u64::saturating_add);
-    let influences: u64 = asset
-        .skins
-        .iter()
-        .map(|s| mul(s.influences.entries().len(), USD_BYTES_PER_INFLUENCE))
-        .fold(0, u64::saturating_add);
     let buffers = 2 * crate::usd::SPILL_BYTES as u64;
-    anim.saturating_add(
-        meshes
-            .saturating_add(influences)
-            .saturating_mul(USD_PEAK_OVER_TEXT),
-    )
-    .saturating_add(buffers)
+    anim.saturating_add(usd_geometry_text(asset).saturating_mul(USD_PEAK_OVER_TEXT))
+        .saturating_add(buffers)
 }
 
 /// Estimated peak bytes of writing `asset` as glTF.

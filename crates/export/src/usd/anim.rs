@@ -454,28 +454,15 @@ pub(super) fn write_animation(
 
     // Each attribute's time samples are computed as they are written (a pose at a time),
     // so a clip of millions of frames never holds its poses.
-    let sampled = !anim.joints.is_empty() && !times.is_empty();
+    let times = if anim.joints.is_empty() { &[] } else { times };
     let mut value = [0.0_f64; 4];
-    let line_of = |doc: &mut Usda, tc: f64, write: &dyn Fn(&mut String)| {
-        let line = doc.start();
-        line.push_str("    ");
-        put(line, tc);
-        line.push_str(": ");
-        write(line);
-        line.push(',');
-        doc.end();
-    };
-
-    let line = doc.start();
-    line.push_str("quatf[] rotations = ");
-    array(line, &rest_pose.r, |s, q| put_quat(s, *q));
-    doc.end();
-    if sampled {
-        doc.line("quatf[] rotations.timeSamples = {");
-        let mut previous: Vec<[f32; 4]> = Vec::new();
-        let mut current: Vec<[f32; 4]> = Vec::with_capacity(rest.len());
-        for &(tc, seconds) in times {
-            current.clear();
+    write_attribute(
+        doc,
+        "quatf[] rotations",
+        &rest_pose.r,
+        times,
+        |s, q| put_quat(s, *q),
+        |seconds, previous, out| {
             for (k, (samplers, rest)) in anim.trs.iter().zip(&rest).enumerate() {
                 let mut q = match &samplers[1] {
                     Some(s) => {
@@ -491,25 +478,19 @@ pub(super) fn write_animation(
                         q = q.map(|c| -c);
                     }
                 }
-                current.push(q);
+                out.push(q);
             }
-            line_of(doc, tc, &|s| array(s, &current, |s, q| put_quat(s, *q)));
-            std::mem::swap(&mut previous, &mut current);
-        }
-        doc.line("}");
-    }
-
-    let line = doc.start();
-    line.push_str("half3[] scales = ");
-    array(line, &rest_pose.s, |s, v| tuple(s, v));
-    doc.end();
-    if sampled {
-        doc.line("half3[] scales.timeSamples = {");
-        let mut current: Vec<[f32; 3]> = Vec::with_capacity(rest.len());
-        for &(tc, seconds) in times {
-            current.clear();
+        },
+    );
+    write_attribute(
+        doc,
+        "half3[] scales",
+        &rest_pose.s,
+        times,
+        |s, v| tuple(s, v),
+        |seconds, _, out| {
             for (samplers, rest) in anim.trs.iter().zip(&rest) {
-                current.push(match &samplers[2] {
+                out.push(match &samplers[2] {
                     Some(s) => {
                         s.sample(seconds, &mut value);
                         half_error.round([value[0], value[1], value[2]].map(|v| v as f32))
@@ -517,22 +498,17 @@ pub(super) fn write_animation(
                     None => half_error.round(rest.scale.to_array()),
                 });
             }
-            line_of(doc, tc, &|s| array(s, &current, |s, v| tuple(s, v)));
-        }
-        doc.line("}");
-    }
-
-    let line = doc.start();
-    line.push_str("float3[] translations = ");
-    array(line, &rest_pose.t, |s, v| tuple(s, v));
-    doc.end();
-    if sampled {
-        doc.line("float3[] translations.timeSamples = {");
-        let mut current: Vec<[f32; 3]> = Vec::with_capacity(rest.len());
-        for &(tc, seconds) in times {
-            current.clear();
+        },
+    );
+    write_attribute(
+        doc,
+        "float3[] translations",
+        &rest_pose.t,
+        times,
+        |s, v| tuple(s, v),
+        |seconds, _, out| {
             for (samplers, rest) in anim.trs.iter().zip(&rest) {
-                current.push(match &samplers[0] {
+                out.push(match &samplers[0] {
                     Some(s) => {
                         s.sample(seconds, &mut value);
                         [value[0], value[1], value[2]].map(|v| v as f32)
@@ -540,10 +516,8 @@ pub(super) fn write_animation(
                     None => rest.translation.to_array(),
                 });
             }
-            line_of(doc, tc, &|s| array(s, &current, |s, v| tuple(s, v)));
-        }
-        doc.line("}");
-    }
+        },
+    );
     doc.close();
     if half_error.worst > HALF_REPORT_TOLERANCE {
         warnings.push(Warning::Repaired {
@@ -554,6 +528,44 @@ pub(super) fn write_animation(
             ),
         });
     }
+}
+
+/// Writes `decl = [rest...]` and, when `times` is not empty, `decl.timeSamples` with one
+/// array per `(time code, seconds)`: `pose(seconds, previous, out)` pushes the values at
+/// `seconds` into the empty `out`, `previous` holding those of the time before (empty at
+/// the first).
+fn write_attribute<T>(
+    doc: &mut Usda,
+    decl: &str,
+    rest: &[T],
+    times: &[(f64, f64)],
+    each: impl Fn(&mut String, &T) + Copy,
+    mut pose: impl FnMut(f64, &[T], &mut Vec<T>),
+) {
+    let line = doc.start();
+    line.push_str(decl);
+    line.push_str(" = ");
+    array(line, rest, each);
+    doc.end();
+    if times.is_empty() {
+        return;
+    }
+    doc.line(&format!("{decl}.timeSamples = {{"));
+    let mut previous: Vec<T> = Vec::new();
+    let mut current: Vec<T> = Vec::with_capacity(rest.len());
+    for &(tc, seconds) in times {
+        current.clear();
+        pose(seconds, &previous, &mut current);
+        let line = doc.start();
+        line.push_str("    ");
+        put(line, tc);
+        line.push_str(": ");
+        array(line, &current, each);
+        line.push(',');
+        doc.end();
+        std::mem::swap(&mut previous, &mut current);
+    }
+    doc.line("}");
 }
 
 /// Tracks the largest relative change made by rounding scales to half precision.

@@ -64,11 +64,14 @@ impl<'a> Sampler<'a> {
         let after = track_times.partition_point(|&x| f64::from(x) <= t);
         let first = after.saturating_sub(1);
         let last = after.min(track_times.len() - 1);
-        let times: Vec<f64> = (first..=last).map(|k| f64::from(track_times[k])).collect();
-        let values: Vec<f64> = (first..=last).flat_map(|k| self.key(k)).collect();
+        let times = [f64::from(track_times[first]), f64::from(track_times[last])];
+        let mut values = Vec::with_capacity(2 * self.stride());
+        for k in first..=last {
+            self.push_key(k, &mut values);
+        }
         let keys = Keys {
             interpolation: self.track.interpolation,
-            times: &times,
+            times: &times[..=last - first],
             values: &values,
             components: self.components,
         };
@@ -82,19 +85,30 @@ impl<'a> Sampler<'a> {
         }
     }
 
-    /// Key `k`'s floats in `f64` in the track's layout (`[in, value, out]` for cubic
-    /// splines), a rotation normalized and sign-continuous, its tangents flipped with it.
-    fn key(&self, k: usize) -> Vec<f64> {
-        let c = self.components;
-        let cubic = self.track.interpolation == Interpolation::CubicSpline;
-        let stride = if cubic { 3 * c } else { c };
-        let mut key: Vec<f64> = (self.track.values)
-            .get(k * stride..(k + 1) * stride)
-            .unwrap_or_default()
-            .iter()
-            .map(|&v| f64::from(v))
-            .collect();
+    /// Floats per key in the track's layout.
+    fn stride(&self) -> usize {
+        match self.track.interpolation {
+            Interpolation::CubicSpline => 3 * self.components,
+            _ => self.components,
+        }
+    }
+
+    /// Appends key `k`'s floats in `f64` in the track's layout (`[in, value, out]` for
+    /// cubic splines) to `out`, a rotation normalized and sign-continuous, its tangents
+    /// flipped with it.
+    fn push_key(&self, k: usize, out: &mut Vec<f64>) {
+        let stride = self.stride();
+        let start = out.len();
+        out.extend(
+            (self.track.values)
+                .get(k * stride..(k + 1) * stride)
+                .unwrap_or_default()
+                .iter()
+                .map(|&v| f64::from(v)),
+        );
+        let key = &mut out[start..];
         if self.rotation && key.len() == stride {
+            let cubic = self.track.interpolation == Interpolation::CubicSpline;
             let offset = if cubic { 4 } else { 0 };
             let mut q = key_quat(self.track, k);
             if self.flipped.get(k).copied().unwrap_or(false) {
@@ -107,7 +121,6 @@ impl<'a> Sampler<'a> {
             }
             key[offset..offset + 4].copy_from_slice(&q);
         }
-        key
     }
 }
 
