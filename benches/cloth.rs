@@ -1,4 +1,4 @@
-//! Criterion benchmark of the cloth solver (`rigport_eval::cloth`): particle-substeps per
+//! Criterion benchmark of the cloth solver (`rigport_deform::cloth`): particle-substeps per
 //! second for square garments of 2,500 (50 x 50) and 10,000 (100 x 100) particles.
 //!
 //! `cargo bench --bench cloth`. The garment hangs from a bending box arm (the USTC course's
@@ -12,7 +12,7 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use rigport_eval::cloth::{simulate, ClothOptions, Garment};
+use rigport_deform::cloth::{simulate, ClothOptions, Garment};
 use rigport_model::glam::{Quat, Vec3};
 use rigport_model::{
     Asset, Clip, Influence, Influences, Interpolation, Joint, JointIndex, Mesh, MeshIndex,

@@ -7,7 +7,7 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use rigport_eval::footlock::{find_feet, footlock, up_in_model, FootlockOptions};
+use rigport_ik::footlock::{find_feet, footlock, up_in_model, FootlockOptions};
 
 fn bench(c: &mut Criterion) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -10,16 +10,16 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use rigport_eval::ik::{IkMethod, IkProblem, IkReport, IkScratch, IkSolveJob};
+use rigport_ik::{IkMethod, IkProblem, IkReport, IkScratch, IkSolveJob};
 
 #[allow(dead_code)]
 #[path = "../examples/ik_bench.rs"]
 mod ik_bench;
 
 use ik_bench::{chain_joints, k_chain, load_rigs, rest, solvers, target_sets, Rng};
-use rigport_eval::ik::chains::ChainSolver;
-use rigport_eval::ik::two_bone::TwoBoneIkJob;
-use rigport_eval::ik::IkSettings;
+use rigport_ik::chains::ChainSolver;
+use rigport_ik::two_bone::TwoBoneIkJob;
+use rigport_ik::IkSettings;
 use rigport_model::glam::{Mat4, Quat, Vec3};
 use rigport_model::{HandleSet, HandleSolver, HandleTrack, RootMotion};
 

@@ -12,8 +12,8 @@ use std::collections::BTreeMap;
 use std::num::NonZeroUsize;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use rigport_eval::refit::asset::{ROM_BENT_JOINTS, ROM_RANDOM_POSES, ROM_SEED};
-use rigport_eval::refit::{range_of_motion, RefitJob};
+use rigport_deform::refit::asset::{ROM_BENT_JOINTS, ROM_RANDOM_POSES, ROM_SEED};
+use rigport_deform::refit::{range_of_motion, RefitJob};
 use rigport_eval::skinning::rayon;
 use rigport_eval::skinning_matrices;
 use rigport_model::glam::{Mat4, Vec3};

@@ -24,10 +24,11 @@ use std::path::{Path, PathBuf};
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rigport_eval::dqs::{DqsJob, DqsPalette};
-use rigport_eval::skinning::{par_skin_frames, rayon, PackedInfluences, SkinningMethod};
+use rigport_eval::skinning::{par_skin_frames, rayon, PackedInfluences};
 use rigport_eval::{LbsJob, Pose, Rig, RigOutput};
 use rigport_import::pinocchio;
 use rigport_model::glam::{EulerRot, Mat4, Quat, Vec3};
+use rigport_model::SkinningMethod;
 use rigport_model::{Influence, Influences};
 
 /// Frames of the bake variant.

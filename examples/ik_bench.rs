@@ -45,7 +45,7 @@ use std::time::{Duration, Instant};
 
 use k::nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use k::InverseKinematicsSolver;
-use rigport_eval::ik::{
+use rigport_ik::{
     IkEffector, IkHandle, IkMethod, IkProblem, IkReport, IkScratch, IkSettings, IkSolveJob, Lambda,
 };
 use rigport_import::{csci520, pinocchio};

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
+use rigport_model::{InfluencesFit, SkinningMethod, UpAxis};
 
 use crate::exit;
 
@@ -222,42 +223,15 @@ pub struct OutputArgs {
     /// own, as the source declares it). glTF is always LBS; use `rigport bake --skinning
     /// dqs` to bake DQS into a glTF.
     #[arg(long, value_enum)]
-    pub skinning: Option<Skinning>,
+    pub skinning: Option<SkinningMethod>,
     /// The `upAxis` a .usda declares (default: the source's; the root prim's transform
     /// converts). glTF is always +Y up in metres.
     #[arg(long, value_enum, value_name = "AXIS")]
-    pub up_axis: Option<UpAxisArg>,
+    pub up_axis: Option<UpAxis>,
     /// The `metersPerUnit` a .usda declares (default: the source's, 1 when it states none;
     /// the root prim's transform converts).
     #[arg(long, value_name = "M")]
     pub meters_per_unit: Option<f64>,
-}
-
-/// How influences beyond the per-vertex limit are dropped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum InfluencesFit {
-    /// Keep the largest weights, renormalized.
-    Truncate,
-    /// Fit the kept weights to the full deformation over a pose set.
-    Refit,
-}
-
-/// An up axis.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum UpAxisArg {
-    /// +Y up.
-    Y,
-    /// +Z up.
-    Z,
-}
-
-/// A skinning method.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Skinning {
-    /// Linear blend skinning.
-    Lbs,
-    /// Dual quaternion skinning (UsdSkel's definition).
-    Dqs,
 }
 
 /// `rigport convert`.
@@ -486,7 +460,7 @@ pub struct EvalArgs {
     /// Skinning method (default: the one the source declares for its skin, LBS unless a
     /// USD mesh says `dualQuaternion`).
     #[arg(long, value_enum)]
-    pub skinning: Option<Skinning>,
+    pub skinning: Option<SkinningMethod>,
 }
 
 /// `rigport demo`.
@@ -527,7 +501,7 @@ pub struct BakeArgs {
     /// The skinning to bake (default: the one the source declares for its skin). `lbs`
     /// needs no correction and writes the plain file.
     #[arg(long, value_enum)]
-    pub skinning: Option<Skinning>,
+    pub skinning: Option<SkinningMethod>,
     /// The clip to bake (default: the first).
     #[arg(long, value_name = "NAME")]
     pub clip: Option<String>,
@@ -648,8 +622,8 @@ pub struct RenderArgs {
     /// Skinning method; `both` draws LBS (left) and DQS (right) with the same camera.
     /// Default: the method the source declares for its skin (LBS unless a USD mesh says
     /// `dualQuaternion`).
-    #[arg(long, value_enum)]
-    pub skinning: Option<SkinningArg>,
+    #[arg(long, value_name = "lbs|dqs|both", value_parser = render_skinning)]
+    pub skinning: Option<&'static [SkinningMethod]>,
     /// Do not draw the skeleton over the mesh.
     #[arg(long)]
     pub no_skeleton: bool,
@@ -689,15 +663,14 @@ pub enum CameraArg {
     Perspective,
 }
 
-/// `--skinning`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum SkinningArg {
-    /// Linear blend skinning.
-    Lbs,
-    /// Dual quaternion skinning.
-    Dqs,
-    /// Both, side by side.
-    Both,
+/// `rigport render --skinning`: one method, or `both` (LBS left, DQS right).
+fn render_skinning(s: &str) -> Result<&'static [SkinningMethod], String> {
+    match s {
+        "both" => Ok(rigport_render::LBS_AND_DQS),
+        "lbs" => Ok(&[SkinningMethod::Lbs]),
+        "dqs" => Ok(&[SkinningMethod::Dqs]),
+        _ => Err(format!("{s:?}: expected lbs, dqs or both")),
+    }
 }
 
 fn parse_range(s: &str) -> Result<FrameRange, String> {

@@ -4,16 +4,17 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
-use rigport_model::{Asset, SkinningMethod, UpAxis, Warning};
-pub use rigport_pipeline::outputs::{extension, Format};
-use rigport_pipeline::write::{self, InfluencesFit, WriteOptions};
+use rigport_model::OutputFormat;
+use rigport_model::{Asset, InfluencesFit, SkinningMethod, Warning};
+pub use rigport_pipeline::outputs::extension;
+use rigport_pipeline::write::{self, WriteOptions};
 
-use crate::cli::{InputArgs, OutputArgs, Skinning, UpAxisArg};
+use crate::cli::{InputArgs, OutputArgs};
 use crate::context::Context;
 use crate::exit::UsageError;
 
 /// The format an output path asks for (a usage error, exit code 2, else).
-pub fn format_of(path: &Path) -> Result<Format> {
+pub fn format_of(path: &Path) -> Result<OutputFormat> {
     Ok(rigport_pipeline::outputs::format_of(path)?)
 }
 
@@ -93,22 +94,13 @@ pub fn write_asset_with(
     write::check_memory(asset, path, format, &crate::memory::budget())?;
     let opts = WriteOptions {
         max_influences: args.max_influences.map(usize::from),
-        influences_fit: match args.influences_fit {
-            crate::cli::InfluencesFit::Truncate => InfluencesFit::Truncate,
-            crate::cli::InfluencesFit::Refit => InfluencesFit::Refit,
-        },
-        skinning: args.skinning.map(|m| match m {
-            Skinning::Lbs => SkinningMethod::Lbs,
-            Skinning::Dqs => SkinningMethod::Dqs,
-        }),
-        up_axis: args.up_axis.map(|a| match a {
-            UpAxisArg::Y => UpAxis::Y,
-            UpAxisArg::Z => UpAxis::Z,
-        }),
+        influences_fit: args.influences_fit,
+        skinning: args.skinning,
+        up_axis: args.up_axis,
         meters_per_unit: args.meters_per_unit,
         morphs_as_points: usd_point_caches,
     };
-    if format == Format::Gltf && opts.max_influences.is_some_and(|k| k > 4) && !ctx.quiet {
+    if format.is_gltf() && opts.max_influences.is_some_and(|k| k > 4) && !ctx.quiet {
         if let Some(note) = write::four_influence_note(asset) {
             eprintln!("influences: {note}");
         }
@@ -129,12 +121,12 @@ pub fn write_asset_with(
         }
     }
     let asset = fitted.as_ref().map_or(asset, |f| &f.asset);
-    if format == Format::Gltf && args.skinning == Some(Skinning::Dqs) {
+    if format.is_gltf() && args.skinning == Some(SkinningMethod::Dqs) {
         bail!("glTF defines only linear blend skinning; `rigport bake --skinning dqs` bakes a DQS result into a glTF, and a .usda output can declare DQS");
     }
     let building = match format {
-        Format::Gltf => "building glTF",
-        Format::Usda => "building USD",
+        OutputFormat::Glb | OutputFormat::Gltf => "building glTF",
+        OutputFormat::Usda | OutputFormat::Usdc | OutputFormat::Usdz => "building USD",
     };
     let prepared = ctx.step(building, || write::prepare(asset, path, format, &opts))?;
     warnings.extend(prepared.warnings().iter().cloned());

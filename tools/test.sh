@@ -11,7 +11,9 @@
 #  8. output hashes          tools/output_hashes.sh (the demo and every corpus conversion
 #                            hash as recorded in tools/output_hashes.txt)
 #  9. module circles         tools/module_cycles.py (no file of a crate imports one that
-#                            imports it back)
+#                            imports it back); tools/one_concept.py (each concept the model
+#                            defines -- skinning method, up axis, influence fit, output
+#                            format, the clip lookup -- is defined once)
 # 10. fuzz (short)           fuzz/run.sh --dev --seconds RIGPORT_FUZZ_SECONDS (default 5) per
 #                            target, when cargo-fuzz and a nightly toolchain are installed
 #                            (skipped otherwise, or when cargo fuzz itself cannot build, with
@@ -292,6 +294,15 @@ if python3 tools/module_cycles.py; then
   record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
 else
   record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "files that import each other (listed above)"
+fi
+
+CURRENT_STEP="one concept, one type (tools/one_concept.py)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+if python3 tools/one_concept.py --self-test && python3 tools/one_concept.py; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "a concept defined twice (listed above)"
 fi
 
 # ------------------------------------------------------------- 10 fuzz (short)

@@ -1,19 +1,19 @@
 //! `rigport bake`: a dual quaternion skinning result baked into an ordinary (LBS) glTF as
 //! per-frame corrective morph targets in bind space (FORMATS.md, "glTF 2.0 skins and
-//! animation"; the eval side is `rigport_eval::bake`).
+//! animation"; the eval side is `rigport_deform::bake`).
 
 use anyhow::{bail, Result};
-use rigport_eval::bake::pipeline::{bake_dqs, DqsBakeOptions};
-use rigport_model::Warning;
+use rigport_deform::bake::asset::{bake_dqs, DqsBakeOptions};
+use rigport_model::{SkinningMethod, Warning};
 
-use crate::cli::{BakeArgs, OutputArgs, Skinning};
+use crate::cli::{BakeArgs, OutputArgs};
 use crate::context::Context;
 use crate::input;
-use crate::output::{self, Format};
+use crate::output;
 
 /// Runs `bake`.
 pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
-    if output::format_of(&args.output)? != Format::Gltf {
+    if !output::format_of(&args.output)?.is_gltf() {
         bail!(
             "{}: bake writes glTF (.glb/.gltf); a .usda declares DQS directly (`rigport convert --skinning dqs`)",
             args.output.display()
@@ -33,23 +33,20 @@ pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
         output: args.output.clone(),
         max_influences: Some(args.max_influences),
         // The DQS corrections are measured against what truncation leaves.
-        influences_fit: crate::cli::InfluencesFit::Truncate,
+        influences_fit: rigport_model::InfluencesFit::Truncate,
         reduce_tolerance: None,
         // The file itself is LBS; the DQS result lives in its morph targets.
-        skinning: Some(Skinning::Lbs),
+        skinning: Some(SkinningMethod::Lbs),
         up_axis: None,
         meters_per_unit: None,
     };
     let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
     let mut asset = imported.asset;
     let mut warnings = imported.warnings;
-    let skinning = args.skinning.unwrap_or(
-        match asset.skins.first().map(|s| s.method).unwrap_or_default() {
-            rigport_model::SkinningMethod::Lbs => Skinning::Lbs,
-            rigport_model::SkinningMethod::Dqs => Skinning::Dqs,
-        },
-    );
-    if skinning == Skinning::Lbs {
+    let skinning = args
+        .skinning
+        .unwrap_or(asset.skins.first().map(|s| s.method).unwrap_or_default());
+    if skinning == SkinningMethod::Lbs {
         warnings.push(Warning::Note {
             location: plan.label(),
             message: "--skinning lbs: glTF skins with LBS already, no corrective targets needed; writing the plain file".into(),

@@ -1,11 +1,11 @@
 //! `rigport cloth`: a garment simulated on the animated body and baked into the output
-//! (the work is `rigport_eval::cloth::pipeline`).
+//! (the work is `rigport_deform::cloth::asset`).
 
 use std::path::Path;
 
 use anyhow::{Context as _, Result};
-use rigport_eval::cloth::pipeline::{self, GarmentSource};
-use rigport_eval::cloth::{ClothOptions, PinSelection};
+use rigport_deform::cloth::asset::{self, GarmentSource};
+use rigport_deform::cloth::{ClothOptions, PinSelection};
 
 use crate::cli::{ClothArgs, OutputArgs};
 use crate::context::Context;
@@ -45,7 +45,7 @@ pub fn run(ctx: &Context, args: &ClothArgs) -> Result<()> {
         ..ClothOptions::default()
     };
     let bar = progress_bar(ctx);
-    let report = pipeline::run(
+    let report = asset::run(
         &mut asset,
         source,
         &pins,
@@ -66,7 +66,7 @@ pub fn run(ctx: &Context, args: &ClothArgs) -> Result<()> {
     let out_args = OutputArgs {
         output: args.output.clone(),
         max_influences: None,
-        influences_fit: crate::cli::InfluencesFit::Truncate,
+        influences_fit: rigport_model::InfluencesFit::Truncate,
         reduce_tolerance: None,
         skinning: None,
         up_axis: None,

@@ -2,10 +2,9 @@
 //! (`rigport_pipeline::dump`).
 
 use anyhow::Result;
-use rigport_model::SkinningMethod;
 use rigport_pipeline::dump::{eval_dump_to, DumpOptions};
 
-use crate::cli::{EvalArgs, Skinning};
+use crate::cli::EvalArgs;
 use crate::context::Context;
 use crate::input;
 
@@ -19,10 +18,7 @@ pub fn run(ctx: &Context, args: &EvalArgs) -> Result<()> {
         clip: args.clip.as_deref(),
         fps: args.fps,
         max_influences: args.max_influences.map(usize::from),
-        skinning: args.skinning.map(|s| match s {
-            Skinning::Lbs => SkinningMethod::Lbs,
-            Skinning::Dqs => SkinningMethod::Dqs,
-        }),
+        skinning: args.skinning,
     };
     let budget = crate::memory::budget();
     // Streamed to the file: memory stays bounded whatever the clip's length.

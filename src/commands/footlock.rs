@@ -3,7 +3,7 @@
 use std::io::Write;
 
 use anyhow::{bail, Context as _, Result};
-use rigport_eval::footlock::{footlock, resolve_feet, up_in_model, FootlockOptions, PinAt};
+use rigport_ik::footlock::{footlock, resolve_feet, up_in_model, FootlockOptions, PinAt};
 use serde_json::json;
 
 use crate::cli::FootlockArgs;
@@ -30,20 +30,11 @@ pub fn run(ctx: &Context, args: &FootlockArgs) -> Result<()> {
     let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
     let mut asset = imported.asset;
     let mut warnings = imported.warnings;
-    let index = match &args.clip {
-        Some(name) => asset.clips.iter().position(|c| &c.name == name),
-        None => (!asset.clips.is_empty()).then_some(0),
-    };
+    let index = asset
+        .clip_index(args.clip.as_deref())
+        .with_context(|| plan.label())?;
     let Some(index) = index else {
-        bail!(
-            "{}: {}; clips: {}",
-            plan.label(),
-            match &args.clip {
-                Some(name) => format!("no clip named {name:?}"),
-                None => "the rig has no clip to clean".into(),
-            },
-            rigport_pipeline::clip_names(&asset)
-        );
+        bail!("{}: the rig has no clip to clean", plan.label());
     };
     let (legs, found_by) = resolve_feet(&asset.skeleton, &args.feet)
         .with_context(|| format!("{}: cannot find the feet", plan.label()))?;

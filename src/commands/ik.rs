@@ -3,8 +3,8 @@
 use std::io::Write;
 
 use anyhow::{bail, Result};
-use rigport_eval::ik::clip::{solve_clip_on, ClipSolveOptions};
-use rigport_eval::ik::{IkMethod, Lambda};
+use rigport_ik::clip::{solve_clip_on, ClipSolveOptions};
+use rigport_ik::{IkMethod, Lambda};
 use serde::Serialize;
 
 use crate::cli::IkArgs;
@@ -82,8 +82,7 @@ pub fn run(ctx: &Context, args: &IkArgs) -> Result<()> {
     let mut asset = imported.asset;
     let mut warnings = imported.warnings;
     let handles = rigport_import::json::handles::read(&args.handles, &asset.skeleton)?;
-    let clip_names: Vec<&str> = asset.clips.iter().map(|c| c.name.as_str()).collect();
-    rigport_import::json::handles::check_base(&args.handles, &handles, &clip_names)?;
+    rigport_import::json::handles::check_base(&args.handles, &handles, &asset.clips)?;
     let name = args
         .handles
         .file_stem()

@@ -87,7 +87,7 @@ fn check_outputs(command: &Command) -> Result<()> {
         Command::Ik(a) => (&a.output.output, with_files(&a.input, &[&a.handles])),
         Command::Footlock(a) => (&a.output.output, with_files(&a.input, &[])),
         Command::Bake(a) => {
-            if output::format_of(&a.output)? != output::Format::Gltf {
+            if !output::format_of(&a.output)?.is_gltf() {
                 return Err(UsageError(format!(
                     "{}: bake writes glTF (.glb/.gltf); a .usda declares DQS directly (`rigport convert --skinning dqs`)",
                     a.output.display()

@@ -2,10 +2,11 @@
 //! drawn on the CPU by `rigport-render`, optionally with IK handle targets as markers.
 
 use anyhow::{bail, Context as _, Result};
-use rigport_eval::ik::clip::HandleTargets;
-use rigport_render::{Markers, Projection, RenderOptions, SkinningChoice, View};
+use rigport_ik::clip::HandleTargets;
+use rigport_model::SkinningMethod;
+use rigport_render::{Markers, Projection, RenderOptions, View};
 
-use crate::cli::{CameraArg, RenderArgs, SkinningArg, ViewArg};
+use crate::cli::{CameraArg, RenderArgs, ViewArg};
 use crate::context::Context;
 use crate::exit::{OutputError, UsageError};
 use crate::input;
@@ -60,12 +61,10 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
             CameraArg::Perspective => Projection::PERSPECTIVE,
         },
         skinning: match args.skinning {
-            Some(SkinningArg::Lbs) => SkinningChoice::Lbs,
-            Some(SkinningArg::Dqs) => SkinningChoice::Dqs,
-            Some(SkinningArg::Both) => SkinningChoice::Both,
+            Some(methods) => methods,
             None => match asset.skins.first().map(|s| s.method) {
-                Some(rigport_model::SkinningMethod::Dqs) => SkinningChoice::Dqs,
-                _ => SkinningChoice::Lbs,
+                Some(SkinningMethod::Dqs) => &[SkinningMethod::Dqs],
+                _ => &[SkinningMethod::Lbs],
             },
         },
         skeleton: !args.no_skeleton,

@@ -3,7 +3,7 @@
 use std::io::Write;
 
 use anyhow::{Context as _, Result};
-use rigport_eval::retarget::RetargetOptions;
+use rigport_ik::retarget::RetargetOptions;
 
 use crate::cli::{InputArgs, RetargetArgs};
 use crate::context::Context;

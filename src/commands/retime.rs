@@ -1,8 +1,8 @@
 //! `rigport retime`: resample, speed up, warp, reverse or trim a clip.
 
 use anyhow::{bail, Context as _, Result};
-use rigport_eval::retime::{retime, Retime, WarpCurve};
-use rigport_eval::sequence::trim;
+use rigport_anim::retime::{retime, Retime, WarpCurve};
+use rigport_anim::sequence::trim;
 use rigport_model::{Clip, Warning};
 
 use crate::cli::RetimeArgs;
@@ -74,20 +74,11 @@ fn run_with(
     let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
     let mut asset = imported.asset;
     let mut warnings = imported.warnings;
-    let index = match &args.clip {
-        Some(name) => asset.clips.iter().position(|c| &c.name == name),
-        None => (!asset.clips.is_empty()).then_some(0),
-    };
+    let index = asset
+        .clip_index(args.clip.as_deref())
+        .with_context(|| plan.label())?;
     let Some(index) = index else {
-        bail!(
-            "{}: {}; clips: {}",
-            plan.label(),
-            match &args.clip {
-                Some(name) => format!("no clip named {name:?}"),
-                None => "the rig has no clip to retime".into(),
-            },
-            rigport_pipeline::clip_names(&asset)
-        );
+        bail!("{}: the rig has no clip to retime", plan.label());
     };
     let before = &asset.clips[index];
     let after = op(before, &asset.skeleton)

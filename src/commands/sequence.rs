@@ -1,7 +1,7 @@
 //! `rigport sequence`: clips one after another, crossfaded, optionally looping.
 
 use anyhow::{bail, Context as _, Result};
-use rigport_eval::sequence::{concatenate, make_loop};
+use rigport_anim::sequence::{concatenate, make_loop};
 use rigport_model::{Clip, Skeleton, Track, TrackTarget, Warning};
 
 use crate::cli::SequenceArgs;

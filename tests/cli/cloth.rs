@@ -8,8 +8,8 @@
 
 use std::path::Path;
 
-use rigport_eval::cloth::attach::nearest_point;
-use rigport_eval::cloth::{simulate, ClothOptions, Garment};
+use rigport_deform::cloth::attach::nearest_point;
+use rigport_deform::cloth::{simulate, ClothOptions, Garment};
 use rigport_model::glam::Vec3;
 
 use crate::common::*;
@@ -229,7 +229,7 @@ fn demo_skirt_for_10_seconds_at_60_fps_is_stable() {
         "a NaN position"
     );
     let worst = sim.worst();
-    let argmax = |f: fn(&rigport_eval::cloth::FrameStats) -> f32| {
+    let argmax = |f: fn(&rigport_deform::cloth::FrameStats) -> f32| {
         sim.stats.iter().enumerate().fold(
             (0, 0.0f32),
             |a, (i, s)| if f(s) > a.1 { (i, f(s)) } else { a },

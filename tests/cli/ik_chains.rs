@@ -247,7 +247,7 @@ fn bad_chain_fields_name_their_json_path() {
         (
             "base",
             format!(r#"{{"base": "run", "handles": [{{"joint": "RightHand", "keys": [{key}]}}]}}"#),
-            "/base: the input has no clip named \"run\" (it has: walk)",
+            "/base: no clip named \"run\"; clips are \"walk\"",
         ),
     ];
     for (name, text, needle) in cases {

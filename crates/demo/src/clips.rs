@@ -1,6 +1,6 @@
 //! The demo's clips, built in Rust: `wave` and `twist` are keyed whole poses baked by
-//! [`rigport_eval::keyed::clip`], `reach` an IK handle track solved by
-//! [`rigport_eval::ik::clip::solve_clip`]. Each also exists as the JSON example file that
+//! [`rigport_anim::keyed::clip`], `reach` an IK handle track solved by
+//! [`rigport_ik::clip::solve_clip`]. Each also exists as the JSON example file that
 //! `rigport demo` writes beside its outputs (for `rigport animate` and `rigport ik`); a test
 //! checks that the files' parsers give exactly the keys and handles built here.
 

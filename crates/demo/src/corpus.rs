@@ -97,12 +97,12 @@ pub fn picture(corpus: &Path, rig: &CorpusRig) -> Result<CorpusPicture, DemoErro
         return Err(DemoError::CorpusRigs(opened.len()));
     }
     let (source, mut imported) = opened.remove(0);
-    rigport_eval::bone_mesh::add_bone_mesh(&mut imported.asset);
+    rigport_import::bone_mesh::add_bone_mesh(&mut imported.asset);
     let label = source.label();
     let asset = &mut imported.asset;
     if rig.model1_keys {
         let keys = crate::clips::model1_keys(&asset.skeleton)?;
-        let clip = rigport_eval::keyed::clip(&asset.skeleton, &keys, "demo").map_err(|source| {
+        let clip = rigport_anim::keyed::clip(&asset.skeleton, &keys, "demo").map_err(|source| {
             DemoError::Keys {
                 clip: "arms".into(),
                 source,

@@ -1,8 +1,8 @@
 //! Why the demo could not be built.
 
-use rigport_eval::bake::pipeline::DqsBakeError;
-use rigport_eval::ik::clip::ClipSolveError;
+use rigport_deform::bake::asset::DqsBakeError;
 use rigport_eval::sample::SampleError;
+use rigport_ik::clip::ClipSolveError;
 use rigport_import::ImportError;
 
 /// Why the demo could not be built: each is a rigport bug for the built-in character,
@@ -32,7 +32,7 @@ pub enum DemoError {
     Bake(#[source] DqsBakeError),
     /// The demo's skirt cannot be simulated.
     #[error("cannot simulate the demo's skirt (a rigport bug)")]
-    Cloth(#[source] rigport_eval::cloth::ClothError),
+    Cloth(#[source] rigport_deform::cloth::ClothError),
     /// A picture cannot be rendered.
     #[error("cannot render {what}")]
     Render {

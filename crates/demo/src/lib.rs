@@ -72,8 +72,8 @@ mod weights;
 pub use character::{character, DemoRig, MAX_DETAIL};
 pub use error::DemoError;
 
-use rigport_eval::bake::pipeline::{bake_dqs, DqsBakeOptions, MeshBakeReport};
-use rigport_eval::ik::clip::{solve_clip, ClipSolveOptions, HandleTargets};
+use rigport_deform::bake::asset::{bake_dqs, DqsBakeOptions, MeshBakeReport};
+use rigport_ik::clip::{solve_clip, ClipSolveOptions, HandleTargets};
 use rigport_import::{pinocchio, Imported};
 use rigport_model::{Asset, Influences, Skeleton, SkinBinding, Warning};
 
@@ -145,7 +145,7 @@ fn keyed(
     keys: &rigport_model::PoseKeys,
     name: &str,
 ) -> Result<rigport_model::Clip, DemoError> {
-    rigport_eval::keyed::clip(skeleton, keys, name).map_err(|source| DemoError::Keys {
+    rigport_anim::keyed::clip(skeleton, keys, name).map_err(|source| DemoError::Keys {
         clip: name.to_owned(),
         source,
     })

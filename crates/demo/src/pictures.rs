@@ -3,7 +3,7 @@
 //! of the skirt simulated on `wave` ([`skirt_picture`]).
 
 use rigport_model::Asset;
-use rigport_render::{FrameTime, RenderOptions, SkinningChoice, View};
+use rigport_render::{FrameTime, RenderOptions, View, LBS_AND_DQS};
 
 use crate::clips::TWIST_PEAK_S;
 use crate::{Demo, DemoError};
@@ -89,7 +89,7 @@ pub fn pictures(demo: &Demo) -> Result<Vec<Picture>, DemoError> {
             width: TWIST_PX,
             height: TWIST_PX,
             view: View::Front,
-            skinning: SkinningChoice::Both,
+            skinning: LBS_AND_DQS,
             skeleton: false,
             frame_counter: false,
             ..RenderOptions::default()

@@ -1,10 +1,10 @@
 //! The demo's garment: a skirt, a flared cone of triangles hanging from the waist, its top
-//! ring pinned to the skin (`rigport cloth`, `rigport_eval::cloth`). [`bake`] simulates it
+//! ring pinned to the skin (`rigport cloth`, `rigport_deform::cloth`). [`bake`] simulates it
 //! on the demo's [`CLIP`] and bakes it into morph targets, as `rigport demo` writes it
 //! (`skirt.glb`, `skirt.png`).
 
-use rigport_eval::cloth::pipeline::{self, ClothReport, GarmentSource};
-use rigport_eval::cloth::{ClothOptions, PinSelection};
+use rigport_deform::cloth::asset::{self, ClothReport, GarmentSource};
+use rigport_deform::cloth::{ClothOptions, PinSelection};
 use rigport_model::glam::Vec3;
 use rigport_model::{Asset, Mesh, Warning};
 
@@ -143,7 +143,7 @@ pub fn bake(
         clip: Some(CLIP),
         ..ClothOptions::default()
     };
-    let report = pipeline::run(
+    let report = asset::run(
         &mut asset,
         GarmentSource::Mesh(Box::new(mesh)),
         &[pins],

@@ -1,4 +1,10 @@
-//! The rigport rig evaluator: forward kinematics, poses and skinning.
+//! The rigport runtime evaluator: forward kinematics, poses, clip sampling, the `Rig`, and
+//! skinning (LBS and DQS).
+//!
+//! This is the runtime core, as ozz-animation separates its runtime from its offline
+//! libraries: clip edits are in `rigport-anim`, IK, foot locking and retargeting in
+//! `rigport-ik`, and the deformation bakes (DQS correctives, cloth, influence refit) in
+//! `rigport-deform`. Each of those depends on this crate, never the other way.
 //!
 //! Each step is a *job* in the ozz-animation sense: a struct of documented inputs and
 //! caller-owned output slices with `validate()` (sizes and references, checked once) and
@@ -6,23 +12,15 @@
 //! influences, not a skeleton. Parallelism is the caller's choice.
 #![warn(missing_docs)]
 
-pub mod bake;
-pub mod bone_mesh;
-pub mod cloth;
 mod error;
 pub mod fk;
-pub mod footlock;
-pub mod ik;
-pub mod keyed;
 pub mod pose;
-pub mod reduce;
-pub mod refit;
-pub mod retarget;
-pub mod retime;
 pub mod rig;
 pub mod sample;
-pub mod sequence;
 pub mod skinning;
+#[cfg(any(test, feature = "test-support"))]
+#[doc(hidden)]
+pub mod test_support;
 
 pub use dqs::{DqsJob, DqsPalette};
 pub use error::EvalError;
@@ -32,5 +30,4 @@ pub use rig::{Rig, RigOutput};
 pub use skinning::dqs;
 pub use skinning::{
     par_skin_frames, skin_frames, skinning_matrices, LbsJob, PackedInfluences, SkinFramesJob,
-    SkinningMethod,
 };

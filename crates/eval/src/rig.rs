@@ -4,8 +4,9 @@ use glam::{Mat4, Vec3};
 use rigport_model::{Asset, JointIndex};
 
 use crate::dqs::DqsPalette;
-use crate::skinning::{PackedInfluences, SkinFramesJob, SkinningMethod};
+use crate::skinning::{PackedInfluences, SkinFramesJob};
 use crate::{skinning_matrices, EvalError, LocalToModelJob, Pose};
+use rigport_model::SkinningMethod;
 
 /// An asset checked and prepared for evaluation: parent array, per-mesh skin data.
 ///

@@ -54,5 +54,5 @@ pub use gltf::{
     prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, ImageFile,
     PreparedGltf,
 };
-pub use usd::{prepare_usd, to_usda, ExportedUsd, PreparedUsd, UsdOptions, UsdSkinning};
+pub use usd::{prepare_usd, to_usda, ExportedUsd, PreparedUsd, UsdOptions};
 pub use weights::gltf_influences;

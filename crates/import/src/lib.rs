@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 
 pub mod asf_amc;
+pub mod bone_mesh;
 pub mod bvh;
 pub mod csci520;
 pub mod detect;

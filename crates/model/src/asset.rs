@@ -92,7 +92,63 @@ pub enum AssetError {
     },
 }
 
+/// An asset has no clip of the name asked for: the one "no clip named" error, with the
+/// names it has.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("no clip named {name:?}; clips are {}", clip_list(available))]
+pub struct NoSuchClip {
+    /// The name asked for.
+    pub name: String,
+    /// The asset's clip names, in order.
+    pub available: Vec<String>,
+}
+
+fn clip_list(names: &[String]) -> String {
+    if names.is_empty() {
+        "none".into()
+    } else {
+        let quoted: Vec<String> = names.iter().map(|n| format!("{n:?}")).collect();
+        quoted.join(", ")
+    }
+}
+
+/// The index in `clips` of the clip named `name`, or of the first clip when `name` is
+/// `None` (`Ok(None)` when there is no clip): the one clip lookup, behind [`Asset::clip`].
+///
+/// # Errors
+/// [`NoSuchClip`] when no clip has that name.
+pub fn find_clip(clips: &[Clip], name: Option<&str>) -> Result<Option<usize>, NoSuchClip> {
+    match name {
+        None => Ok((!clips.is_empty()).then_some(0)),
+        Some(name) => match clips.iter().position(|c| c.name == name) {
+            Some(index) => Ok(Some(index)),
+            None => Err(NoSuchClip {
+                name: name.to_owned(),
+                available: clips.iter().map(|c| c.name.clone()).collect(),
+            }),
+        },
+    }
+}
+
 impl Asset {
+    /// The index of the clip named `name`, or of the first clip when `name` is `None`
+    /// (`Ok(None)` when the asset has no clip).
+    ///
+    /// # Errors
+    /// [`NoSuchClip`] when no clip has that name.
+    pub fn clip_index(&self, name: Option<&str>) -> Result<Option<usize>, NoSuchClip> {
+        find_clip(&self.clips, name)
+    }
+
+    /// The clip named `name`, or the first clip when `name` is `None` (`Ok(None)` when the
+    /// asset has no clip).
+    ///
+    /// # Errors
+    /// [`NoSuchClip`] when no clip has that name.
+    pub fn clip(&self, name: Option<&str>) -> Result<Option<&Clip>, NoSuchClip> {
+        Ok(self.clip_index(name)?.map(|i| &self.clips[i]))
+    }
+
     /// Checks every cross-reference and value; returns every problem found.
     ///
     /// # Errors

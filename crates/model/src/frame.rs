@@ -5,6 +5,7 @@ use glam::{DMat4, DVec4};
 
 /// The axis a scene calls up. Both are right-handed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum UpAxis {
     /// +Y up (glTF, USD's default, Maya, most formats).
     #[default]
@@ -107,35 +108,6 @@ impl SceneFrame {
     /// Sources that state no unit keep their numbers.
     pub fn model_to_gltf(&self, meters_per_unit: Option<f64>) -> DMat4 {
         self.model_to(meters_per_unit, UpAxis::Y, Some(1.0))
-    }
-}
-
-/// How a skinned mesh's points follow its joints.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum SkinningMethod {
-    /// Linear blend skinning (glTF's only method; UsdSkel `classicLinear`, its default).
-    #[default]
-    Lbs,
-    /// Dual quaternion skinning as UsdSkel computes it (`dualQuaternion`).
-    Dqs,
-}
-
-impl SkinningMethod {
-    /// The `primvars:skel:skinningMethod` token UsdSkel uses for this method.
-    pub fn usd_token(self) -> &'static str {
-        match self {
-            Self::Lbs => "classicLinear",
-            Self::Dqs => "dualQuaternion",
-        }
-    }
-
-    /// The method a UsdSkel `skinningMethod` token names.
-    pub fn from_usd_token(token: &str) -> Option<Self> {
-        match token {
-            "classicLinear" => Some(Self::Lbs),
-            "dualQuaternion" => Some(Self::Dqs),
-            _ => None,
-        }
     }
 }
 

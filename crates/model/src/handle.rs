@@ -80,7 +80,7 @@ pub struct HandleTrack {
     pub twist_deg: f32,
     /// The solver for this handle.
     pub solver: HandleSolver,
-    /// Two-bone softening, `0..=1` (see `rigport_eval::ik::two_bone`).
+    /// Two-bone softening, `0..=1` (see `rigport_ik::two_bone`).
     pub soften: f32,
 }
 

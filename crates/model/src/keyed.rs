@@ -2,7 +2,7 @@
 //!
 //! These are what `POSE.json` and `KEYS.json` hold once their joint names are resolved
 //! against a skeleton (`rigport_import::json`); the evaluator turns them into poses and
-//! clips (`rigport_eval::keyed`).
+//! clips (`rigport_anim::keyed`).
 
 use glam::{Quat, Vec3};
 

@@ -10,6 +10,7 @@ mod asset;
 pub mod budget;
 mod clip;
 pub mod conventions;
+mod format;
 mod frame;
 mod handle;
 mod index;
@@ -22,10 +23,11 @@ mod skin;
 mod transform;
 mod warning;
 
-pub use asset::{Asset, AssetError};
+pub use asset::{find_clip, Asset, AssetError, NoSuchClip};
 pub use budget::{MemoryBudget, OverBudget};
 pub use clip::{Clip, Interpolation, Track, TrackTarget};
-pub use frame::{SceneFrame, SkinningMethod, UpAxis};
+pub use format::{OutputFormat, OutputFormatError};
+pub use frame::{SceneFrame, UpAxis};
 pub use handle::{HandleSet, HandleSolver, HandleTrack, RootMotion, RotationLimit};
 pub use index::{JointIndex, MeshIndex};
 pub use keyed::{PoseKey, PoseKeys, RestRotation};
@@ -35,7 +37,7 @@ pub use material::{
 };
 pub use mesh::{Mesh, MorphTarget};
 pub use skeleton::{parents_first_order, Joint, Skeleton, SkeletonProblem};
-pub use skin::{Influence, Influences, SkinBinding};
+pub use skin::{Influence, Influences, InfluencesFit, SkinBinding, SkinningMethod};
 pub use transform::Transform;
 pub use warning::{Warning, WARNING_CODES};
 

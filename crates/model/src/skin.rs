@@ -1,6 +1,48 @@
 use glam::Mat4;
 
-use crate::{JointIndex, MeshIndex, SkinningMethod};
+use crate::{JointIndex, MeshIndex};
+
+/// How a skinned mesh's points follow its joints.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum SkinningMethod {
+    /// Linear blend skinning (glTF's only method; UsdSkel `classicLinear`, its default).
+    #[default]
+    Lbs,
+    /// Dual quaternion skinning as UsdSkel computes it (`dualQuaternion`).
+    Dqs,
+}
+
+impl SkinningMethod {
+    /// The `primvars:skel:skinningMethod` token UsdSkel uses for this method.
+    pub fn usd_token(self) -> &'static str {
+        match self {
+            Self::Lbs => "classicLinear",
+            Self::Dqs => "dualQuaternion",
+        }
+    }
+
+    /// The method a UsdSkel `skinningMethod` token names.
+    pub fn from_usd_token(token: &str) -> Option<Self> {
+        match token {
+            "classicLinear" => Some(Self::Lbs),
+            "dualQuaternion" => Some(Self::Dqs),
+            _ => None,
+        }
+    }
+}
+
+/// How a vertex with more influences than a writer's per-vertex limit drops the rest.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum InfluencesFit {
+    /// Keep the largest weights, renormalized (what Blender, gltfpack and Assimp do).
+    #[default]
+    Truncate,
+    /// Fit the kept weights to the full deformation over a pose set (`rigport-deform`'s
+    /// `refit`).
+    Refit,
+}
 
 /// One joint's weight on a vertex. `joint` indexes the owning [`SkinBinding::joints`].
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -25,12 +25,12 @@ use std::io::{BufWriter, Write as _};
 use std::path::Path;
 
 use rigport_eval::sample::{CompiledClip, FrameGrid, SampleJob};
-use rigport_eval::skinning::SkinningMethod;
 use rigport_eval::{Pose, Rig, RigOutput};
 use rigport_export::npz::{EvalDump, NpzWriter, SPILL_LIMIT};
+use rigport_model::SkinningMethod;
 use rigport_model::{Asset, MemoryBudget};
 
-use crate::{clip_names, PipelineError};
+use crate::PipelineError;
 
 /// What to evaluate.
 #[derive(Clone, Copy, Debug, Default)]
@@ -202,17 +202,11 @@ fn evaluate(
     }
     let spill_err = |e| PipelineError::output(output, e);
     let mut posed = RigOutput::default();
-    let clip = match (opts.pose, opts.clip) {
-        (Some(_), _) => None,
-        (None, Some(name)) => {
-            Some(asset.clips.iter().find(|c| c.name == name).ok_or_else(|| {
-                PipelineError::Invalid(format!(
-                    "{label}: no clip named {name:?}; clips: {}",
-                    clip_names(asset)
-                ))
-            })?)
-        }
-        (None, None) => asset.clips.first(),
+    let clip = match opts.pose {
+        Some(_) => None,
+        None => asset
+            .clip(opts.clip)
+            .map_err(|e| PipelineError::Invalid(format!("{label}: {e}")))?,
     };
     match clip {
         None => {

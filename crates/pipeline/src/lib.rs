@@ -39,8 +39,6 @@ pub mod write;
 
 use std::error::Error as StdError;
 
-use rigport_model::Asset;
-
 pub use rigport_model::budget::{MemoryBudget, OverBudget};
 
 /// Why a pipeline step failed. [`PipelineError::is_usage`] and [`PipelineError::is_output`]
@@ -95,7 +93,7 @@ pub enum PipelineError {
     Sample(#[from] rigport_eval::sample::SampleError),
     /// An influence refit failed.
     #[error(transparent)]
-    Refit(#[from] rigport_eval::refit::asset::RefitError),
+    Refit(#[from] rigport_deform::refit::asset::RefitError),
     /// The inputs are readable but do not make what was asked (the message says why).
     #[error("{0}")]
     Invalid(String),
@@ -133,19 +131,6 @@ impl PipelineError {
             source: source.into(),
         }
     }
-}
-
-/// The clip names of an asset, for messages.
-pub fn clip_names(asset: &Asset) -> String {
-    if asset.clips.is_empty() {
-        return "none".into();
-    }
-    let names: Vec<String> = asset
-        .clips
-        .iter()
-        .map(|c| format!("{:?}", c.name))
-        .collect();
-    names.join(", ")
 }
 
 /// An error with its causes, `: `-separated (as the CLI prints errors).

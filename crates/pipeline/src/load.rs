@@ -56,7 +56,7 @@ pub fn load(
 ) -> Result<Imported, PipelineError> {
     crate::memory::check_import(plan, budget)?;
     let mut imported = plan.import()?;
-    if bone_mesh && rigport_eval::bone_mesh::add_bone_mesh(&mut imported.asset) {
+    if bone_mesh && rigport_import::bone_mesh::add_bone_mesh(&mut imported.asset) {
         imported.warnings.push(Warning::Note {
             location: plan.label(),
             message: "skeleton only: added a bone mesh (one shape per bone; --no-bone-mesh to leave it out)".into(),

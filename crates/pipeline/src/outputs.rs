@@ -4,10 +4,11 @@
 //!
 //! ```
 //! use std::path::Path;
-//! use rigport_pipeline::outputs::{check_outputs, format_of, Format};
+//! use rigport_model::OutputFormat;
+//! use rigport_pipeline::outputs::{check_outputs, format_of};
 //!
-//! assert_eq!(format_of(Path::new("a.GLB"))?, Format::Gltf);
-//! assert_eq!(format_of(Path::new("a.usdz"))?, Format::Usda);
+//! assert_eq!(format_of(Path::new("a.GLB"))?, OutputFormat::Glb);
+//! assert_eq!(format_of(Path::new("a.usdz"))?, OutputFormat::Usdz);
 //! assert!(format_of(Path::new("a.usd")).is_err_and(|e| e.is_usage()));
 //! let input = Path::new("../../fixtures/bvh/end_sites.bvh");
 //! let err = check_outputs(&[input], &[input.to_path_buf()]).unwrap_err();
@@ -18,39 +19,17 @@
 use std::path::{Path, PathBuf};
 
 use rigport_export::ExportError;
+use rigport_model::OutputFormat;
 
 use crate::{Message, PipelineError};
 
-/// The model file formats rigport writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
-    /// `.glb` or `.gltf` (+ `.bin`).
-    Gltf,
-    /// `.usda`, `.usdc` or `.usdz` (the encoding by the extension).
-    Usda,
-}
-
-/// The format an output path asks for.
+/// The format an output path asks for, by its extension ([`OutputFormat::of_path`]).
 ///
 /// # Errors
-/// An extension rigport does not write (a usage error).
-pub fn format_of(path: &Path) -> Result<Format, PipelineError> {
-    Ok(match extension(path).as_str() {
-        "glb" | "gltf" => Format::Gltf,
-        "usda" | "usdc" | "usdz" => Format::Usda,
-        "usd" => {
-            return Err(PipelineError::Usage(format!(
-                "{}: say which USD encoding: .usda (text), .usdc (binary) or .usdz (package)",
-                path.display()
-            )))
-        }
-        _ => {
-            return Err(PipelineError::Usage(format!(
-                "{}: unknown output type; expected .glb, .gltf, .usda, .usdc or .usdz",
-                path.display()
-            )))
-        }
-    })
+/// An extension rigport does not write, or `.usd` (a usage error naming the path).
+pub fn format_of(path: &Path) -> Result<OutputFormat, PipelineError> {
+    OutputFormat::of_path(path)
+        .map_err(|e| PipelineError::Usage(format!("{}: {e}", path.display())))
 }
 
 /// The lower-case extension of `path` ("" when none).

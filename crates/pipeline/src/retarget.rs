@@ -19,9 +19,9 @@
 
 use std::path::Path;
 
-use rigport_eval::footlock::up_in_model;
-use rigport_eval::retarget::RetargetReport;
-use rigport_eval::retarget::{auto_map, retarget, JointMap, RetargetInput, RetargetOptions};
+use rigport_ik::footlock::up_in_model;
+use rigport_ik::retarget::RetargetReport;
+use rigport_ik::retarget::{auto_map, retarget, JointMap, RetargetInput, RetargetOptions};
 use rigport_model::{Asset, Warning};
 use serde_json::{json, Value};
 
@@ -52,16 +52,13 @@ pub fn onto(
     map_file: Option<&Path>,
     options: &RetargetOptions,
 ) -> Result<Done, PipelineError> {
-    let found = match clip {
-        Some(name) => source.clips.iter().find(|c| c.name == name),
-        None => source.clips.first(),
-    };
+    let found = source
+        .clip(clip)
+        .map_err(|e| PipelineError::Invalid(e.to_string()))?;
     let Some(found) = found else {
-        let wanted = clip.map_or("to retarget".into(), |n| format!("named {n:?}"));
-        let names = crate::clip_names(source);
-        return Err(PipelineError::Invalid(format!(
-            "no clip {wanted}; clips: {names}"
-        )));
+        return Err(PipelineError::Invalid(
+            "no clip to retarget; the source has none".into(),
+        ));
     };
     let (source_up, target_up) = (up_in_model(&source.frame), up_in_model(&target.frame));
     let map = match map_file {

@@ -4,8 +4,8 @@
 //!
 //! ```
 //! use std::num::NonZeroUsize;
-//! use rigport_pipeline::outputs::Format;
-//! use rigport_pipeline::write::{self, InfluencesFit, WriteOptions};
+//! use rigport_model::{InfluencesFit, OutputFormat};
+//! use rigport_pipeline::write::{self, WriteOptions};
 //! use rigport_pipeline::{load, MemoryBudget};
 //!
 //! let dir = tempfile::tempdir()?;
@@ -14,11 +14,11 @@
 //! let mut asset = load::load(&plan, true, &MemoryBudget::UNLIMITED)?.asset;
 //! let mut warnings = Vec::new();
 //! write::reduce_clips(&mut asset, 1e-4, &mut warnings)?;
-//! write::check_memory(&asset, &out, Format::Gltf, &MemoryBudget::UNLIMITED)?;
+//! write::check_memory(&asset, &out, OutputFormat::Glb, &MemoryBudget::UNLIMITED)?;
 //! let opts = WriteOptions { max_influences: Some(2), influences_fit: InfluencesFit::Refit, ..WriteOptions::default() };
 //! // The bone mesh has one influence per vertex: nothing to fit.
-//! assert!(write::fit_influences(&asset, &opts, Format::Gltf)?.is_none());
-//! let prepared = write::prepare(&asset, &out, Format::Gltf, &opts)?;
+//! assert!(write::fit_influences(&asset, &opts, OutputFormat::Glb)?.is_none());
+//! let prepared = write::prepare(&asset, &out, OutputFormat::Glb, &opts)?;
 //! warnings.extend(prepared.warnings().iter().cloned());
 //! prepared.write()?;
 //! assert_eq!(&std::fs::read(&out)?[..4], b"glTF");
@@ -28,23 +28,14 @@
 use std::num::NonZeroUsize;
 use std::path::{Path, PathBuf};
 
-use rigport_eval::refit::{self, asset::AssetRefit, asset::PoseSet};
+use rigport_deform::refit::{self, asset::AssetRefit, asset::PoseSet};
 use rigport_export::{GltfOptions, PreparedGltf, PreparedUsd, UsdOptions};
-use rigport_model::{Asset, MemoryBudget, OverBudget, SkinningMethod, UpAxis, Warning};
+use rigport_model::{
+    Asset, InfluencesFit, MemoryBudget, OutputFormat, OverBudget, SkinningMethod, UpAxis, Warning,
+};
 
-use crate::outputs::{write_failure, Format};
+use crate::outputs::write_failure;
 use crate::PipelineError;
-
-/// How influences beyond the per-vertex limit are dropped.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum InfluencesFit {
-    /// Keep the largest weights, renormalized (what Blender, gltfpack and Assimp do).
-    #[default]
-    Truncate,
-    /// Fit the kept weights to the full deformation over a pose set
-    /// (`rigport_eval::refit::asset`).
-    Refit,
-}
 
 /// How an asset is written.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -65,7 +56,7 @@ pub struct WriteOptions {
 }
 
 /// Reduces the keys of every clip while every joint's world position stays within
-/// `tolerance` (`rigport_eval::reduce`), adding a note per clip.
+/// `tolerance` (`rigport_anim::reduce`), adding a note per clip.
 ///
 /// # Errors
 /// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
@@ -75,7 +66,7 @@ pub fn reduce_clips(
     warnings: &mut Vec<Warning>,
 ) -> Result<(), PipelineError> {
     for clip in &mut asset.clips {
-        let (reduced, stats) = rigport_eval::reduce::reduce(clip, &asset.skeleton, tolerance)
+        let (reduced, stats) = rigport_anim::reduce::reduce(clip, &asset.skeleton, tolerance)
             .map_err(|e| PipelineError::step(format!("cannot reduce clip {:?}", clip.name), e))?;
         warnings.push(Warning::Note {
             location: format!("clip {:?}", clip.name),
@@ -96,13 +87,15 @@ pub fn reduce_clips(
 pub fn check_memory(
     asset: &Asset,
     path: &Path,
-    format: Format,
+    format: OutputFormat,
     budget: &MemoryBudget,
 ) -> Result<(), OverBudget> {
     use rigport_export::estimate;
     let (needed, as_what) = match format {
-        Format::Gltf => (estimate::gltf_memory(asset), "glTF"),
-        Format::Usda => (estimate::usd_memory_at(asset, path), "USD"),
+        OutputFormat::Glb | OutputFormat::Gltf => (estimate::gltf_memory(asset), "glTF"),
+        OutputFormat::Usda | OutputFormat::Usdc | OutputFormat::Usdz => {
+            (estimate::usd_memory_at(asset, path), "USD")
+        }
     };
     let what = format!(
         "{}: writing {} joints x {} samples and {} vertices as {as_what}",
@@ -136,10 +129,10 @@ pub struct Fitted {
 pub fn fit_influences(
     asset: &Asset,
     opts: &WriteOptions,
-    format: Format,
+    format: OutputFormat,
 ) -> Result<Option<Fitted>, PipelineError> {
     let k = match (format, opts.max_influences) {
-        (Format::Usda, None) => return Ok(None),
+        (format, None) if format.is_usd() => return Ok(None),
         (_, limit) => limit.unwrap_or(4),
     };
     let k = NonZeroUsize::new(k)
@@ -153,7 +146,7 @@ pub fn fit_influences(
     }
     let mut fitted = asset.clone();
     let refit = match opts.influences_fit {
-        InfluencesFit::Truncate if format == Format::Gltf => return Ok(None),
+        InfluencesFit::Truncate if format.is_gltf() => return Ok(None),
         InfluencesFit::Truncate => {
             for skin in &mut fitted.skins {
                 skin.influences = rigport_model::Influences::from_rows(
@@ -241,7 +234,7 @@ impl Prepared {
 pub fn prepare(
     asset: &Asset,
     path: &Path,
-    format: Format,
+    format: OutputFormat,
     opts: &WriteOptions,
 ) -> Result<Prepared, PipelineError> {
     // A long USD text is staged beside the output as it is built: failing to write it is
@@ -251,13 +244,13 @@ pub fn prepare(
         e => PipelineError::step(format!("cannot export {:?}", asset.name), e),
     };
     let file = match format {
-        Format::Gltf => {
+        OutputFormat::Glb | OutputFormat::Gltf => {
             let opts = GltfOptions {
                 max_influences: opts.max_influences.unwrap_or(4),
             };
             PreparedFile::Gltf(rigport_export::prepare_gltf(asset, path, &opts).map_err(failed)?)
         }
-        Format::Usda => {
+        OutputFormat::Usda | OutputFormat::Usdc | OutputFormat::Usdz => {
             let opts = UsdOptions {
                 skinning: opts.skinning,
                 up_axis: opts.up_axis,

@@ -17,10 +17,7 @@ const LEAF: usize = 1024;
 /// Frames skinned per pass over a block of vertices.
 const FRAME_BLOCK: usize = 16;
 
-/// How skinned positions are computed from the joints' skinning matrices: the model's
-/// [`rigport_model::SkinningMethod`] (LBS, or DQS as UsdSkel computes it, see
-/// [`crate::dqs`]), re-exported under its old path.
-pub use rigport_model::SkinningMethod;
+use rigport_model::SkinningMethod;
 
 /// How [`PackedInfluences`] stores its rows.
 #[derive(Clone, Debug, PartialEq)]
@@ -418,9 +415,9 @@ impl Block<'_> {
 /// (`J x min(F, 16)` joint entries) itself.
 ///
 /// ```
-/// use rigport_eval::skinning::{skin_frames, PackedInfluences, SkinningMethod};
+/// use rigport_eval::skinning::{skin_frames, PackedInfluences};
 /// use rigport_model::glam::{Mat4, Vec3};
-/// use rigport_model::{Influence, Influences};
+/// use rigport_model::{Influence, Influences, SkinningMethod};
 ///
 /// // One vertex at +Y, half on each of two joints.
 /// let half = |joint| Influence { joint, weight: 0.5 };

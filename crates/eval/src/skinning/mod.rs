@@ -27,7 +27,7 @@
 //! - `dqs.rs`: dual quaternion skinning ([`dqs::DqsJob`], [`dqs::DqsPalette`]), also
 //!   `rigport_eval::dqs`;
 //! - `frames.rs`: [`PackedInfluences`], [`SkinFramesJob`] and the method switch
-//!   ([`SkinningMethod`]).
+//!   ([`rigport_model::SkinningMethod`]).
 //!
 //! [`Influences`]: rigport_model::Influences
 
@@ -44,7 +44,5 @@ mod tests;
 pub use rayon;
 
 pub use self::common::skinning_matrices;
-pub use self::frames::{
-    par_skin_frames, skin_frames, PackedInfluences, SkinFramesJob, SkinningMethod,
-};
+pub use self::frames::{par_skin_frames, skin_frames, PackedInfluences, SkinFramesJob};
 pub use self::lbs::LbsJob;

@@ -470,8 +470,9 @@ pub(crate) fn dqs_sparse<H: Hemisphere>(
 #[cfg(test)]
 mod tests {
     use super::PORTABLE_ONLY;
-    use crate::skinning::{skin_frames, PackedInfluences, SkinningMethod};
+    use crate::skinning::{skin_frames, PackedInfluences};
     use glam::{Mat4, Quat, Vec3};
+    use rigport_model::SkinningMethod;
     use rigport_model::{Influence, Influences};
 
     /// A tiny seeded generator (xorshift64*).

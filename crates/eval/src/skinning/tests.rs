@@ -1,5 +1,5 @@
 use glam::{Mat4, Vec3};
-use rigport_model::{Influence, Influences};
+use rigport_model::{Influence, Influences, SkinningMethod};
 
 use super::common::GRAIN;
 use super::dqs::DqsPalette;

@@ -9,33 +9,6 @@ use std::path::Path;
 
 use crate::{ExportError, ImageFile};
 
-/// How an output path asks for USD to be encoded, by its extension (case-insensitive).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Encoding {
-    /// `.usda`, or `.usd` (which may hold text).
-    Text,
-    /// `.usdc`: a crate file.
-    Crate,
-    /// `.usdz`: a package with a `.usdc` root layer and the textures.
-    Package,
-}
-
-impl Encoding {
-    /// The encoding `path` asks for; `None` for an extension that is not USD's.
-    pub(crate) fn of(path: &Path) -> Option<Self> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        Some(match ext.as_deref()? {
-            "usda" | "usd" => Self::Text,
-            "usdc" => Self::Crate,
-            "usdz" => Self::Package,
-            _ => return None,
-        })
-    }
-}
-
 /// The `.usda` text as a crate file; `path` names the output in errors.
 ///
 /// # Errors

@@ -7,7 +7,7 @@ use super::skeleton::SKELETON;
 use super::skin::{skin_rows, Binding};
 use super::text::{array, float, matrix, put, tuple, write_tokens, Usda};
 use super::topology::{topology, Topology};
-use super::{UsdOptions, UsdSkinning};
+use super::{SkinningMethod, UsdOptions};
 use crate::labels::mesh_label;
 
 /// One mesh as it will be written.
@@ -235,7 +235,7 @@ pub(super) fn write_mesh(
                     Some(rows.element_size),
                     "vertex",
                 );
-                if ctx.options.skinning.unwrap_or(binding.method) == UsdSkinning::Dqs {
+                if ctx.options.skinning.unwrap_or(binding.method) == SkinningMethod::Dqs {
                     doc.line("uniform token primvars:skel:skinningMethod = \"dualQuaternion\"");
                 }
             }

@@ -66,7 +66,7 @@
 //!   noise below 1e-6 of the row dropped, sorted, renormalized (reported when a row's sum
 //!   was off); a point without influence is bound to the skin's root joint (reported);
 //!   `primvars:skel:geomBindTransform` (identity unless the skin needs one); with
-//!   [`UsdSkinning::Dqs`] `uniform token primvars:skel:skinningMethod = "dualQuaternion"`;
+//!   [`SkinningMethod::Dqs`] `uniform token primvars:skel:skinningMethod = "dualQuaternion"`;
 //! - attached to a joint ([`Mesh::attached_to`](rigport_model::Mesh::attached_to)): points
 //!   stay in the joint's space, a rigid binding (`jointIndices = [j]`, `jointWeights =
 //!   [1]`, constant interpolation, `elementSize = 1`) with `geomBindTransform` = the
@@ -145,32 +145,27 @@ mod topology;
 
 use std::path::{Path, PathBuf};
 
-use rigport_model::{Asset, UpAxis, Warning};
+use rigport_model::{Asset, OutputFormat, SkinningMethod, UpAxis, Warning};
 
-use self::encode::Encoding;
 use self::text::{Finished, Usda};
 use crate::atomic::TempFile;
 use crate::ExportError;
 
 pub(crate) use self::text::SPILL_BYTES;
 
-/// Whether `path` asks for USD text (`.usda`, `.usd`), which is streamed when long.
+/// Whether `path` asks for USD text (`.usda`), which is streamed when long.
 pub(crate) fn encode_is_text(path: &Path) -> bool {
-    Encoding::of(path) == Some(Encoding::Text)
+    OutputFormat::of_path(path) == Ok(OutputFormat::Usda)
 }
-
-/// The skinning method a USD reader should use for skinned meshes: the model's
-/// [`SkinningMethod`](rigport_model::SkinningMethod) (`Lbs` writes nothing, UsdSkel's
-/// default `classicLinear`; `Dqs` writes
-/// `uniform token primvars:skel:skinningMethod = "dualQuaternion"`, USD >= 23.02).
-pub type UsdSkinning = rigport_model::SkinningMethod;
 
 /// Options for the USD exporter.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct UsdOptions {
     /// Skinning method of every skinned mesh; `None` (the default) keeps each skin's own
-    /// [`SkinBinding::method`](rigport_model::SkinBinding::method).
-    pub skinning: Option<UsdSkinning>,
+    /// [`SkinBinding::method`](rigport_model::SkinBinding::method). `Lbs` writes nothing
+    /// (UsdSkel's default `classicLinear`); `Dqs` writes
+    /// `uniform token primvars:skel:skinningMethod = "dualQuaternion"` (USD >= 23.02).
+    pub skinning: Option<SkinningMethod>,
     /// The stage's `upAxis`; `None` keeps the asset's ([`rigport_model::SceneFrame::up_axis`]).
     pub up_axis: Option<UpAxis>,
     /// The stage's `metersPerUnit`; `None` keeps the asset's (1 when it states none).
@@ -309,10 +304,13 @@ fn prepare_usd_spilling_at(
     options: &UsdOptions,
     spill_at: usize,
 ) -> Result<PreparedUsd, ExportError> {
-    let Some(encoding) = Encoding::of(path) else {
-        return Err(ExportError::UnsupportedExtension {
-            path: path.to_path_buf(),
-        });
+    let encoding = match OutputFormat::of_path(path) {
+        Ok(format) if format.is_usd() => format,
+        _ => {
+            return Err(ExportError::UnsupportedExtension {
+                path: path.to_path_buf(),
+            })
+        }
     };
     let stem = path
         .file_stem()
@@ -325,27 +323,27 @@ fn prepare_usd_spilling_at(
     let doc = match encoding {
         // Where a long text goes: the file a link at `path` leads to. A path that cannot
         // be written is reported when the text would be staged, else by `write`.
-        Encoding::Text => match crate::atomic::check_output(path) {
+        OutputFormat::Usda => match crate::atomic::check_output(path) {
             Ok(target) => Usda::spilling_to(&target, spill_at),
             Err(_) => Usda::default(),
         },
-        Encoding::Crate | Encoding::Package => Usda::default(),
+        _ => Usda::default(),
     };
     let (doc, images, warnings) = build_body(asset, options, &stem, doc)?;
     let (body, images) = match encoding {
-        Encoding::Text => {
+        OutputFormat::Usda => {
             let body = match doc.finish().map_err(io_error)? {
                 Finished::Text(text) => Body::Text(text),
                 Finished::Staged { file, target } => Body::Staged { file, target },
             };
             (body, images)
         }
-        Encoding::Crate => (
+        OutputFormat::Usdc => (
             Body::Encoded(encode::crate_file(&doc.into_text(), path)?),
             images,
         ),
         // A package holds its textures.
-        Encoding::Package => (
+        _ => (
             Body::Encoded(encode::package(&doc.into_text(), &images, &stem, path)?),
             Vec::new(),
         ),

@@ -18,7 +18,7 @@ use super::*;
 use crate::labels::fallback_palette_index;
 use crate::{sample, Problem};
 
-fn usda(asset: &Asset, skinning: UsdSkinning) -> ExportedUsd {
+fn usda(asset: &Asset, skinning: SkinningMethod) -> ExportedUsd {
     to_usda(
         asset,
         &UsdOptions {
@@ -62,7 +62,7 @@ fn numbers(text: &str, decl: &str) -> Vec<f64> {
 #[test]
 fn rig_text_has_the_usdskel_layout() {
     let asset = sample::rig();
-    let out = usda(&asset, UsdSkinning::Lbs);
+    let out = usda(&asset, SkinningMethod::Lbs);
     let text = &out.text;
     assert!(text
         .starts_with("#usda 1.0\n(\n    defaultPrim = \"rig\"\n    doc = \"Written by rigport "));
@@ -198,7 +198,7 @@ fn rig_text_has_the_usdskel_layout() {
         &|w| matches!(w, Warning::Repaired { message, .. } if message.contains("sampled at 24 fps"))
     ));
 
-    let dqs = usda(&asset, UsdSkinning::Dqs).text;
+    let dqs = usda(&asset, SkinningMethod::Dqs).text;
     assert_eq!(
         dqs.matches("uniform token primvars:skel:skinningMethod = \"dualQuaternion\"")
             .count(),
@@ -216,7 +216,7 @@ fn rig_text_has_the_usdskel_layout() {
 #[test]
 fn other_samples() {
     // Several roots in one Skeleton.
-    let text = usda(&sample::two_roots(), UsdSkinning::Lbs).text;
+    let text = usda(&sample::two_roots(), SkinningMethod::Lbs).text;
     assert!(text.contains(
         "uniform token[] joints = [\"left\", \"left/left_end\", \"right\", \"right/right_end\"]"
     ));
@@ -235,18 +235,18 @@ fn other_samples() {
         times: vec![0.0],
         values: vec![0.0, 0.0, 0.0, -1.0],
     });
-    let text = usda(&asset, UsdSkinning::Lbs).text;
+    let text = usda(&asset, SkinningMethod::Lbs).text;
     assert!(text.contains("uniform token[] joints = [\"right\"]\n"));
     assert!(
         text.contains("endTimeCode = 48\n"),
         "their keys still count"
     );
     asset.clips[0].tracks[1].values[0] = -0.999;
-    let text = usda(&asset, UsdSkinning::Lbs).text;
+    let text = usda(&asset, SkinningMethod::Lbs).text;
     assert!(text.contains("uniform token[] joints = [\"left\", \"right\"]\n"));
 
     // No clips, but a default morph weight: a `rest` animation carries it.
-    let text = usda(&sample::wide_rig(), UsdSkinning::Lbs).text;
+    let text = usda(&sample::wide_rig(), SkinningMethod::Lbs).text;
     assert!(text.contains("rel skel:animationSource = </wide/Animations/rest>"));
     assert!(!text.contains("variantSet"));
     assert!(
@@ -254,7 +254,7 @@ fn other_samples() {
         "1-8 distinct influences, no limit"
     );
     // Unskinned meshes only: an empty Skeleton drives the blend shapes; the grid is plain.
-    let text = usda(&sample::static_props(), UsdSkinning::Lbs).text;
+    let text = usda(&sample::static_props(), SkinningMethod::Lbs).text;
     assert!(text.contains("uniform token[] joints = []\n"));
     let grid = block(&text, "def Mesh \"grid\"");
     assert!(grid.starts_with("def Mesh \"grid\"\n"), "no SkelBindingAPI");
@@ -263,10 +263,10 @@ fn other_samples() {
     assert!(hat.contains("uniform token[] skel:blendShapes = [\"squash\"]"));
     assert!(!hat.contains("jointIndices"));
     // Big palettes are no problem for int indices.
-    let text = usda(&sample::big_palette(), UsdSkinning::Lbs).text;
+    let text = usda(&sample::big_palette(), SkinningMethod::Lbs).text;
     assert!(text.contains("elementSize = 2\n"));
     // Bones only: no animation, no time metadata.
-    let text = usda(&sample::bones_only(), UsdSkinning::Lbs).text;
+    let text = usda(&sample::bones_only(), SkinningMethod::Lbs).text;
     assert!(!text.contains("timeCodesPerSecond"));
     assert!(
         text.contains("metersPerUnit = 1\n"),
@@ -277,8 +277,8 @@ fn other_samples() {
 #[test]
 fn output_is_deterministic() {
     for asset in [sample::rig(), sample::two_roots(), sample::wide_rig()] {
-        let a = usda(&asset, UsdSkinning::Dqs);
-        let b = usda(&asset.clone(), UsdSkinning::Dqs);
+        let a = usda(&asset, SkinningMethod::Dqs);
+        let b = usda(&asset.clone(), SkinningMethod::Dqs);
         assert_eq!(a, b);
     }
 }
@@ -307,7 +307,7 @@ fn joint_names_become_unique_identifiers() {
         skeleton,
         ..Default::default()
     };
-    let out = usda(&asset, UsdSkinning::Lbs);
+    let out = usda(&asset, SkinningMethod::Lbs);
     assert!(out.text.contains(
         "uniform token[] joints = [\"Hips\", \"Hips/Left_Arm\", \"Hips/Left_Arm_1\", \"Hips/Left_Arm/_1st\", \"Hips/_u8155\", \"Left_Arm_001\"]"
     ));
@@ -358,7 +358,7 @@ fn invalid_assets_are_rejected_and_usd_only_limits_lifted() {
         name: "empty".into(),
         ..Default::default()
     });
-    let text = usda(&asset, UsdSkinning::Lbs).text;
+    let text = usda(&asset, SkinningMethod::Lbs).text;
     assert!(text.contains("int[] faceVertexCounts = []\n"));
 }
 
@@ -391,7 +391,7 @@ fn frame_rates() {
     // An irregular first clip gets millisecond time codes.
     let mut asset = sample::two_roots();
     asset.clips[0].tracks[0].times = vec![0.0, 0.0123];
-    let text = usda(&asset, UsdSkinning::Lbs).text;
+    let text = usda(&asset, SkinningMethod::Lbs).text;
     assert!(text.contains("timeCodesPerSecond = 1000\n"));
     let code = f64::from(0.0123_f32) * 1000.0;
     assert!(
@@ -418,7 +418,7 @@ fn bind_pose_mismatches_use_geom_bind_or_a_second_skeleton() {
     asset.meshes.push(asset.meshes[0].clone());
     asset.skins.push(moved);
     asset.skins.push(odd);
-    let out = usda(&asset, UsdSkinning::Lbs);
+    let out = usda(&asset, SkinningMethod::Lbs);
     let second = block(&out.text, "def Mesh \"body_1\"");
     let g = numbers(second, "matrix4d primvars:skel:geomBindTransform");
     assert!((g[12] - 2.0).abs() < 1e-6 && g[13].abs() < 1e-6, "{g:?}");
@@ -445,7 +445,7 @@ fn dropped_tracks_are_reported() {
         times: vec![0.0],
         values: vec![1.0],
     });
-    let out = usda(&asset, UsdSkinning::Lbs);
+    let out = usda(&asset, SkinningMethod::Lbs);
     let dropped: Vec<&str> = out
         .warnings
         .iter()
@@ -485,7 +485,7 @@ fn prepare_and_write() {
     assert_eq!(names.len(), 1, "no temporary file left: {names:?}");
     let missing = prepare_usd(
         &asset,
-        &dir.path().join("no/such/dir/a.usd"),
+        &dir.path().join("no/such/dir/a.usda"),
         &UsdOptions::default(),
     )
     .unwrap();
@@ -589,13 +589,13 @@ fn every_sample_passes_usd_validation() {
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().unwrap();
     let cases = [
-        ("rig", sample::rig(), UsdSkinning::Lbs),
-        ("rig_dqs", sample::rig(), UsdSkinning::Dqs),
-        ("wide", sample::wide_rig(), UsdSkinning::Dqs),
-        ("two_roots", sample::two_roots(), UsdSkinning::Lbs),
-        ("big_palette", sample::big_palette(), UsdSkinning::Lbs),
-        ("props", sample::static_props(), UsdSkinning::Lbs),
-        ("bones", sample::bones_only(), UsdSkinning::Lbs),
+        ("rig", sample::rig(), SkinningMethod::Lbs),
+        ("rig_dqs", sample::rig(), SkinningMethod::Dqs),
+        ("wide", sample::wide_rig(), SkinningMethod::Dqs),
+        ("two_roots", sample::two_roots(), SkinningMethod::Lbs),
+        ("big_palette", sample::big_palette(), SkinningMethod::Lbs),
+        ("props", sample::static_props(), SkinningMethod::Lbs),
+        ("bones", sample::bones_only(), SkinningMethod::Lbs),
     ];
     for (name, asset, skinning) in cases {
         let path = dir.path().join(format!("{name}.usda"));
@@ -627,7 +627,7 @@ fn every_sample_passes_usd_validation() {
 fn checker_rejects_broken_bindings() {
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let good = usda(&sample::two_roots(), UsdSkinning::Lbs).text;
+    let good = usda(&sample::two_roots(), SkinningMethod::Lbs).text;
     let body = block(&good, "def Mesh \"body\"");
     let cases: [(&str, String, &str); 4] = [
         (
@@ -944,7 +944,7 @@ fn usd_evaluation_matches_the_reference() {
     let rig = rig_with_seams();
     // The seams' copies agree on position, influences and morph deltas, so they merge back
     // into the source's points (no source map needed; normals and st go face-varying).
-    let text = usda(&rig, UsdSkinning::Lbs).text;
+    let text = usda(&rig, SkinningMethod::Lbs).text;
     assert!(
         !text.contains("primvars:rigport:sourceVertex"),
         "seams merged back"
@@ -1032,7 +1032,7 @@ fn usd_evaluation_matches_the_reference() {
         &asset,
         &usd,
         &UsdOptions {
-            skinning: Some(UsdSkinning::Dqs),
+            skinning: Some(SkinningMethod::Dqs),
             ..Default::default()
         },
     )
@@ -1094,7 +1094,7 @@ fn each_clip_variant_has_its_own_time_range() {
         t.times.iter_mut().for_each(|x| *x *= 2.0);
     }
     asset.clips.push(long);
-    let text = usda(&asset, UsdSkinning::Lbs).text;
+    let text = usda(&asset, SkinningMethod::Lbs).text;
     assert!(
         text.contains("endTimeCode = 24\n"),
         "the stage: the selected clip"
@@ -1128,7 +1128,7 @@ fn the_scene_frame_is_written_as_authored_or_converted() {
         model_to_scene: place,
     };
     asset.meters_per_unit = Some(0.01);
-    let text = usda(&asset, UsdSkinning::Lbs).text;
+    let text = usda(&asset, SkinningMethod::Lbs).text;
     assert!(text.contains("upAxis = \"Z\"\n"), "kept");
     assert!(text.contains("metersPerUnit = 0.01\n"), "kept");
     let xform = numbers(&text, "matrix4d xformOp:transform");
@@ -1159,7 +1159,7 @@ fn the_scene_frame_is_written_as_authored_or_converted() {
         "{xform:?}"
     );
     // An identity frame authors no transform.
-    assert!(!usda(&sample::rig(), UsdSkinning::Lbs)
+    assert!(!usda(&sample::rig(), SkinningMethod::Lbs)
         .text
         .contains("xformOp"));
 }

@@ -27,7 +27,8 @@ use std::path::Path;
 use rigport_model::conventions::EulerOrder;
 use rigport_model::glam::{Quat, Vec3};
 use rigport_model::{
-    HandleSet, HandleSolver, HandleTrack, JointIndex, RootMotion, RotationLimit, Skeleton,
+    find_clip, Clip, HandleSet, HandleSolver, HandleTrack, JointIndex, RootMotion, RotationLimit,
+    Skeleton,
 };
 use serde::Deserialize;
 
@@ -394,20 +395,15 @@ pub fn read(path: &Path, skeleton: &Skeleton) -> Result<HandleSet, JsonError> {
     })
 }
 
-/// Checks that the file's `base` names one of `clip_names` (the input's clips).
+/// Checks that the file's `base` names one of `clips` (the input's).
 ///
 /// # Errors
 /// [`JsonProblem::UnknownClip`] at `/base`.
-pub fn check_base(path: &Path, handles: &HandleSet, clip_names: &[&str]) -> Result<(), JsonError> {
+pub fn check_base(path: &Path, handles: &HandleSet, clips: &[Clip]) -> Result<(), JsonError> {
     match &handles.base {
-        Some(base) if !clip_names.contains(&base.as_str()) => Err(JsonError::at(
-            path,
-            "/base",
-            JsonProblem::UnknownClip {
-                name: base.clone(),
-                known: clip_names.join(", "),
-            },
-        )),
-        _ => Ok(()),
+        Some(base) => find_clip(clips, Some(base))
+            .map(drop)
+            .map_err(|e| JsonError::at(path, "/base", JsonProblem::UnknownClip(e))),
+        None => Ok(()),
     }
 }

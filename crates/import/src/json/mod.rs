@@ -135,13 +135,8 @@ pub enum JsonProblem {
         other: [String; 2],
     },
     /// A clip name the input does not have.
-    #[error("the input has no clip named {name:?} (it has: {known})")]
-    UnknownClip {
-        /// The name given.
-        name: String,
-        /// The input's clip names.
-        known: String,
-    },
+    #[error(transparent)]
+    UnknownClip(rigport_model::NoSuchClip),
 }
 
 /// A JSON input that could not be read: where, and what is wrong.
@@ -446,11 +441,21 @@ mod tests {
         assert_eq!(t.rotations[1], None);
         assert!(h.tracks[1].pin && h.tracks[1].orient && h.tracks[1].times.is_empty());
         assert_eq!(h.tracks[1].root, Some(JointIndex(0)));
-        assert!(super::handles::check_base(&path, &h, &["walk"]).is_ok());
-        let e = super::handles::check_base(&path, &h, &["run", "jump"]).expect_err("no such clip");
+        let clips = |names: &[&str]| -> Vec<rigport_model::Clip> {
+            names
+                .iter()
+                .map(|n| rigport_model::Clip {
+                    name: (*n).into(),
+                    tracks: Vec::new(),
+                })
+                .collect()
+        };
+        assert!(super::handles::check_base(&path, &h, &clips(&["walk"])).is_ok());
+        let e = super::handles::check_base(&path, &h, &clips(&["run", "jump"]))
+            .expect_err("no such clip");
         assert!(
             e.to_string()
-                .ends_with("at /base: the input has no clip named \"walk\" (it has: run, jump)"),
+                .ends_with("at /base: no clip named \"walk\"; clips are \"run\", \"jump\""),
             "{e}"
         );
     }

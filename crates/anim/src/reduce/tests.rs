@@ -1,0 +1,589 @@
+use super::*;
+use rigport_model::{Joint, MeshIndex};
+
+/// xorshift64*: deterministic test data without a dependency.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+/// A random tree: joint i's parent is one of the earlier joints, offsets 0.2–1 long.
+fn random_skeleton(rng: &mut Rng, n: usize) -> Skeleton {
+    let joints = (0..n)
+        .map(|i| {
+            let parent = (i > 0).then(|| JointIndex((rng.next() * i as f32) as u32));
+            let dir = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            )
+            .normalize_or(Vec3::Y);
+            Joint {
+                name: format!("j{i}"),
+                parent,
+                rest_local: Transform {
+                    translation: if i == 0 {
+                        Vec3::ZERO
+                    } else {
+                        dir * rng.range(0.2, 1.0)
+                    },
+                    rotation: Quat::from_rotation_y(rng.range(-1.0, 1.0)),
+                    scale: Vec3::ONE,
+                },
+            }
+        })
+        .collect();
+    Skeleton::new(joints).unwrap()
+}
+
+fn quats(qs: impl IntoIterator<Item = Quat>) -> Vec<f32> {
+    qs.into_iter().flat_map(|q| q.to_array()).collect()
+}
+
+/// Smooth random motion at 120 fps: a sum of two sines per axis per joint, a root
+/// translation, a LINEAR scale on one joint and a STEP scale on another.
+fn random_clip(rng: &mut Rng, skeleton: &Skeleton, frames: usize) -> Clip {
+    let times: Vec<f32> = (0..frames).map(|f| f as f32 / 120.0).collect();
+    let mut tracks = Vec::new();
+    for j in 0..skeleton.len() {
+        let rest = skeleton.joints()[j].rest_local.rotation;
+        let waves: Vec<[f32; 4]> = (0..6)
+            .map(|_| {
+                [
+                    rng.range(0.05, 0.6),
+                    rng.range(0.2, 3.0),
+                    rng.range(0.0, 6.3),
+                    0.0,
+                ]
+            })
+            .collect();
+        let angles = |t: f32, axis: usize| {
+            let w1 = waves[2 * axis];
+            let w2 = waves[2 * axis + 1];
+            w1[0] * (w1[1] * t + w1[2]).sin() + w2[0] * (w2[1] * 2.0 * t + w2[2]).sin()
+        };
+        tracks.push(Track {
+            target: TrackTarget::Rotation(JointIndex(j as u32)),
+            interpolation: Interpolation::Linear,
+            times: times.clone(),
+            values: quats(times.iter().map(|&t| {
+                rest * Quat::from_euler(
+                    glam::EulerRot::ZYX,
+                    angles(t, 0),
+                    angles(t, 1),
+                    angles(t, 2),
+                )
+            })),
+        });
+    }
+    tracks.push(Track {
+        target: TrackTarget::Translation(JointIndex(0)),
+        interpolation: Interpolation::Linear,
+        times: times.clone(),
+        values: times
+            .iter()
+            .flat_map(|&t| [0.5 * t, 0.1 * (3.0 * t).sin(), 0.2 * (1.3 * t).cos()])
+            .collect(),
+    });
+    tracks.push(Track {
+        target: TrackTarget::Scale(JointIndex(1)),
+        interpolation: Interpolation::Linear,
+        times: times.clone(),
+        values: times
+            .iter()
+            .flat_map(|&t| {
+                let s = 1.0 + 0.2 * (2.0 * t).sin();
+                [s, s, 1.0 / s]
+            })
+            .collect(),
+    });
+    let step_times: Vec<f32> = times.iter().step_by(17).copied().collect();
+    tracks.push(Track {
+        target: TrackTarget::Scale(JointIndex(2)),
+        interpolation: Interpolation::Step,
+        values: step_times
+            .iter()
+            .flat_map(|&t| [1.0 + 0.1 * t, 1.0, 1.0])
+            .collect(),
+        times: step_times,
+    });
+    Clip {
+        name: "random".into(),
+        tracks,
+    }
+}
+
+/// The naive reference: binary search, f64 slerp, recursive FK; STEP and LINEAR only.
+fn naive_positions(clip: &Clip, skeleton: &Skeleton, t: f32) -> Vec<Vec3> {
+    let mut local: Vec<Transform> = skeleton.joints().iter().map(|j| j.rest_local).collect();
+    let mut done = std::collections::BTreeSet::new();
+    for track in &clip.tracks {
+        if !done.insert(track.target) {
+            continue;
+        }
+        let c = track.components();
+        let times = &track.times;
+        let k = times.partition_point(|&x| x <= t).saturating_sub(1);
+        let (k0, k1, u) = if t <= times[0] || k + 1 == times.len() || times[k] == t {
+            (k, k, 0.0)
+        } else {
+            (
+                k,
+                k + 1,
+                f64::from((t - times[k]) / (times[k + 1] - times[k])),
+            )
+        };
+        let u = if track.interpolation == Interpolation::Step {
+            0.0
+        } else {
+            u
+        };
+        let at = |k: usize| -> Vec<f64> {
+            track.values[k * c..(k + 1) * c]
+                .iter()
+                .map(|&v| f64::from(v))
+                .collect()
+        };
+        let (a, b) = (at(k0), at(k1));
+        let value: Vec<f64> = if c == 4 {
+            let norm = |q: &[f64]| {
+                let l = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+                q.iter().map(|x| x / l).collect::<Vec<f64>>()
+            };
+            let (a, mut b) = (norm(&a), norm(&b));
+            let mut dot: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+            if dot < 0.0 {
+                b.iter_mut().for_each(|x| *x = -*x);
+                dot = -dot;
+            }
+            let omega = dot.min(1.0).acos();
+            if omega < 1e-9 {
+                a
+            } else {
+                let (wa, wb) = (
+                    ((1.0 - u) * omega).sin() / omega.sin(),
+                    (u * omega).sin() / omega.sin(),
+                );
+                a.iter().zip(&b).map(|(x, y)| wa * x + wb * y).collect()
+            }
+        } else {
+            a.iter().zip(&b).map(|(x, y)| x + (y - x) * u).collect()
+        };
+        let v: Vec<f32> = value.iter().map(|&x| x as f32).collect();
+        match track.target {
+            TrackTarget::Translation(j) => local[j.get()].translation = Vec3::from_slice(&v),
+            TrackTarget::Scale(j) => local[j.get()].scale = Vec3::from_slice(&v),
+            TrackTarget::Rotation(j) => local[j.get()].rotation = Quat::from_slice(&v).normalize(),
+            TrackTarget::MorphWeights(_) => {}
+        }
+    }
+    fn world(skeleton: &Skeleton, local: &[Transform], j: usize) -> Mat4 {
+        let m = local[j].to_mat4();
+        match skeleton.joints()[j].parent {
+            Some(p) => world(skeleton, local, p.get()) * m,
+            None => m,
+        }
+    }
+    (0..skeleton.len())
+        .map(|j| world(skeleton, &local, j).w_axis.truncate())
+        .collect()
+}
+
+/// The largest joint position difference at every original key time, measured by the
+/// naive reference.
+fn measured_error(original: &Clip, reduced: &Clip, skeleton: &Skeleton) -> f32 {
+    let mut times: Vec<f32> = original
+        .tracks
+        .iter()
+        .filter(|t| !matches!(t.target, TrackTarget::MorphWeights(_)))
+        .flat_map(|t| t.times.iter().copied())
+        .collect();
+    times.sort_by(f32::total_cmp);
+    times.dedup();
+    let mut worst = 0.0f32;
+    for t in times {
+        let a = naive_positions(original, skeleton, t);
+        let b = naive_positions(reduced, skeleton, t);
+        for (p, q) in a.iter().zip(&b) {
+            worst = worst.max(p.distance(*q));
+        }
+    }
+    worst
+}
+
+/// Every reduced track keeps the first and last key and a subset of the original keys,
+/// values bit for bit; non-LINEAR tracks are unchanged.
+fn assert_subset(original: &Clip, reduced: &Clip) {
+    assert_eq!(original.tracks.len(), reduced.tracks.len());
+    assert_eq!(original.duration(), reduced.duration());
+    for (o, r) in original.tracks.iter().zip(&reduced.tracks) {
+        assert_eq!((o.target, o.interpolation), (r.target, r.interpolation));
+        if o.interpolation != Interpolation::Linear
+            || matches!(o.target, TrackTarget::MorphWeights(_))
+        {
+            assert_eq!(o, r);
+            continue;
+        }
+        assert_eq!(r.times.first(), o.times.first());
+        assert_eq!(r.times.last(), o.times.last());
+        let c = o.components();
+        for (k, t) in r.times.iter().enumerate() {
+            let ko = o
+                .times
+                .iter()
+                .position(|x| x == t)
+                .expect("an original time");
+            assert_eq!(r.values[k * c..(k + 1) * c], o.values[ko * c..(ko + 1) * c]);
+        }
+    }
+}
+
+#[test]
+fn bound_holds_on_random_smooth_clips() {
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    for case in 0..4 {
+        let skeleton = random_skeleton(&mut rng, 6 + 3 * case);
+        let clip = random_clip(&mut rng, &skeleton, 240);
+        for tolerance in [1e-3, 1e-2, 0.05] {
+            let (reduced, stats) = reduce(&clip, &skeleton, tolerance).unwrap();
+            assert_subset(&clip, &reduced);
+            let measured = measured_error(&clip, &reduced, &skeleton);
+            // The naive reference slerps in f64: it may differ from the reducer's f32
+            // sampling by a few ulps of the skeleton's size (a few units here).
+            assert!(
+                measured <= tolerance + 2e-5,
+                "case {case} tol {tolerance}: measured {measured}, stats {stats:?}"
+            );
+            assert!(
+                (measured - stats.max_error).abs() <= 2e-5,
+                "case {case}: measured {measured} vs reported {}",
+                stats.max_error
+            );
+            assert!(stats.max_error <= tolerance);
+            println!("case {case} tol {tolerance}: {stats:?}");
+            // At 1 mm, motion this fast needs most of its 120 fps keys.
+            let factor = if tolerance < 0.01 { 1 } else { 3 };
+            assert!(
+                stats.keys_after * factor < stats.keys_before,
+                "case {case} tol {tolerance}: smooth motion keeps few keys: {stats:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn bound_holds_across_a_sharp_step() {
+    // A chain of 4 along +X; the root's translation jumps by 1 between two frames and
+    // joint 1's rotation flips by 120 degrees between two others.
+    let skeleton = Skeleton::new(
+        (0..4)
+            .map(|i| Joint {
+                name: format!("j{i}"),
+                parent: (i > 0).then(|| JointIndex(i - 1)),
+                rest_local: Transform::from_translation(if i > 0 { Vec3::X } else { Vec3::ZERO }),
+            })
+            .collect(),
+    )
+    .unwrap();
+    let times: Vec<f32> = (0..100).map(|f| f as f32 / 30.0).collect();
+    let clip = Clip {
+        name: "step".into(),
+        tracks: vec![
+            Track {
+                target: TrackTarget::Translation(JointIndex(0)),
+                interpolation: Interpolation::Linear,
+                times: times.clone(),
+                values: (0..100)
+                    .flat_map(|f| [if f < 40 { 0.0 } else { 1.0 }, 0.01 * f as f32, 0.0])
+                    .collect(),
+            },
+            Track {
+                target: TrackTarget::Rotation(JointIndex(1)),
+                interpolation: Interpolation::Linear,
+                times: times.clone(),
+                values: quats((0..100).map(|f| {
+                    let a = if f < 70 {
+                        0.002 * f as f32
+                    } else {
+                        2.1 + 0.002 * f as f32
+                    };
+                    Quat::from_rotation_z(a)
+                })),
+            },
+        ],
+    };
+    for tolerance in [1e-4, 1e-2] {
+        let (reduced, stats) = reduce(&clip, &skeleton, tolerance).unwrap();
+        assert_subset(&clip, &reduced);
+        let measured = measured_error(&clip, &reduced, &skeleton);
+        assert!(measured <= tolerance + 1e-5, "{measured} {stats:?}");
+        // The keys on both sides of each step survive; the ramps between go.
+        let tr = &reduced.tracks[0].times;
+        assert!(tr.contains(&times[39]) && tr.contains(&times[40]), "{tr:?}");
+        let rot = &reduced.tracks[1].times;
+        assert!(
+            rot.contains(&times[69]) && rot.contains(&times[70]),
+            "{rot:?}"
+        );
+        assert!(tr.len() <= 6 && rot.len() <= 6, "{tr:?} {rot:?}");
+    }
+}
+
+#[test]
+fn tolerance_zero_keeps_every_non_redundant_key() {
+    let mut rng = Rng(7);
+    let skeleton = random_skeleton(&mut rng, 8);
+    let clip = random_clip(&mut rng, &skeleton, 120);
+    let (reduced, stats) = reduce(&clip, &skeleton, 0.0).unwrap();
+    assert_eq!(reduced, clip, "no key of smooth motion is redundant");
+    assert_eq!(stats.keys_before, stats.keys_after);
+    assert_eq!(stats.max_error, 0.0);
+
+    // Runs of equal values: only their interior keys go, and the result is exact.
+    let mut held = clip.clone();
+    let rot = &mut held.tracks[3];
+    let first: Vec<f32> = rot.values[40..44].to_vec();
+    for k in 10..=30 {
+        rot.values[4 * k..4 * k + 4].copy_from_slice(&first);
+    }
+    let root = held
+        .tracks
+        .iter_mut()
+        .find(|t| t.target == TrackTarget::Translation(JointIndex(0)))
+        .unwrap();
+    for k in 100..120 {
+        let v: Vec<f32> = root.values[300..303].to_vec();
+        root.values[3 * k..3 * k + 3].copy_from_slice(&v);
+    }
+    let (reduced, stats) = reduce(&held, &skeleton, 0.0).unwrap();
+    assert_subset(&held, &reduced);
+    assert_eq!(stats.keys_before - stats.keys_after, 19 + 18, "{stats:?}");
+    assert_eq!(reduced.tracks[3].times.len(), 120 - 19);
+    assert!(!reduced.tracks[3].times.contains(&held.tracks[3].times[20]));
+    assert_eq!(stats.max_error, 0.0);
+    assert_eq!(measured_error(&held, &reduced, &skeleton), 0.0);
+}
+
+#[test]
+fn linear_ramps_reduce_to_two_keys() {
+    let skeleton = Skeleton::new(vec![
+        Joint {
+            name: "root".into(),
+            parent: None,
+            rest_local: Transform::IDENTITY,
+        },
+        Joint {
+            name: "arm".into(),
+            parent: Some(JointIndex(0)),
+            rest_local: Transform::from_translation(Vec3::new(0.0, 2.0, 0.0)),
+        },
+        Joint {
+            name: "hand".into(),
+            parent: Some(JointIndex(1)),
+            rest_local: Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)),
+        },
+    ])
+    .unwrap();
+    let times: Vec<f32> = (0..100).map(|f| f as f32 * 0.01).collect();
+    let clip = Clip {
+        name: "ramp".into(),
+        tracks: vec![
+            Track {
+                target: TrackTarget::Translation(JointIndex(0)),
+                interpolation: Interpolation::Linear,
+                times: times.clone(),
+                values: times.iter().flat_map(|&t| [t, 2.0 * t, -3.0 * t]).collect(),
+            },
+            Track {
+                // Constant angular velocity: slerp between the ends is the same path.
+                // Every other key is stored as -q, the same rotation.
+                target: TrackTarget::Rotation(JointIndex(1)),
+                interpolation: Interpolation::Linear,
+                times: times.clone(),
+                values: quats(times.iter().enumerate().map(|(k, &t)| {
+                    let q = Quat::from_rotation_x(1.5 * t);
+                    if k % 2 == 1 {
+                        -q
+                    } else {
+                        q
+                    }
+                })),
+            },
+        ],
+    };
+    let (reduced, stats) = reduce(&clip, &skeleton, 1e-4).unwrap();
+    for track in &reduced.tracks {
+        assert_eq!(track.times, [times[0], times[99]]);
+    }
+    assert_eq!((stats.keys_before, stats.keys_after), (200, 4));
+    assert!(measured_error(&clip, &reduced, &skeleton) <= 1e-4);
+}
+
+#[test]
+fn stats_count_every_track_and_other_tracks_are_kept() {
+    let mut rng = Rng(99);
+    let skeleton = random_skeleton(&mut rng, 5);
+    let mut clip = random_clip(&mut rng, &skeleton, 60);
+    clip.tracks.push(Track {
+        target: TrackTarget::Translation(JointIndex(3)),
+        interpolation: Interpolation::CubicSpline,
+        times: vec![0.0, 0.25, 0.5],
+        values: (0..27).map(|i| (i as f32 * 0.37).sin() * 0.1).collect(),
+    });
+    clip.tracks.push(Track {
+        target: TrackTarget::MorphWeights(MeshIndex(0)),
+        interpolation: Interpolation::Linear,
+        times: vec![0.0, 0.1, 0.2, 0.3],
+        values: vec![0.0, 0.0, 0.0, 0.0],
+    });
+    // A second track for the same property: kept, not sampled.
+    let mut duplicate = clip.tracks[0].clone();
+    duplicate.values.iter_mut().for_each(|v| *v = -*v);
+    clip.tracks.push(duplicate);
+    let (reduced, stats) = reduce(&clip, &skeleton, 0.01).unwrap();
+    assert_subset(&clip, &reduced);
+    let count = |c: &Clip| c.tracks.iter().map(|t| t.times.len()).sum::<usize>();
+    assert_eq!(stats.keys_before, count(&clip));
+    assert_eq!(stats.keys_after, count(&reduced));
+    assert!(stats.keys_after < stats.keys_before);
+    let n = clip.tracks.len();
+    assert_eq!(reduced.tracks[n - 1], clip.tracks[n - 1], "duplicate kept");
+    assert_eq!(
+        reduced.tracks[n - 2],
+        clip.tracks[n - 2],
+        "morph weights kept"
+    );
+    assert_eq!(reduced.tracks[n - 3], clip.tracks[n - 3], "cubic kept");
+    assert!(
+        stats.max_error > 0.0 && stats.max_error <= 0.01,
+        "{stats:?}"
+    );
+}
+
+#[test]
+fn verification_tightens_and_restores_until_the_bound_holds() {
+    let mut rng = Rng(0x00DE_C0DE);
+    let skeleton = random_skeleton(&mut rng, 10);
+    let clip = random_clip(&mut rng, &skeleton, 240);
+    let tolerance = 0.01;
+    let (plain, _) = reduce(&clip, &skeleton, tolerance).unwrap();
+    // Local tolerances 50 times too loose: the first round fails, tightening repairs it.
+    let loose = Tuning {
+        budget_scale: 50.0,
+        ..Tuning::DEFAULT
+    };
+    let (tightened, stats) = reduce_with(&clip, &skeleton, tolerance, loose).unwrap();
+    assert_subset(&clip, &tightened);
+    assert!(measured_error(&clip, &tightened, &skeleton) <= tolerance + 2e-5);
+    assert!(stats.max_error <= tolerance);
+    assert_ne!(tightened, plain, "another path to the bound");
+    // No tightening allowed: the failing chains come back whole, and the bound holds.
+    let no_rounds = Tuning {
+        budget_scale: 50.0,
+        tighten_rounds: 0,
+    };
+    let (restored, stats) = reduce_with(&clip, &skeleton, tolerance, no_rounds).unwrap();
+    assert_subset(&clip, &restored);
+    assert!(measured_error(&clip, &restored, &skeleton) <= tolerance + 2e-5);
+    assert!(stats.max_error <= tolerance);
+    let whole = restored
+        .tracks
+        .iter()
+        .zip(&clip.tracks)
+        .filter(|(r, o)| r.interpolation == Interpolation::Linear && r == o)
+        .count();
+    assert!(whole > 0, "some tracks restored whole");
+    assert!(stats.keys_after < stats.keys_before, "{stats:?}");
+}
+
+#[test]
+fn bad_inputs_are_reported() {
+    let mut rng = Rng(3);
+    let skeleton = random_skeleton(&mut rng, 3);
+    let clip = random_clip(&mut rng, &skeleton, 10);
+    for tolerance in [-1.0, f32::NAN, f32::INFINITY] {
+        assert!(matches!(
+            reduce(&clip, &skeleton, tolerance),
+            Err(ReduceError::Tolerance { .. })
+        ));
+    }
+    let mut bad = clip.clone();
+    bad.tracks[1].target = TrackTarget::Rotation(JointIndex(7));
+    assert_eq!(
+        reduce(&bad, &skeleton, 0.1).unwrap_err(),
+        ReduceError::UnknownJoint {
+            clip: "random".into(),
+            track: 1,
+            joint: JointIndex(7),
+            joints: 3
+        }
+    );
+    let mut bad = clip.clone();
+    bad.tracks[0].values.pop();
+    assert!(matches!(
+        reduce(&bad, &skeleton, 0.1).unwrap_err(),
+        ReduceError::BadTrack {
+            track: 0,
+            problem: TrackProblem::ValueCount {
+                expected: 40,
+                found: 39
+            },
+            ..
+        }
+    ));
+    let mut bad = clip.clone();
+    bad.tracks[2].values[8..12].fill(0.0);
+    assert!(matches!(
+        reduce(&bad, &skeleton, 0.1).unwrap_err(),
+        ReduceError::BadTrack {
+            track: 2,
+            problem: TrackProblem::ZeroRotation { key: 2 },
+            ..
+        }
+    ));
+    let mut bad = clip.clone();
+    bad.tracks[0].times[5] = bad.tracks[0].times[4];
+    assert!(matches!(
+        reduce(&bad, &skeleton, 0.1).unwrap_err(),
+        ReduceError::BadTrack {
+            track: 0,
+            problem: TrackProblem::Times { key: 5 },
+            ..
+        }
+    ));
+    let mut bad = clip;
+    bad.tracks[0].times.clear();
+    assert!(matches!(
+        reduce(&bad, &skeleton, 0.1).unwrap_err(),
+        ReduceError::BadTrack {
+            track: 0,
+            problem: TrackProblem::NoKeys,
+            ..
+        }
+    ));
+}
+
+#[test]
+fn mocap_sized_clip_is_fast() {
+    // 30 joints x 5000 frames at 120 fps, like CMU 131_04-dance.
+    let mut rng = Rng(131);
+    let skeleton = random_skeleton(&mut rng, 30);
+    let clip = random_clip(&mut rng, &skeleton, 5000);
+    let start = std::time::Instant::now();
+    let (_, stats) = reduce(&clip, &skeleton, 0.01).unwrap();
+    let elapsed = start.elapsed();
+    println!("30 joints x 5000 frames: {stats:?} in {elapsed:?}");
+    assert!(stats.max_error <= 0.01);
+    if !cfg!(debug_assertions) {
+        assert!(elapsed.as_secs_f32() < 0.5, "{elapsed:?}");
+    }
+}

@@ -1,0 +1,223 @@
+//! Joint-name conventions of the skeletons rigport meets (CMU ASF, cgspeed BVH, Mixamo,
+//! Bandai, Pinocchio, the demo): finding the feet by name, or as named, and the name helpers
+//! the retarget maps use.
+
+use rigport_model::{JointIndex, Skeleton};
+
+use crate::footlock::{FootlockError, Leg};
+
+/// Ankle and toe joint names per side, for the skeletons rigport meets most: `(label,
+/// [(left ankle, left toe), (right ankle, right toe)])`. Names compare without case and
+/// after any namespace prefix (`mixamorig:LeftFoot` is `LeftFoot`).
+///
+/// - CMU ASF/AMC: bones `lfoot`/`ltoes`; rigport puts each ASF joint at its bone's start,
+///   so `lfoot` is the ankle and `ltoes` the ball of the foot.
+/// - cgspeed's CMU BVH and Mixamo (and most Maya/MotionBuilder HumanIK exports):
+///   `LeftFoot`/`LeftToeBase`.
+/// - Bandai Namco Research motion dataset BVH: `Foot_L`/`Toes_L`.
+/// - The demo character: `foot_l`/`toe_l`.
+pub const NAMED_FEET: [(&str, [(&str, &str); 2]); 4] = [
+    ("CMU ASF", [("lfoot", "ltoes"), ("rfoot", "rtoes")]),
+    (
+        "cgspeed BVH / Mixamo",
+        [("LeftFoot", "LeftToeBase"), ("RightFoot", "RightToeBase")],
+    ),
+    (
+        "Bandai Namco BVH",
+        [("Foot_L", "Toes_L"), ("Foot_R", "Toes_R")],
+    ),
+    ("rigport demo", [("foot_l", "toe_l"), ("foot_r", "toe_r")]),
+];
+
+/// Pinocchio's `HumanSkeleton` (skeleton.cpp) as rigport names it (one joint per bone,
+/// `bone_<k>` at the head of the bone that ends at Pinocchio joint `k`): the left leg is
+/// hip `bone_5` (Pinocchio `lthigh`), knee `bone_6`, ankle `bone_7` (the bone from `lankle`
+/// to `lfoot`); the right leg `bone_9`, `bone_10`, `bone_11`. The template has no toe
+/// joint. `(joint, its parent)` pairs that must all hold, so another 18-joint Pinocchio
+/// skeleton is not taken for a human.
+const PINOCCHIO_HUMAN: [(&str, &str); 17] = [
+    ("bone_1", "root"),
+    ("bone_2", "bone_1"),
+    ("bone_3", "root"),
+    ("bone_4", "bone_2"),
+    ("bone_5", "bone_4"),
+    ("bone_6", "bone_5"),
+    ("bone_7", "bone_6"),
+    ("bone_8", "bone_2"),
+    ("bone_9", "bone_8"),
+    ("bone_10", "bone_9"),
+    ("bone_11", "bone_10"),
+    ("bone_12", "root"),
+    ("bone_13", "bone_12"),
+    ("bone_14", "bone_13"),
+    ("bone_15", "root"),
+    ("bone_16", "bone_15"),
+    ("bone_17", "bone_16"),
+];
+
+/// A joint name without its namespace (`mixamorig:LeftFoot` -> `LeftFoot`).
+fn bare(name: &str) -> &str {
+    name.rsplit([':', '|']).next().unwrap_or(name)
+}
+
+/// The joint whose bare name equals `wanted` (ignoring case); the first in skeleton order.
+pub(crate) fn find_bare(skeleton: &Skeleton, wanted: &str) -> Option<JointIndex> {
+    skeleton
+        .joints()
+        .iter()
+        .position(|j| bare(&j.name).eq_ignore_ascii_case(wanted))
+        .map(|i| JointIndex(i as u32))
+}
+
+/// Whether `skeleton` is Pinocchio's human template, joint for joint ([`PINOCCHIO_HUMAN`]).
+pub(crate) fn is_pinocchio_human(skeleton: &Skeleton) -> bool {
+    skeleton.len() == PINOCCHIO_HUMAN.len() + 1
+        && PINOCCHIO_HUMAN.iter().all(|(joint, parent)| {
+            skeleton
+                .find(joint)
+                .and_then(|j| skeleton.joint(j).parent)
+                .is_some_and(|p| skeleton.joint(p).name == *parent)
+        })
+}
+
+/// The leg of an ankle: its parent (knee) and grandparent (hip).
+///
+/// # Errors
+/// [`FootlockError::NotALeg`] when the ankle has fewer than two ancestors, or the toe is not
+/// a descendant of the ankle.
+pub fn leg_of(
+    skeleton: &Skeleton,
+    label: &str,
+    ankle: JointIndex,
+    toe: Option<JointIndex>,
+) -> Result<Leg, FootlockError> {
+    let name = |j: JointIndex| skeleton.joint(j).name.clone();
+    let not_a_leg = |why: &str| FootlockError::NotALeg {
+        joint: name(ankle),
+        why: why.to_string(),
+    };
+    let knee = skeleton
+        .joint(ankle)
+        .parent
+        .ok_or_else(|| not_a_leg("it has no parent (knee)"))?;
+    let hip = skeleton
+        .joint(knee)
+        .parent
+        .ok_or_else(|| not_a_leg("its parent has no parent (hip)"))?;
+    if let Some(toe) = toe {
+        let mut cur = skeleton.joint(toe).parent;
+        while cur.is_some_and(|c| c != ankle) {
+            cur = cur.and_then(|c| skeleton.joint(c).parent);
+        }
+        if cur.is_none() {
+            return Err(FootlockError::NotALeg {
+                joint: name(toe),
+                why: format!("it is not below the ankle {:?}", name(ankle)),
+            });
+        }
+    }
+    Ok(Leg {
+        label: label.to_string(),
+        hip,
+        knee,
+        ankle,
+        toe,
+    })
+}
+
+/// Finds the feet by name (see [`NAMED_FEET`] and Pinocchio's human template): the first
+/// convention whose ankles exist; a toe is used when that convention's toe joint exists.
+/// Returns the legs (left, then right, where found) and the convention's label.
+///
+/// # Errors
+/// [`FootlockError::NoFeet`] when no convention matches, [`FootlockError::NotALeg`] when a
+/// named ankle has no knee and hip above it.
+pub fn find_feet(skeleton: &Skeleton) -> Result<(Vec<Leg>, &'static str), FootlockError> {
+    for (convention, sides) in NAMED_FEET {
+        let mut legs = Vec::new();
+        for ((ankle, toe), side) in sides.iter().zip(["left", "right"]) {
+            if let Some(a) = find_bare(skeleton, ankle) {
+                legs.push(leg_of(skeleton, side, a, find_bare(skeleton, toe))?);
+            }
+        }
+        if !legs.is_empty() {
+            return Ok((legs, convention));
+        }
+    }
+    let is_human = is_pinocchio_human(skeleton);
+    if is_human {
+        let mut legs = Vec::new();
+        for (side, ankle) in [("left", "bone_7"), ("right", "bone_11")] {
+            if let Some(a) = skeleton.find(ankle) {
+                legs.push(leg_of(skeleton, side, a, None)?);
+            }
+        }
+        return Ok((legs, "Pinocchio human template"));
+    }
+    Err(FootlockError::NoFeet)
+}
+
+/// The legs of explicitly named feet: `(ankle, optional toe)` joint names, matched exactly.
+/// Labels are the ankles' names.
+///
+/// # Errors
+/// [`FootlockError::UnknownJoint`] for a name the skeleton lacks, [`FootlockError::NotALeg`]
+/// as [`leg_of`], [`FootlockError::SharedLeg`] when two feet share a leg joint.
+pub fn named_feet(
+    skeleton: &Skeleton,
+    feet: &[(String, Option<String>)],
+) -> Result<Vec<Leg>, FootlockError> {
+    let find = |name: &str| {
+        skeleton
+            .find(name)
+            .ok_or_else(|| FootlockError::UnknownJoint {
+                name: name.to_string(),
+            })
+    };
+    let mut legs: Vec<Leg> = Vec::with_capacity(feet.len());
+    for (ankle, toe) in feet {
+        let a = find(ankle)?;
+        let t = toe.as_deref().map(find).transpose()?;
+        legs.push(leg_of(skeleton, ankle, a, t)?);
+    }
+    check_disjoint(skeleton, &legs)?;
+    Ok(legs)
+}
+
+/// Two legs may not share a hip, knee or ankle (each joint gets one solve per frame).
+fn check_disjoint(skeleton: &Skeleton, legs: &[Leg]) -> Result<(), FootlockError> {
+    for (i, a) in legs.iter().enumerate() {
+        for b in &legs[i + 1..] {
+            let ja = [a.hip, a.knee, a.ankle];
+            if let Some(&shared) = [b.hip, b.knee, b.ankle].iter().find(|j| ja.contains(j)) {
+                return Err(FootlockError::SharedLeg {
+                    joint: skeleton.joint(shared).name.clone(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The legs for `specs`, each `ANKLE` or `ANKLE,TOE` (joint names, matched exactly); with
+/// no specs, the feet [`find_feet`] finds. Also returns how they were found (the naming
+/// convention, or `"named"`).
+///
+/// # Errors
+/// As [`named_feet`] and [`find_feet`].
+pub fn resolve_feet(
+    skeleton: &Skeleton,
+    specs: &[String],
+) -> Result<(Vec<Leg>, &'static str), FootlockError> {
+    if specs.is_empty() {
+        return find_feet(skeleton);
+    }
+    let feet: Vec<(String, Option<String>)> = specs
+        .iter()
+        .map(|f| match f.split_once(',') {
+            Some((a, t)) => (a.trim().to_string(), Some(t.trim().to_string())),
+            None => (f.trim().to_string(), None),
+        })
+        .collect();
+    Ok((named_feet(skeleton, &feet)?, "named"))
+}

@@ -1,0 +1,462 @@
+//! Joint maps: which source joint drives which target joint. Built-in conventions name
+//! the joints of each body role; [`auto_map`] picks the conventions of both skeletons by
+//! name matching.
+
+use glam::Vec3;
+use rigport_model::{JointIndex, Skeleton};
+
+use super::RetargetError;
+use crate::naming::{find_bare, is_pinocchio_human};
+
+/// One mapped joint: the target joint takes the source joint's world rotation (relative
+/// to rest, see the module docs of [`super`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MapPair {
+    /// The driving joint, in the source skeleton.
+    pub source: JointIndex,
+    /// The driven joint, in the target skeleton.
+    pub target: JointIndex,
+    /// The body role both joints play (`"LeftUpperArm"`), when the map came from
+    /// conventions; `None` for name-for-name and file maps.
+    pub role: Option<&'static str>,
+}
+
+/// A joint map between a source and a target skeleton.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct JointMap {
+    /// The pairs, in target joint order. A target joint appears at most once; a source
+    /// joint may drive several target joints.
+    pub pairs: Vec<MapPair>,
+    /// The source joint whose world position drives the target's hips (the pelvis), and
+    /// the target joint at the target's pelvis.
+    pub pelvis: (JointIndex, JointIndex),
+    /// How the map was made (`"by name"`, `"cgspeed BVH -> Pinocchio human template"`,
+    /// `"file"`).
+    pub how: String,
+}
+
+/// The body roles built-in conventions name, in the order reports list them.
+pub const ROLES: [&str; 27] = [
+    "Hips",
+    "Spine",
+    "Spine1",
+    "Chest",
+    "Neck",
+    "Neck1",
+    "Head",
+    "LeftShoulder",
+    "LeftUpperArm",
+    "LeftLowerArm",
+    "LeftHand",
+    "RightShoulder",
+    "RightUpperArm",
+    "RightLowerArm",
+    "RightHand",
+    "LeftUpperLeg",
+    "LeftLowerLeg",
+    "LeftFoot",
+    "LeftToes",
+    "RightUpperLeg",
+    "RightLowerLeg",
+    "RightFoot",
+    "RightToes",
+    // Unused by the built-in conventions; kept so file maps can name them.
+    "LeftFingers",
+    "RightFingers",
+    "LeftThumb",
+    "RightThumb",
+];
+
+/// A naming convention: `(role, joint name)` pairs. Names compare without case and after
+/// any namespace prefix (`mixamorig:LeftArm` is `LeftArm`).
+#[derive(Clone, Copy, Debug)]
+pub struct Convention {
+    /// A label for reports.
+    pub label: &'static str,
+    /// `(role, joint name)`.
+    pub joints: &'static [(&'static str, &'static str)],
+    /// The joint at the pelvis (where the hips' position is measured).
+    pub pelvis: &'static str,
+}
+
+/// CMU's ASF skeletons as rigport names them: each ASF bone becomes a joint at the bone's
+/// start, so `lfemur` is at the hip, `ltibia` at the knee, `lfoot` at the ankle.
+pub const CMU_ASF: Convention = Convention {
+    label: "CMU ASF",
+    pelvis: "root",
+    joints: &[
+        ("Hips", "root"),
+        ("Spine", "lowerback"),
+        ("Spine1", "upperback"),
+        ("Chest", "thorax"),
+        ("Neck", "lowerneck"),
+        ("Neck1", "upperneck"),
+        ("Head", "head"),
+        ("LeftShoulder", "lclavicle"),
+        ("LeftUpperArm", "lhumerus"),
+        ("LeftLowerArm", "lradius"),
+        ("LeftHand", "lwrist"),
+        ("RightShoulder", "rclavicle"),
+        ("RightUpperArm", "rhumerus"),
+        ("RightLowerArm", "rradius"),
+        ("RightHand", "rwrist"),
+        ("LeftUpperLeg", "lfemur"),
+        ("LeftLowerLeg", "ltibia"),
+        ("LeftFoot", "lfoot"),
+        ("LeftToes", "ltoes"),
+        ("RightUpperLeg", "rfemur"),
+        ("RightLowerLeg", "rtibia"),
+        ("RightFoot", "rfoot"),
+        ("RightToes", "rtoes"),
+    ],
+};
+
+/// cgspeed's BVH conversion of the CMU database (`LowerBack`, `Spine`, `Spine1`).
+pub const CGSPEED_BVH: Convention = Convention {
+    label: "cgspeed BVH",
+    pelvis: "Hips",
+    joints: &[
+        ("Hips", "Hips"),
+        ("Spine", "LowerBack"),
+        ("Spine1", "Spine"),
+        ("Chest", "Spine1"),
+        ("Neck", "Neck"),
+        ("Neck1", "Neck1"),
+        ("Head", "Head"),
+        ("LeftShoulder", "LeftShoulder"),
+        ("LeftUpperArm", "LeftArm"),
+        ("LeftLowerArm", "LeftForeArm"),
+        ("LeftHand", "LeftHand"),
+        ("RightShoulder", "RightShoulder"),
+        ("RightUpperArm", "RightArm"),
+        ("RightLowerArm", "RightForeArm"),
+        ("RightHand", "RightHand"),
+        ("LeftUpperLeg", "LeftUpLeg"),
+        ("LeftLowerLeg", "LeftLeg"),
+        ("LeftFoot", "LeftFoot"),
+        ("LeftToes", "LeftToeBase"),
+        ("RightUpperLeg", "RightUpLeg"),
+        ("RightLowerLeg", "RightLeg"),
+        ("RightFoot", "RightFoot"),
+        ("RightToes", "RightToeBase"),
+    ],
+};
+
+/// Mixamo and most HumanIK exports (`Spine`, `Spine1`, `Spine2`; `mixamorig:` prefixes).
+pub const MIXAMO: Convention = Convention {
+    label: "Mixamo",
+    pelvis: "Hips",
+    joints: &[
+        ("Hips", "Hips"),
+        ("Spine", "Spine"),
+        ("Spine1", "Spine1"),
+        ("Chest", "Spine2"),
+        ("Neck", "Neck"),
+        ("Head", "Head"),
+        ("LeftShoulder", "LeftShoulder"),
+        ("LeftUpperArm", "LeftArm"),
+        ("LeftLowerArm", "LeftForeArm"),
+        ("LeftHand", "LeftHand"),
+        ("RightShoulder", "RightShoulder"),
+        ("RightUpperArm", "RightArm"),
+        ("RightLowerArm", "RightForeArm"),
+        ("RightHand", "RightHand"),
+        ("LeftUpperLeg", "LeftUpLeg"),
+        ("LeftLowerLeg", "LeftLeg"),
+        ("LeftFoot", "LeftFoot"),
+        ("LeftToes", "LeftToeBase"),
+        ("RightUpperLeg", "RightUpLeg"),
+        ("RightLowerLeg", "RightLeg"),
+        ("RightFoot", "RightFoot"),
+        ("RightToes", "RightToeBase"),
+    ],
+};
+
+/// The Bandai Namco Research motion dataset's BVH (`UpperArm_L`, `Toes_R`).
+pub const BANDAI_NAMCO_BVH: Convention = Convention {
+    label: "Bandai Namco BVH",
+    pelvis: "Hips",
+    joints: &[
+        ("Hips", "Hips"),
+        ("Spine", "Spine"),
+        ("Chest", "Chest"),
+        ("Neck", "Neck"),
+        ("Head", "Head"),
+        ("LeftShoulder", "Shoulder_L"),
+        ("LeftUpperArm", "UpperArm_L"),
+        ("LeftLowerArm", "LowerArm_L"),
+        ("LeftHand", "Hand_L"),
+        ("RightShoulder", "Shoulder_R"),
+        ("RightUpperArm", "UpperArm_R"),
+        ("RightLowerArm", "LowerArm_R"),
+        ("RightHand", "Hand_R"),
+        ("LeftUpperLeg", "UpperLeg_L"),
+        ("LeftLowerLeg", "LowerLeg_L"),
+        ("LeftFoot", "Foot_L"),
+        ("LeftToes", "Toes_L"),
+        ("RightUpperLeg", "UpperLeg_R"),
+        ("RightLowerLeg", "LowerLeg_R"),
+        ("RightFoot", "Foot_R"),
+        ("RightToes", "Toes_R"),
+    ],
+};
+
+/// rigport's demo character, a Pinocchio-style rig: each joint sits at the head of the
+/// bone it drives and is named after the bone's end point (`shin_l` is at the hip and
+/// turns the thigh, `toe_l` is at the ankle and turns the foot). It has no toe-tip joint.
+pub const RIGPORT_DEMO: Convention = Convention {
+    label: "rigport demo",
+    pelvis: "hips",
+    joints: &[
+        ("Hips", "hips"),
+        ("Spine", "spine"),
+        ("Spine1", "chest"),
+        ("Chest", "neck"),
+        ("Neck", "head"),
+        ("Head", "head_top"),
+        ("LeftShoulder", "upper_arm_l"),
+        ("LeftUpperArm", "forearm_l"),
+        ("LeftLowerArm", "hand_l"),
+        ("LeftHand", "fingertip_l"),
+        ("RightShoulder", "upper_arm_r"),
+        ("RightUpperArm", "forearm_r"),
+        ("RightLowerArm", "hand_r"),
+        ("RightHand", "fingertip_r"),
+        ("LeftUpperLeg", "shin_l"),
+        ("LeftLowerLeg", "foot_l"),
+        ("LeftFoot", "toe_l"),
+        ("RightUpperLeg", "shin_r"),
+        ("RightLowerLeg", "foot_r"),
+        ("RightFoot", "toe_r"),
+    ],
+};
+
+/// Pinocchio's `HumanSkeleton` (skeleton.cpp) as rigport names it: one joint per bone,
+/// `bone_<k>` at the head of the bone ending at Pinocchio joint `k`, and `root` at joint 0
+/// (the shoulders). Pinocchio's spine hangs from the shoulders (`bone_1` shoulders to
+/// back, `bone_2` back to hips), so the source's hips drive the root, its spine `bone_1`,
+/// its chest `bone_2` (the order of the hierarchy kept: a map may not reverse it); the hip
+/// bones `bone_4`/`bone_8` follow `bone_2`, and the pelvis point is their head. The
+/// template has no hand or toe joints. Which side is left is decided from the rest pose
+/// ([`auto_map`]): Pinocchio's `l` joints lie at -x of a template that faces +z, the
+/// character's right.
+pub const PINOCCHIO_HUMAN: Convention = Convention {
+    label: "Pinocchio human template",
+    pelvis: "bone_4",
+    joints: &[
+        ("Hips", "root"),
+        ("Spine", "bone_1"),
+        ("Chest", "bone_2"),
+        ("Neck", "bone_3"),
+        ("LeftShoulder", "bone_12"),
+        ("LeftUpperArm", "bone_13"),
+        ("LeftLowerArm", "bone_14"),
+        ("RightShoulder", "bone_15"),
+        ("RightUpperArm", "bone_16"),
+        ("RightLowerArm", "bone_17"),
+        ("LeftUpperLeg", "bone_5"),
+        ("LeftLowerLeg", "bone_6"),
+        ("LeftFoot", "bone_7"),
+        ("RightUpperLeg", "bone_9"),
+        ("RightLowerLeg", "bone_10"),
+        ("RightFoot", "bone_11"),
+    ],
+};
+
+/// Every built-in convention, in the order [`auto_map`] tries them on ties.
+pub const CONVENTIONS: [Convention; 6] = [
+    CMU_ASF,
+    CGSPEED_BVH,
+    MIXAMO,
+    BANDAI_NAMCO_BVH,
+    RIGPORT_DEMO,
+    PINOCCHIO_HUMAN,
+];
+
+/// The joints of `skeleton` for each role of `convention` (roles whose joint is missing
+/// are left out). For Pinocchio's template the sides are swapped when its `l` limbs lie
+/// on the character's right in the rest pose (`up` is the model-space up direction).
+pub fn resolve(
+    skeleton: &Skeleton,
+    convention: &Convention,
+    up: Vec3,
+) -> Vec<(&'static str, JointIndex)> {
+    if convention.label == PINOCCHIO_HUMAN.label && !is_pinocchio_human(skeleton) {
+        return Vec::new();
+    }
+    let mut found: Vec<(&'static str, JointIndex)> = convention
+        .joints
+        .iter()
+        .filter_map(|&(role, name)| find_bare(skeleton, name).map(|j| (role, j)))
+        .collect();
+    if convention.label == PINOCCHIO_HUMAN.label {
+        let rest = skeleton.model_rest_matrices();
+        let at = |role: &str| {
+            found
+                .iter()
+                .find(|(r, _)| *r == role)
+                .and_then(|(_, j)| rest.get(j.get()))
+                .map(|m| m.w_axis.truncate())
+        };
+        if let (Some(l), Some(r)) = (at("LeftUpperLeg"), at("RightUpperLeg")) {
+            let forward = super::align::facing(&rest, &found, up);
+            let right = forward.cross(up);
+            if (l - r).dot(right) > 0.0 {
+                for (role, _) in &mut found {
+                    *role = mirror(role);
+                }
+            }
+        }
+    }
+    found
+}
+
+/// The role of the other side (`LeftHand` <-> `RightHand`); other roles unchanged.
+fn mirror(role: &'static str) -> &'static str {
+    let other = if let Some(rest) = role.strip_prefix("Left") {
+        format!("Right{rest}")
+    } else if let Some(rest) = role.strip_prefix("Right") {
+        format!("Left{rest}")
+    } else {
+        return role;
+    };
+    ROLES.iter().find(|r| **r == other).copied().unwrap_or(role)
+}
+
+/// The convention of `skeleton` that names the most of its joints (at least 5), with its
+/// resolved joints.
+fn best_convention(
+    skeleton: &Skeleton,
+    up: Vec3,
+) -> Option<(&'static Convention, Vec<(&'static str, JointIndex)>)> {
+    let mut best: Option<(&'static Convention, Vec<(&'static str, JointIndex)>)> = None;
+    for c in &CONVENTIONS {
+        let found = resolve(skeleton, c, up);
+        if found.len() >= 5 && best.as_ref().is_none_or(|(_, b)| found.len() > b.len()) {
+            best = Some((c, found));
+        }
+    }
+    best
+}
+
+/// The map chosen by names: when at least 90% of the target's joints (and at least two)
+/// have a source joint of the same name, joint for joint by name (a rig onto its own
+/// skeleton, or two rigs of one convention); otherwise through the body roles of the
+/// conventions ([`CONVENTIONS`]) that name the most joints of each skeleton.
+/// `source_up`/`target_up` are the model-space up directions.
+///
+/// # Errors
+/// [`RetargetError::NoMap`] when neither skeleton's convention is known or they share
+/// fewer than 5 roles.
+pub fn auto_map(
+    source: &Skeleton,
+    target: &Skeleton,
+    source_up: Vec3,
+    target_up: Vec3,
+) -> Result<JointMap, RetargetError> {
+    let same: Vec<MapPair> = target
+        .joints()
+        .iter()
+        .enumerate()
+        .filter_map(|(t, j)| {
+            source.find(&j.name).map(|s| MapPair {
+                source: s,
+                target: JointIndex(t as u32),
+                role: None,
+            })
+        })
+        .collect();
+    if same.len() >= 2 && same.len() * 10 >= target.len() * 9 {
+        let shallowest = same
+            .iter()
+            .min_by_key(|p| depth(source, p.source))
+            .map(|p| (p.source, p.target));
+        if let Some(pelvis) = shallowest {
+            return Ok(JointMap {
+                pairs: same,
+                pelvis,
+                how: "by name (same joint names)".into(),
+            });
+        }
+    }
+    let (Some((sc, sj)), Some((tc, tj))) = (
+        best_convention(source, source_up),
+        best_convention(target, target_up),
+    ) else {
+        return Err(RetargetError::NoMap);
+    };
+    let mut pairs: Vec<MapPair> = Vec::new();
+    for &(role, t) in &tj {
+        if let Some(&(_, s)) = sj.iter().find(|(r, _)| *r == role) {
+            pairs.push(MapPair {
+                source: s,
+                target: t,
+                role: Some(role),
+            });
+        }
+    }
+    pairs.sort_by_key(|p| p.target);
+    let source_pelvis = find_bare(source, sc.pelvis);
+    let target_pelvis = find_bare(target, tc.pelvis);
+    let roles = pairs.iter().filter(|p| p.role.is_some()).count();
+    match (source_pelvis, target_pelvis) {
+        (Some(s), Some(t)) if roles >= 5 => Ok(JointMap {
+            pairs,
+            pelvis: (s, t),
+            how: format!("{} -> {}", sc.label, tc.label),
+        }),
+        _ => Err(RetargetError::NoMap),
+    }
+}
+
+/// Number of ancestors of `j`.
+pub(crate) fn depth(skeleton: &Skeleton, j: JointIndex) -> usize {
+    let mut d = 0;
+    let mut cur = skeleton.joint(j).parent;
+    while let Some(p) = cur {
+        d += 1;
+        cur = skeleton.joint(p).parent;
+    }
+    d
+}
+
+/// The body roles of `skeleton`'s joints under the built-in convention that names the most
+/// of them (empty when none names 5). `up` is the model-space up direction.
+pub fn roles_of(skeleton: &Skeleton, up: Vec3) -> Vec<(&'static str, JointIndex)> {
+    best_convention(skeleton, up)
+        .map(|b| b.1)
+        .unwrap_or_default()
+}
+
+impl JointMap {
+    /// A map from `(source, target)` pairs (a map file's): the pelvis is `pelvis`, or the
+    /// mapped source joint nearest its root with its first target. `None` without pairs.
+    pub fn from_pairs(
+        source: &Skeleton,
+        pairs: &[(JointIndex, JointIndex)],
+        pelvis: Option<(JointIndex, JointIndex)>,
+        how: &str,
+    ) -> Option<Self> {
+        let pelvis = pelvis.or_else(|| {
+            pairs
+                .iter()
+                .filter(|(s, _)| s.get() < source.len())
+                .min_by_key(|(s, _)| depth(source, *s))
+                .copied()
+        })?;
+        let mut pairs: Vec<MapPair> = pairs
+            .iter()
+            .map(|&(source, target)| MapPair {
+                source,
+                target,
+                role: None,
+            })
+            .collect();
+        pairs.sort_by_key(|p| p.target);
+        Some(Self {
+            pairs,
+            pelvis,
+            how: how.to_string(),
+        })
+    }
+}
