@@ -1,8 +1,14 @@
-//! What every command shares: quiet and deny-warnings settings, warning reports and
-//! spinners.
+//! What every command shares: quiet and deny-warnings settings, spinners and progress bars
+//! for the pipelines' steps ([`Progress`]), warning reports, and the printing of a
+//! pipeline's [`Report`].
+
+use std::io::Write as _;
+use std::sync::{Arc, Mutex};
 
 use anyhow::Result;
 use rigport_model::Warning;
+use rigport_pipeline::progress::{Denied, Progress};
+use rigport_pipeline::{PipelineError, Report};
 
 use crate::exit::DeniedWarnings;
 
@@ -13,13 +19,35 @@ pub struct Context {
     /// Fail on warnings.
     pub deny_warnings: bool,
     /// When set (`batch` items), warnings are collected here instead of printed.
-    pub captured: Option<std::sync::Arc<std::sync::Mutex<Vec<String>>>>,
+    pub captured: Option<Arc<Mutex<Vec<String>>>>,
+    /// The spinner or bar of the step under way.
+    bar: Mutex<Option<indicatif::ProgressBar>>,
 }
 
 impl Context {
+    /// A context; `captured` collects the warnings instead of printing them.
+    pub fn new(
+        quiet: bool,
+        deny_warnings: bool,
+        captured: Option<Arc<Mutex<Vec<String>>>>,
+    ) -> Self {
+        Self {
+            quiet,
+            deny_warnings,
+            captured,
+            bar: Mutex::new(None),
+        }
+    }
+
     /// Prints warnings (and notes) to stderr; with `--deny-warnings`, fails if there is any
     /// warning. Notes ([`Warning::Note`]: facts, nothing lost or repaired) never fail.
     pub fn report(&self, warnings: &[Warning]) -> Result<()> {
+        Ok(self
+            .show(warnings)
+            .map_err(|d| DeniedWarnings { count: d.count })?)
+    }
+
+    fn show(&self, warnings: &[Warning]) -> Result<(), Denied> {
         let mut count = 0;
         if let Some(captured) = &self.captured {
             let mut captured = captured.lock().unwrap_or_else(|e| e.into_inner());
@@ -40,29 +68,97 @@ impl Context {
             }
         }
         if self.deny_warnings && count > 0 {
-            return Err(DeniedWarnings { count }.into());
+            return Err(Denied { count });
         }
         Ok(())
     }
 
-    /// Runs `f` under a spinner on stderr (shown only on a terminal, never with --quiet).
-    pub fn step<T>(&self, message: &str, f: impl FnOnce() -> T) -> T {
-        let bar = self.spinner();
-        bar.set_message(message.to_string());
-        let out = f();
-        bar.finish_and_clear();
-        out
+    /// Runs a pipeline with this context as its [`Progress`], then prints its report:
+    /// `log` to stderr and `summary` to stdout unless quiet, `notices` to stderr and
+    /// `output` to stdout always.
+    ///
+    /// # Errors
+    /// The pipeline's error, worded for the command line ([`crate::exit::command_line`]).
+    pub fn run(
+        &self,
+        pipeline: impl FnOnce(&dyn Progress) -> Result<Report, PipelineError>,
+    ) -> Result<()> {
+        let result = pipeline(self);
+        self.step_done();
+        let report = result.map_err(crate::exit::command_line)?;
+        for line in &report.notices {
+            eprintln!("{line}");
+        }
+        if !self.quiet {
+            for line in &report.log {
+                eprintln!("{line}");
+            }
+        }
+        let mut out = std::io::stdout().lock();
+        if let Some(summary) = report.summary.as_ref().filter(|_| !self.quiet) {
+            out.write_all(summary.as_bytes())?;
+        }
+        if let Some(text) = &report.output {
+            out.write_all(text.as_bytes())?;
+        }
+        out.flush()?;
+        Ok(())
     }
 
-    /// A spinner on stderr for a library's progress messages (hidden unless on a terminal
-    /// and without --quiet: then no thread at all).
-    pub fn spinner(&self) -> indicatif::ProgressBar {
+    /// Whether bars and spinners are drawn: on a terminal, without --quiet.
+    fn draws(&self) -> bool {
         use std::io::IsTerminal;
-        if self.quiet || !std::io::stderr().is_terminal() {
-            return indicatif::ProgressBar::hidden();
+        !self.quiet && self.captured.is_none() && std::io::stderr().is_terminal()
+    }
+
+    fn set_bar(&self, bar: Option<indicatif::ProgressBar>) {
+        let mut slot = self.bar.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(old) = slot.take() {
+            old.finish_and_clear();
+        }
+        *slot = bar;
+    }
+}
+
+impl Progress for Context {
+    fn step(&self, message: &str) {
+        if !self.draws() {
+            return;
         }
         let bar = indicatif::ProgressBar::new_spinner();
         bar.enable_steady_tick(std::time::Duration::from_millis(100));
-        bar
+        bar.set_message(message.to_string());
+        self.set_bar(Some(bar));
+    }
+
+    fn step_done(&self) {
+        self.set_bar(None);
+    }
+
+    fn count(&self, what: &str, done: usize, total: usize) {
+        if !self.draws() {
+            return;
+        }
+        let mut slot = self.bar.lock().unwrap_or_else(|e| e.into_inner());
+        let bar = slot.get_or_insert_with(|| {
+            let bar = indicatif::ProgressBar::new(total as u64);
+            let template = format!("{what} {{bar:30}} {{pos}}/{{len}}, ETA {{eta}}");
+            if let Ok(style) = indicatif::ProgressStyle::with_template(&template) {
+                bar.set_style(style);
+            }
+            bar
+        });
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    }
+
+    fn info(&self, line: &str) {
+        if !self.quiet {
+            eprintln!("{line}");
+        }
+    }
+
+    fn warnings(&self, warnings: &[Warning]) -> Result<(), Denied> {
+        self.show(warnings)
     }
 }

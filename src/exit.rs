@@ -44,6 +44,15 @@ pub struct DeniedWarnings {
     pub count: usize,
 }
 
+/// A pipeline's error as the command line words it: refused warnings name
+/// `--deny-warnings` ([`DeniedWarnings`]); everything else is shown as it is.
+pub fn command_line(err: rigport_pipeline::PipelineError) -> anyhow::Error {
+    match err {
+        rigport_pipeline::PipelineError::Denied(d) => DeniedWarnings { count: d.count }.into(),
+        err => err.into(),
+    }
+}
+
 /// The exit code for an error, from the markers in its chain.
 pub fn code_for(err: &anyhow::Error) -> u8 {
     // anyhow's downcast sees context values at every layer as well as the root error.

@@ -1,17 +1,15 @@
 //! The `rigport` command line: a thin shell over the rigport crates.
 //!
-//! Arguments are parsed into [`cli::Cli`], each subcommand resolves them into a plan and
-//! calls into `rigport-import`, `rigport-eval` and `rigport-export`. Errors are printed once,
-//! with their whole cause chain, and mapped to the exit codes documented in `--help`.
+//! Arguments are parsed into [`cli::Cli`]; each subcommand converts its arguments into one
+//! `rigport-pipeline` call and prints the report. Errors are printed once, with their whole
+//! cause chain, and mapped to the exit codes documented in `--help`.
 
+mod args;
 mod cli;
 mod commands;
 mod context;
 mod exit;
-mod input;
-mod keys;
 mod memory;
-mod output;
 mod signals;
 
 use std::process::ExitCode;

@@ -1,35 +1,32 @@
-//! `rigport animate`: keyframe a rig from a JSON file of poses.
+//! `rigport animate`: keyframe a rig from a JSON file of poses (`rigport_pipeline::animate`).
+
+use std::path::PathBuf;
 
 use anyhow::Result;
-use rigport_model::Warning;
+use rigport_pipeline::animate::AnimateOptions;
 
-use crate::cli::AnimateArgs;
+use crate::args::{InputArgs, OutputArgs};
 use crate::context::Context;
-use crate::{input, keys, output};
+
+/// `rigport animate`.
+#[derive(Debug, clap::Args)]
+pub struct AnimateArgs {
+    /// The rig.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// The keyframes (see below).
+    #[arg(long, value_name = "KEYS.json")]
+    pub keys: PathBuf,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
 
 /// Runs `animate`.
 pub fn run(ctx: &Context, args: &AnimateArgs) -> Result<()> {
-    output::format_of(&args.output.output)?;
-    let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
-    let mut asset = imported.asset;
-    let mut warnings = imported.warnings;
-    let stem = args
-        .keys
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "keys".into());
-    let clip = keys::load(&args.keys, &asset.skeleton, &stem)?;
-    if !asset.clips.is_empty() {
-        warnings.push(Warning::Note {
-            location: plan.label(),
-            message: format!(
-                "the keyed clip {:?} comes first; the rig's {} clip(s) follow it",
-                clip.name,
-                asset.clips.len()
-            ),
-        });
-    }
-    asset.clips.insert(0, clip);
-    output::reduce_clips(&mut asset, &args.output, &mut warnings)?;
-    output::write_asset(ctx, &asset, warnings, &args.output)
+    let options = AnimateOptions {
+        keys: args.keys.clone(),
+        output: args.output.to_output(),
+    };
+    ctx.run(|progress| rigport_pipeline::animate(&args.input.to_input(), &options, progress))
 }

@@ -7,16 +7,66 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{anyhow, Result};
-use clap::Parser as _;
 use rigport_batch::{manifest, report, FailureKind, Item, ItemError, Record, Shard, Summary};
 
-use crate::cli::{BatchArgs, BatchReportArgs, Cli, Command};
 use crate::context::Context;
 use crate::exit::{self, OutputError, UsageError};
 
-/// Runs one parsed command (`commands::run_command`, passed in: command modules do not
-/// import each other or the dispatcher).
-pub type RunCommand = fn(Context, Command) -> Result<()>;
+/// `rigport batch`.
+#[derive(Debug, clap::Args)]
+pub struct BatchArgs {
+    /// A JSON Lines manifest, or a folder: one `convert` item per asset found in it.
+    pub manifest: PathBuf,
+    /// The output folder (item outputs are relative to it).
+    #[arg(long, short, value_name = "OUT_DIR")]
+    pub output: PathBuf,
+    /// Worker threads (default: one per core).
+    #[arg(long, short, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Run shard I of N: the items at manifest positions k with k mod N = I. Default from
+    /// JOB_COMPLETION_INDEX/JOB_COMPLETIONS (Kubernetes Indexed Job) or
+    /// SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT (Slurm array), else every item.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
+    /// Skip items whose outputs exist and whose sidecar records the same input bytes,
+    /// options and rigport version.
+    #[arg(long)]
+    pub resume: bool,
+    /// The report (default: OUT_DIR/.rigport-batch/report-I-of-N.jsonl).
+    #[arg(long, value_name = "R.jsonl")]
+    pub report: Option<PathBuf>,
+    /// For a folder: the output extension of its items (glb, gltf, usda, usdc or usdz).
+    #[arg(long, default_value = "glb", value_name = "EXT")]
+    pub to: String,
+    /// For a folder: options every item gets, split on spaces ("--fps 30").
+    #[arg(long, value_name = "ARGS", allow_hyphen_values = true)]
+    pub convert_options: Option<String>,
+}
+
+/// `rigport batch-report`.
+#[derive(Debug, clap::Args)]
+pub struct BatchReportArgs {
+    /// The reports to merge.
+    #[arg(required = true)]
+    pub reports: Vec<PathBuf>,
+    /// Also write the merged report (manifest order) here.
+    #[arg(long, short, value_name = "R.jsonl")]
+    pub output: Option<PathBuf>,
+}
+
+/// How one item's command line went (see [`RunItem`]).
+pub enum ItemRun {
+    /// The arguments do not parse: clap's message.
+    Unparsed(String),
+    /// The command ran, with this result.
+    Ran(Result<()>),
+}
+
+/// Parses one item's command line (`rigport COMMAND ...`) and runs it in-process with a
+/// quiet context that collects its warnings into `captured`; with `deny_warnings` (or the
+/// item's own flag) a warning fails it. Passed in by the dispatcher (`commands::run_item`):
+/// command modules do not import each other, the dispatcher or the top-level parser.
+pub type RunItem = fn(Vec<OsString>, bool, Arc<Mutex<Vec<String>>>) -> ItemRun;
 
 /// The commands an item may run: those that read inputs and write one output file.
 const COMMANDS: [&str; 8] = [
@@ -24,7 +74,7 @@ const COMMANDS: [&str; 8] = [
 ];
 
 /// Runs `batch`.
-pub fn run(ctx: &Context, args: &BatchArgs, run_command: RunCommand) -> Result<()> {
+pub fn run(ctx: &Context, args: &BatchArgs, run_item: RunItem) -> Result<()> {
     let how = manifest::Expansion::new(
         &args.to,
         args.convert_options.as_deref(),
@@ -45,7 +95,7 @@ pub fn run(ctx: &Context, args: &BatchArgs, run_command: RunCommand) -> Result<(
         items.iter().filter(|i| shard.contains(i.index)).count(),
     );
     let deny = ctx.deny_warnings;
-    let execute = |item: &Item, outputs: &[PathBuf]| execute(run_command, deny, item, outputs);
+    let execute = |item: &Item, outputs: &[PathBuf]| execute(run_item, deny, item, outputs);
     let records = rigport_batch::run(&items, &options, &execute, &|p| {
         bar.set_position(p.finished as u64);
         bar.set_message(format!("{} failed, {} skipped", p.failed, p.skipped));
@@ -90,7 +140,7 @@ fn finish(ctx: &Context, records: &[Record], path: Option<&Path>) -> Result<()> 
 
 /// Runs one item in-process.
 fn execute(
-    run_command: RunCommand,
+    run_item: RunItem,
     deny_warnings: bool,
     item: &Item,
     outputs: &[PathBuf],
@@ -114,22 +164,18 @@ fn execute(
     argv.extend(item.inputs.iter().map(|p| p.clone().into_os_string()));
     argv.extend(item.options.iter().map(OsString::from));
     argv.extend(["-o".into(), output.clone().into_os_string()]);
-    let cli = Cli::try_parse_from(argv).map_err(|e| {
-        let text = e.to_string();
-        let first = text.lines().next().unwrap_or_default();
-        input(format!(
-            "{}: {}",
-            item.command,
-            first.trim_start_matches("error: ")
-        ))
-    })?;
     let captured = Arc::new(Mutex::new(Vec::new()));
-    let ctx = Context {
-        quiet: true,
-        deny_warnings: deny_warnings || cli.deny_warnings,
-        captured: Some(Arc::clone(&captured)),
+    let result = match run_item(argv, deny_warnings, Arc::clone(&captured)) {
+        ItemRun::Unparsed(text) => {
+            let first = text.lines().next().unwrap_or_default();
+            return Err(input(format!(
+                "{}: {}",
+                item.command,
+                first.trim_start_matches("error: ")
+            )));
+        }
+        ItemRun::Ran(result) => result,
     };
-    let result = run_command(ctx, cli.command);
     let warnings = std::mem::take(&mut *captured.lock().unwrap_or_else(|e| e.into_inner()));
     result.map(|()| warnings).map_err(|e| ItemError {
         kind: match exit::code_for(&e) {

@@ -1,95 +1,84 @@
 //! `rigport cloth`: a garment simulated on the animated body and baked into the output
-//! (the work is `rigport_deform::cloth::asset`).
+//! (`rigport_pipeline::cloth`).
 
-use std::path::Path;
+use std::path::PathBuf;
 
-use anyhow::{Context as _, Result};
-use rigport_deform::cloth::asset::{self, GarmentSource};
-use rigport_deform::cloth::{ClothOptions, PinSelection};
+use anyhow::Result;
+use rigport_deform::cloth::PinSelection;
+use rigport_pipeline::cloth::ClothRequest;
 
-use crate::cli::{ClothArgs, OutputArgs};
+use crate::args::{frame_rate, InputArgs};
 use crate::context::Context;
-use crate::{input, output};
+
+/// `rigport cloth` arguments.
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "The garment is a mesh of the input by name (e.g. the `Grid` of the USTC \
+course's arm_with_cloth.usda, whose primvars:ControlPoints mark the pinned vertices) or an \
+.obj in the rig's model space. Each pinned vertex is bound at rest to the nearest point of \
+the skinned body and follows it exactly; the others are simulated (XPBD: inextensible edges, \
+bending, gravity down the scene's up axis, damping, substeps) and collide with capsules \
+fitted to the bones. glTF gets the garment as its own mesh animated by morph targets (one \
+per frame, or --targets K shared ones) and a weights track; USD gets its points as time \
+samples beside the UsdSkel body. Only the simulated clip is written."
+)]
+pub struct ClothArgs {
+    /// The rig, with at least one clip.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// The garment: the name of an unskinned mesh of the input, or an .obj file.
+    #[arg(long, value_name = "GARMENT")]
+    pub garment: String,
+    /// Output file: .glb, .gltf (+ .bin), .usda, .usdc or .usdz.
+    #[arg(long, short, value_name = "OUT")]
+    pub output: PathBuf,
+    /// The clip to simulate (default: the first).
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// Pin these garment vertices (source numbering, comma-separated).
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub pin_vertices: Vec<u32>,
+    /// Pin the garment vertices at or below height H (scene up axis and units).
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub pin_below: Option<f32>,
+    /// Pin the garment vertices at or above height H.
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub pin_above: Option<f32>,
+    /// Output frames per second (default: the clip's key rate when 24 or more, else 30).
+    #[arg(long, value_name = "F", value_parser = frame_rate)]
+    pub fps: Option<f32>,
+    /// Simulate S seconds, looping the clip (default: the clip once).
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f32>,
+    /// Substeps per frame (default: 1200 per second).
+    #[arg(long, value_name = "N")]
+    pub substeps: Option<u32>,
+    /// Collision thickness in model units (default: 1% of the body's diagonal).
+    #[arg(long, value_name = "D")]
+    pub thickness: Option<f32>,
+    /// Compress the per-frame targets to K shared ones (PCA), as `bake --correctives`.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
+    pub targets: Option<u32>,
+}
 
 /// Runs `cloth`.
 pub fn run(ctx: &Context, args: &ClothArgs) -> Result<()> {
-    let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
-    let mut asset = imported.asset;
-    let mut warnings = imported.warnings;
-    let garment_path = Path::new(&args.garment);
-    let source =
-        if garment_path.is_file() {
-            let obj = rigport_import::obj::import(garment_path)
-                .with_context(|| format!("cannot read the garment {}", garment_path.display()))?;
-            warnings.extend(obj.warnings);
-            let mesh =
-                obj.asset.meshes.into_iter().next().with_context(|| {
-                    format!("the garment {} holds no mesh", garment_path.display())
-                })?;
-            GarmentSource::Mesh(Box::new(mesh))
-        } else {
-            GarmentSource::Named(&args.garment)
-        };
     let mut pins = Vec::new();
     if !args.pin_vertices.is_empty() {
         pins.push(PinSelection::Vertices(args.pin_vertices.clone()));
     }
     pins.extend(args.pin_below.map(PinSelection::Below));
     pins.extend(args.pin_above.map(PinSelection::Above));
-    let opts = ClothOptions {
-        clip: args.clip.as_deref(),
+    let request = ClothRequest {
+        garment: args.garment.clone(),
+        pins,
+        clip: args.clip.clone(),
         fps: args.fps,
         seconds: args.seconds,
         substeps: args.substeps,
         thickness: args.thickness,
-        ..ClothOptions::default()
-    };
-    let bar = progress_bar(ctx);
-    let report = asset::run(
-        &mut asset,
-        source,
-        &pins,
-        &opts,
-        args.targets.map(|k| k as usize),
-        &mut warnings,
-        |done, total| {
-            if let Some(bar) = &bar {
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-            }
-        },
-    )
-    .with_context(|| format!("cannot simulate the garment on {}", plan.label()))?;
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
-    }
-    let out_args = OutputArgs {
+        targets: args.targets,
         output: args.output.clone(),
-        max_influences: None,
-        influences_fit: rigport_model::InfluencesFit::Truncate,
-        reduce_tolerance: None,
-        skinning: None,
-        up_axis: None,
-        meters_per_unit: None,
     };
-    output::write_asset_with(ctx, &asset, warnings, &out_args, true)?;
-    if !ctx.quiet {
-        eprintln!("{report}");
-    }
-    Ok(())
-}
-
-/// A frame counter with ETA on stderr, on a terminal and without --quiet only.
-fn progress_bar(ctx: &Context) -> Option<indicatif::ProgressBar> {
-    use std::io::IsTerminal;
-    if ctx.quiet || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = indicatif::ProgressBar::new(0);
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "simulating cloth {bar:30} {pos}/{len} frames, ETA {eta}",
-    ) {
-        bar.set_style(style);
-    }
-    Some(bar)
+    ctx.run(|progress| rigport_pipeline::cloth(&args.input.to_input(), &request, progress))
 }

@@ -1,27 +1,41 @@
-//! `rigport convert`: a rig (and its motion) to glTF or USD.
+//! `rigport convert`: a rig (and its motion) to glTF or USD (`rigport_pipeline::convert`).
 
-use anyhow::Result;
+use anyhow::{bail, Result};
+use rigport_model::Warning;
+use rigport_pipeline::convert::ConvertOptions;
 
-use crate::cli::ConvertArgs;
+use crate::args::{frame_rate, InputArgs, OutputArgs};
 use crate::context::Context;
-use crate::{input, output};
+
+/// `rigport convert`.
+#[derive(Debug, clap::Args)]
+pub struct ConvertArgs {
+    /// The rig.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+    /// Deprecated: the frame rate of AMC motions, now `--amc-fps` (kept for one release).
+    #[arg(long, value_name = "FPS", hide = true, value_parser = frame_rate)]
+    pub fps: Option<f32>,
+}
 
 /// Runs `convert`.
 pub fn run(ctx: &Context, args: &ConvertArgs) -> Result<()> {
-    output::format_of(&args.output.output)?;
-    let mut input_args = args.input.clone();
-    if args.fps.is_some() {
-        if input_args.amc_fps.is_some() {
-            anyhow::bail!("give the AMC frame rate once: --fps or --amc-fps");
+    let mut input = args.input.to_input();
+    if let Some(fps) = args.fps {
+        if input.files.amc_fps.is_some() {
+            bail!("give the AMC frame rate once: --amc-fps (--fps is its deprecated name)");
         }
-        input_args.amc_fps = args.fps;
+        input.files.amc_fps = Some(fps);
+        ctx.report(&[Warning::Note {
+            location: "--fps".into(),
+            message: "deprecated for convert: the AMC frame rate is --amc-fps (--fps means a sampling rate everywhere else)".into(),
+        }])?;
     }
-    let plan = input::single_plan(&input_args)?;
-    let imported = ctx.step(&format!("reading {}", plan.label()), || {
-        input::load(&plan, &input_args)
-    })?;
-    let mut asset = imported.asset;
-    let mut warnings = imported.warnings;
-    output::reduce_clips(&mut asset, &args.output, &mut warnings)?;
-    output::write_asset(ctx, &asset, warnings, &args.output)
+    let options = ConvertOptions {
+        output: args.output.to_output(),
+    };
+    ctx.run(|progress| rigport_pipeline::convert(&input, &options, progress))
 }

@@ -4,75 +4,37 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use rigport_pipeline::demo;
+use rigport_pipeline::demo::DemoOptions;
 
-use crate::cli::DemoArgs;
 use crate::context::Context;
+
+/// `rigport demo`.
+#[derive(Debug, clap::Args)]
+pub struct DemoArgs {
+    /// Folder to write into (created if missing).
+    #[arg(long, short, default_value = "rigport-demo", value_name = "DIR")]
+    pub output: PathBuf,
+    /// Mesh detail: 1 (default, several thousand vertices) and up.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4))]
+    pub detail: u32,
+    /// The shared corpus folder: one rig of each family in it is rendered to
+    /// DIR/corpus/<family>.png (default: `../shared/corpus` relative to the current
+    /// directory; skipped with a note when absent).
+    #[arg(long, value_name = "CORPUS_DIR", conflicts_with = "no_corpus")]
+    pub corpus: Option<PathBuf>,
+    /// Do not render corpus rigs.
+    #[arg(long)]
+    pub no_corpus: bool,
+}
 
 /// Runs `demo`.
 pub fn run(ctx: &Context, args: &DemoArgs) -> Result<()> {
-    let bar = ctx.spinner();
-    let progress = |step: &str| bar.set_message(step.to_string());
-    let prepared = demo::prepare(args.detail, &args.output, &progress);
-    bar.finish_and_clear();
-    let prepared = prepared?;
-    ctx.report(prepared.warnings())?;
-    let bar = ctx.spinner();
-    let progress = |step: &str| bar.set_message(step.to_string());
-    // The README runs the demo from the repository root, beside which the corpus lives.
-    let corpus = (!args.no_corpus)
-        .then(|| (args.corpus.clone()).unwrap_or_else(|| PathBuf::from("../shared/corpus")));
-    let written = prepared.write(corpus.as_deref(), &progress)?;
-    bar.finish_and_clear();
-    for line in &written.corpus_skipped {
-        eprintln!("warning: {line}");
-    }
-    if ctx.quiet {
-        return Ok(());
-    }
-    let asset = &written.demo.asset;
-    let mesh = &asset.meshes[0];
-    let (lo, hi) = mesh.bounds().unwrap_or_default();
-    let clip = |k: usize| asset.clips.get(k).map_or(0.0, |c| c.duration());
-    println!("rigport demo: a procedural character in Pinocchio's layout");
-    println!(
-        "  mesh: {} vertices, {} triangles, {:.2} m tall",
-        mesh.vertex_count(),
-        mesh.triangles.len(),
-        hi.y - lo.y
-    );
-    println!(
-        "  skeleton: {} joints (one per bone, rotating about its head)",
-        asset.skeleton.len()
-    );
-    let [keys, reach, twist] = written.keys.each_ref().map(|p| p.display());
-    println!("  clip \"wave\": {:.1} s, keyed in {keys}", clip(0));
-    println!(
-        "  clip \"reach\": {:.1} s, IK (damped least squares) from {reach}",
-        clip(1)
-    );
-    println!(
-        "  clip \"twist\": {:.1} s, the left forearm twists 150 deg, keyed in {twist}",
-        clip(2)
-    );
-    println!(
-        "  wrote {} and {}",
-        written.glb.display(),
-        written.usd.display()
-    );
-    let dqs = written.dqs.display();
-    println!("  wrote {dqs} (clip \"twist\", DQS baked into corrective morph targets)");
-    for line in &written.bake_lines {
-        println!("    {line}");
-    }
-    let skirt = written.skirt.display();
-    println!("  wrote {skirt} (clip \"wave\" with a skirt simulated on it, morph targets)");
-    println!("    {}", written.skirt_report);
-    for (path, what) in &written.pictures {
-        println!("  wrote {} ({what})", path.display());
-    }
-    for line in &written.corpus_lines {
-        println!("  {line}");
-    }
-    Ok(())
+    let options = DemoOptions {
+        detail: args.detail,
+        output: args.output.clone(),
+        // The README runs the demo from the repository root, beside which the corpus lives.
+        corpus: (!args.no_corpus)
+            .then(|| (args.corpus.clone()).unwrap_or_else(|| PathBuf::from("../shared/corpus"))),
+    };
+    ctx.run(|progress| rigport_pipeline::demo(&options, progress))
 }

@@ -1,39 +1,31 @@
-//! `rigport inspect`: what is in a rig.
-
-use std::io::Write;
+//! `rigport inspect`: what is in a rig (`rigport_pipeline::inspect`).
 
 use anyhow::Result;
-use rigport_export::report::Report;
+use rigport_pipeline::inspect::InspectOptions;
 
-use crate::cli::InspectArgs;
+use crate::args::InputArgs;
 use crate::context::Context;
-use crate::input;
 
-/// Runs `inspect`.
+/// `rigport inspect`.
+#[derive(Debug, clap::Args)]
+pub struct InspectArgs {
+    /// The rigs.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Print JSON (one object per asset, in an array) for machines.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `inspect`. The assets' warnings are part of the listing; with `--deny-warnings`
+/// any of them fails the command before anything is printed.
 pub fn run(ctx: &Context, args: &InspectArgs) -> Result<()> {
-    let mut reports = Vec::new();
-    for plan in input::plans(&args.input)? {
-        let imported = ctx.step(&format!("reading {}", plan.label()), || plan.import())?;
-        // Warnings are part of the report; they do not go to stderr twice.
-        let warnings = imported.warnings.iter().map(|w| w.labelled()).collect();
+    let options = InspectOptions { json: args.json };
+    ctx.run(|progress| {
+        let report = rigport_pipeline::inspect(&args.input.to_input(), &options, progress)?;
         if ctx.deny_warnings {
-            ctx.report(&imported.warnings)?;
+            progress.warnings(&report.warnings)?;
         }
-        reports.push(Report::new(plan.label(), &imported.asset, warnings));
-    }
-    let stdout = std::io::stdout();
-    let mut out = std::io::BufWriter::new(stdout.lock());
-    if args.json {
-        serde_json::to_writer_pretty(&mut out, &reports)?;
-        writeln!(out)?;
-    } else {
-        for r in &reports {
-            r.write_text(&mut out)?;
-            for w in &r.warnings {
-                writeln!(out, "  {w}")?;
-            }
-        }
-    }
-    out.flush()?;
-    Ok(())
+        Ok(report)
+    })
 }

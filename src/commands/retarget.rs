@@ -1,57 +1,60 @@
 //! `rigport retarget`: put a motion onto another rig (`rigport_pipeline::retarget`).
 
-use std::io::Write;
+use std::path::PathBuf;
 
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use rigport_ik::retarget::RetargetOptions;
+use rigport_pipeline::load::Inputs;
+use rigport_pipeline::retarget::RetargetRequest;
 
-use crate::cli::{InputArgs, RetargetArgs};
+use crate::args::{InputArgs, OutputArgs};
 use crate::context::Context;
-use crate::{input, output};
+
+/// `rigport retarget`.
+#[derive(Debug, clap::Args)]
+pub struct RetargetArgs {
+    /// The motion (a .bvh, an .asf with --motion/.amc, a glTF with clips).
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// The rig to put it on: files or a folder, as for inputs.
+    #[arg(long, value_name = "RIG", required = true, num_args = 1..)]
+    pub onto: Vec<PathBuf>,
+    /// A joint map (see below); default: chosen by joint names.
+    #[arg(long, value_name = "MAP.json")]
+    pub map: Option<PathBuf>,
+    /// The clip to retarget (default: the first).
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// Plant the target's feet during their ground contacts (foot locking).
+    #[arg(long)]
+    pub plant_feet: bool,
+    /// Turn the arms so the wrists follow the source's, scaled like the hips.
+    #[arg(long)]
+    pub match_hands: bool,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
 
 /// Runs `retarget`.
 pub fn run(ctx: &Context, args: &RetargetArgs) -> Result<()> {
-    output::format_of(&args.output.output)?;
-    let (plan, source) = ctx.step("reading motion", || input::load_single(&args.input))?;
-    let rig_args = InputArgs {
-        inputs: args.onto.clone(),
-        mesh: None,
-        skeleton: None,
-        attachment: None,
-        motion: Vec::new(),
-        amc_fps: None,
-        no_bone_mesh: args.input.no_bone_mesh,
+    let input = args.input.to_input();
+    let mut onto = input.clone();
+    onto.files = Inputs::new(args.onto.clone());
+    let request = RetargetRequest {
+        onto,
+        clip: args.clip.clone(),
+        map: args.map.clone(),
+        options: RetargetOptions {
+            plant_feet: args.plant_feet,
+            match_hands: args.match_hands,
+            ..RetargetOptions::default()
+        },
+        json: args.json,
+        output: args.output.to_output(),
     };
-    let (rig_plan, target) = ctx.step("reading rig", || input::load_single(&rig_args))?;
-    let options = RetargetOptions {
-        plant_feet: args.plant_feet,
-        match_hands: args.match_hands,
-        ..RetargetOptions::default()
-    };
-    let done = ctx
-        .step("retargeting", || {
-            rigport_pipeline::retarget::onto(
-                &source.asset,
-                target.asset,
-                args.clip.as_deref(),
-                args.map.as_deref(),
-                &options,
-            )
-        })
-        .with_context(|| format!("{} onto {}", plan.label(), rig_plan.label()))?;
-    let json = args
-        .json
-        .then(|| rigport_pipeline::retarget::report_json(&done));
-    let summary = done.report.summary();
-    let (mut asset, mut warnings) = (done.asset, target.warnings);
-    warnings.extend(done.warnings);
-    output::reduce_clips(&mut asset, &args.output, &mut warnings)?;
-    output::write_asset(ctx, &asset, warnings, &args.output)?;
-    let mut out = std::io::stdout().lock();
-    if let Some(report) = json {
-        writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
-    } else if !ctx.quiet {
-        writeln!(out, "{summary}")?;
-    }
-    Ok(())
+    ctx.run(|progress| rigport_pipeline::retarget(&input, &request, progress))
 }

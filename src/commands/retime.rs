@@ -1,99 +1,83 @@
-//! `rigport retime`: resample, speed up, warp, reverse or trim a clip.
+//! `rigport retime`: resample, speed up, warp, reverse or trim a clip
+//! (`rigport_pipeline::retime`).
 
-use anyhow::{bail, Context as _, Result};
-use rigport_anim::retime::{retime, Retime, WarpCurve};
-use rigport_anim::sequence::trim;
-use rigport_model::{Clip, Warning};
+use anyhow::{Context as _, Result};
+use rigport_anim::retime::{Retime, WarpCurve};
+use rigport_pipeline::retime::{Change, RetimeOptions};
 
-use crate::cli::RetimeArgs;
+use crate::args::{frame_rate, positive, InputArgs, OutputArgs};
 use crate::context::Context;
-use crate::{input, output};
 
-/// Parses `START..END` seconds.
-fn parse_range(text: &str) -> Result<(f32, f32)> {
-    let parse = |s: &str| -> Result<f32> {
-        let v: f32 = s
-            .trim()
-            .parse()
-            .with_context(|| format!("--trim {text:?}: {s:?} is not a number of seconds"))?;
-        if !v.is_finite() {
-            bail!("--trim {text:?}: {s:?} is not finite");
+/// `rigport retime`.
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("how").required(true).args(["frames", "fps", "speed", "warp", "reverse", "trim"])))]
+pub struct RetimeArgs {
+    /// The rig with its clips.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Resample to N frames over the same duration.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(2..))]
+    pub frames: Option<u64>,
+    /// Resample at F frames per second over the same duration.
+    #[arg(long, value_name = "F", value_parser = frame_rate)]
+    pub fps: Option<f32>,
+    /// Play S times as fast (0.5 = half speed, twice as long).
+    #[arg(long, value_name = "S", value_parser = positive)]
+    pub speed: Option<f32>,
+    /// Warp curve: output_seconds:source_seconds keys, monotone, e.g. 0:0,1:0.4,2:2.
+    #[arg(long, value_name = "KEYS", allow_hyphen_values = true)]
+    pub warp: Option<String>,
+    /// Play backwards.
+    #[arg(long)]
+    pub reverse: bool,
+    /// Keep only START..END seconds (times shift to start at 0).
+    #[arg(long, value_name = "START..END", value_parser = seconds_range)]
+    pub trim: Option<(f32, f32)>,
+    /// The clip to retime (default: the first).
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `--trim START..END` in seconds.
+fn seconds_range(text: &str) -> Result<(f32, f32), String> {
+    let parse = |s: &str| -> Result<f32, String> {
+        match s.trim().parse::<f32>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(format!("{s:?} is not a number of seconds")),
         }
-        Ok(v)
     };
     let (a, b) = text
         .split_once("..")
-        .with_context(|| format!("--trim {text:?}: expected START..END, e.g. 0.5..2"))?;
+        .ok_or_else(|| "expected START..END, e.g. 0.5..2".to_string())?;
     Ok((parse(a)?, parse(b)?))
-}
-
-fn keys_of(clip: &Clip) -> usize {
-    clip.tracks.iter().map(|t| t.times.len()).max().unwrap_or(0)
 }
 
 /// Runs `retime`.
 pub fn run(ctx: &Context, args: &RetimeArgs) -> Result<()> {
-    output::format_of(&args.output.output)?;
-    let how = if let Some(n) = args.frames {
-        if n < 2 {
-            bail!("--frames {n}: a clip needs at least 2 frames");
-        }
-        Retime::Frames(n)
+    let change = if let Some(n) = args.frames {
+        Change::Retime(Retime::Frames(n as usize))
     } else if let Some(fps) = args.fps {
-        if !(fps.is_finite() && fps > 0.0) {
-            bail!("--fps {fps}: expected a positive frame rate");
-        }
-        Retime::Fps(fps)
+        Change::Retime(Retime::Fps(fps))
     } else if let Some(s) = args.speed {
-        if !(s.is_finite() && s > 0.0) {
-            bail!("--speed {s}: expected a positive factor (use --reverse to play backwards)");
-        }
-        Retime::Speed(s)
+        Change::Retime(Retime::Speed(s))
     } else if let Some(w) = &args.warp {
-        Retime::Warp(WarpCurve::parse(w).with_context(|| format!("--warp {w:?}"))?)
+        Change::Retime(Retime::Warp(
+            WarpCurve::parse(w).with_context(|| format!("--warp {w:?}"))?,
+        ))
     } else if args.reverse {
-        Retime::Reverse
+        Change::Retime(Retime::Reverse)
     } else {
         // --trim (clap requires one of the group).
-        let text = args.trim.as_deref().unwrap_or_default();
-        let (start, end) = parse_range(text)?;
-        return run_with(ctx, args, |clip, skeleton| {
-            trim(clip, skeleton, start, end).with_context(|| format!("--trim {text:?}"))
-        });
+        let (start, end) = args.trim.unwrap_or_default();
+        Change::Trim { start, end }
     };
-    run_with(ctx, args, |clip, skeleton| {
-        retime(clip, skeleton, &how).map_err(anyhow::Error::from)
-    })
-}
-
-fn run_with(
-    ctx: &Context,
-    args: &RetimeArgs,
-    op: impl Fn(&Clip, &rigport_model::Skeleton) -> Result<Clip>,
-) -> Result<()> {
-    let (plan, imported) = ctx.step("reading input", || input::load_single(&args.input))?;
-    let mut asset = imported.asset;
-    let mut warnings = imported.warnings;
-    let index = asset
-        .clip_index(args.clip.as_deref())
-        .with_context(|| plan.label())?;
-    let Some(index) = index else {
-        bail!("{}: the rig has no clip to retime", plan.label());
+    let options = RetimeOptions {
+        clip: args.clip.clone(),
+        change,
+        output: args.output.to_output(),
     };
-    let before = &asset.clips[index];
-    let after = op(before, &asset.skeleton)
-        .with_context(|| format!("cannot retime clip {:?}", before.name))?;
-    warnings.push(Warning::Note {
-        location: format!("clip {:?}", before.name),
-        message: format!(
-            "retimed: {:.4} s with {} keys -> {:.4} s with {} keys",
-            before.duration(),
-            keys_of(before),
-            after.duration(),
-            keys_of(&after)
-        ),
-    });
-    asset.clips[index] = after;
-    output::reduce_clips(&mut asset, &args.output, &mut warnings)?;
-    output::write_asset(ctx, &asset, warnings, &args.output)
+    ctx.run(|progress| rigport_pipeline::retime(&args.input.to_input(), &options, progress))
 }

@@ -1,101 +1,42 @@
-//! `rigport sequence`: clips one after another, crossfaded, optionally looping.
+//! `rigport sequence`: clips one after another, crossfaded, optionally looping
+//! (`rigport_pipeline::sequence`).
 
-use anyhow::{bail, Context as _, Result};
-use rigport_anim::sequence::{concatenate, make_loop};
-use rigport_model::{Clip, Skeleton, Track, TrackTarget, Warning};
+use anyhow::Result;
+use rigport_pipeline::sequence::SequenceOptions;
 
-use crate::cli::SequenceArgs;
+use crate::args::{frame_rate, InputArgs, OutputArgs};
 use crate::context::Context;
-use crate::{input, output};
 
-/// Moves `clip` from skeleton `from` onto `to` by joint name. Tracks of joints `to` lacks
-/// and morph-weight tracks (meshes are not carried over) are dropped and counted.
-fn remap(clip: &Clip, from: &Skeleton, to: &Skeleton) -> (Clip, usize) {
-    let mut dropped = 0;
-    let tracks: Vec<Track> = clip
-        .tracks
-        .iter()
-        .filter_map(|t| {
-            let joint = |j: rigport_model::JointIndex| to.find(&from.joint(j).name);
-            let target = match t.target {
-                TrackTarget::Translation(j) => joint(j).map(TrackTarget::Translation),
-                TrackTarget::Rotation(j) => joint(j).map(TrackTarget::Rotation),
-                TrackTarget::Scale(j) => joint(j).map(TrackTarget::Scale),
-                TrackTarget::MorphWeights(_) => None,
-            };
-            if target.is_none() {
-                dropped += 1;
-            }
-            target.map(|target| Track {
-                target,
-                ..t.clone()
-            })
-        })
-        .collect();
-    (
-        Clip {
-            name: clip.name.clone(),
-            tracks,
-        },
-        dropped,
-    )
+/// `rigport sequence`.
+#[derive(Debug, clap::Args)]
+pub struct SequenceArgs {
+    /// The rigs whose clips play one after another (the first rig's skeleton and meshes
+    /// are written; the others' clips are matched to it by joint name). A rig with several
+    /// clips contributes all of them, in order.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Frames over which each clip blends into the next (slerp).
+    #[arg(long, default_value_t = 0, value_name = "FRAMES")]
+    pub crossfade: usize,
+    /// Make the result loop seamlessly (its end blends into its start over --crossfade
+    /// frames, at least one).
+    #[arg(long = "loop")]
+    pub looping: bool,
+    /// Frame rate of the result (default: the first clip's).
+    #[arg(long, value_name = "F", value_parser = frame_rate)]
+    pub fps: Option<f32>,
+    /// Where to write.
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// Runs `sequence`.
 pub fn run(ctx: &Context, args: &SequenceArgs) -> Result<()> {
-    output::format_of(&args.output.output)?;
-    let plans = input::plans(&args.input)?;
-    let mut loaded = Vec::with_capacity(plans.len());
-    for plan in &plans {
-        let imported = ctx.step(&format!("reading {}", plan.label()), || {
-            input::load(plan, &args.input)
-        })?;
-        loaded.push((plan, imported));
-    }
-    let (first_plan, first) = &loaded[0];
-    let skeleton = &first.asset.skeleton;
-    let mut warnings = first.warnings.clone();
-    let mut clips = Vec::new();
-    for (plan, imported) in &loaded {
-        if imported.asset.clips.is_empty() {
-            bail!("{}: has no clip to sequence", plan.label());
-        }
-        if !std::ptr::eq(*plan, *first_plan) {
-            warnings.extend(imported.warnings.iter().cloned());
-        }
-        for clip in &imported.asset.clips {
-            let (clip, dropped) = remap(clip, &imported.asset.skeleton, skeleton);
-            if dropped > 0 {
-                warnings.push(Warning::Incomplete {
-                    location: format!("{} clip {:?}", plan.label(), clip.name),
-                    message: format!(
-                        "{dropped} track(s) animate joints or meshes that {} lacks; dropped",
-                        first_plan.label()
-                    ),
-                });
-            }
-            clips.push(clip);
-        }
-    }
-    if let Some(fps) = args.fps {
-        if !(fps.is_finite() && fps > 0.0) {
-            bail!("--fps {fps}: expected a positive frame rate");
-        }
-    }
-    let refs: Vec<&Clip> = clips.iter().collect();
-    let mut sequence = concatenate(&refs, skeleton, args.crossfade, args.fps)
-        .context("cannot sequence the clips")?;
-    if args.looping {
-        sequence = make_loop(&sequence, skeleton, args.crossfade.max(1))
-            .context("cannot make the sequence loop")?;
-    }
-    sequence.name = clips
-        .iter()
-        .map(|c| c.name.as_str())
-        .collect::<Vec<_>>()
-        .join("+");
-    let mut asset = first.asset.clone();
-    asset.clips = vec![sequence];
-    output::reduce_clips(&mut asset, &args.output, &mut warnings)?;
-    output::write_asset(ctx, &asset, warnings, &args.output)
+    let options = SequenceOptions {
+        crossfade: args.crossfade,
+        fps: args.fps,
+        looping: args.looping,
+        output: args.output.to_output(),
+    };
+    ctx.run(|progress| rigport_pipeline::sequence(&args.input.to_input(), &options, progress))
 }

@@ -39,7 +39,6 @@ pub mod estimate;
 mod gltf;
 mod labels;
 pub mod npz;
-pub mod report;
 mod usd;
 mod weights;
 

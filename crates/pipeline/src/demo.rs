@@ -219,7 +219,7 @@ fn corpus_pictures(corpus: &Path, out: &Path) -> Result<(Vec<String>, Vec<String
         let picture = match corpus::picture(corpus, rig) {
             Ok(picture) => picture,
             Err(e) => {
-                let why = crate::chain(&e);
+                let why = crate::error::chain(&e);
                 skipped.push(format!(
                     "corpus {}: skipped: {why}",
                     corpus.join(first).display()
@@ -246,4 +246,93 @@ fn corpus_pictures(corpus: &Path, out: &Path) -> Result<(Vec<String>, Vec<String
         ));
     }
     Ok((lines, skipped))
+}
+
+/// What `rigport demo` builds, and where.
+#[derive(Clone, Debug)]
+pub struct DemoOptions {
+    /// The character's detail (surface-nets cells per unit; 1 is the default).
+    pub detail: u32,
+    /// The folder written (created).
+    pub output: PathBuf,
+    /// The corpus to draw one rig per family from (`None`: no corpus pictures).
+    pub corpus: Option<PathBuf>,
+}
+
+/// Builds the demo, gives its warnings to `progress` (which may refuse them: then nothing
+/// but the example files is written), and writes every file and picture. The summary
+/// describes the character, its clips and each file written.
+///
+/// # Errors
+/// As [`prepare`] and [`PreparedDemo::write`]; refused warnings.
+pub fn run(
+    options: &DemoOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<crate::Report, PipelineError> {
+    let tell = |step: &str| progress.step(step);
+    let prepared = prepare(options.detail, &options.output, &tell);
+    progress.step_done();
+    let prepared = prepared?;
+    progress.warnings(prepared.warnings())?;
+    let written = prepared.write(options.corpus.as_deref(), &tell);
+    progress.step_done();
+    let written = written?;
+    let asset = &written.demo.asset;
+    let mesh = &asset.meshes[0];
+    let (lo, hi) = mesh.bounds().unwrap_or_default();
+    let clip = |k: usize| asset.clips.get(k).map_or(0.0, |c| c.duration());
+    let mut lines = vec![
+        "rigport demo: a procedural character in Pinocchio's layout".to_string(),
+        format!(
+            "  mesh: {} vertices, {} triangles, {:.2} m tall",
+            mesh.vertex_count(),
+            mesh.triangles.len(),
+            hi.y - lo.y
+        ),
+        format!(
+            "  skeleton: {} joints (one per bone, rotating about its head)",
+            asset.skeleton.len()
+        ),
+    ];
+    let [keys, reach, twist] = written.keys.each_ref().map(|p| p.display());
+    lines.push(format!(
+        "  clip \"wave\": {:.1} s, keyed in {keys}",
+        clip(0)
+    ));
+    lines.push(format!(
+        "  clip \"reach\": {:.1} s, IK (damped least squares) from {reach}",
+        clip(1)
+    ));
+    lines.push(format!(
+        "  clip \"twist\": {:.1} s, the left forearm twists 150 deg, keyed in {twist}",
+        clip(2)
+    ));
+    lines.push(format!(
+        "  wrote {} and {}",
+        written.glb.display(),
+        written.usd.display()
+    ));
+    let dqs = written.dqs.display();
+    lines.push(format!(
+        "  wrote {dqs} (clip \"twist\", DQS baked into corrective morph targets)"
+    ));
+    lines.extend(written.bake_lines.iter().map(|l| format!("    {l}")));
+    let skirt = written.skirt.display();
+    lines.push(format!(
+        "  wrote {skirt} (clip \"wave\" with a skirt simulated on it, morph targets)"
+    ));
+    lines.push(format!("    {}", written.skirt_report));
+    for (path, what) in &written.pictures {
+        lines.push(format!("  wrote {} ({what})", path.display()));
+    }
+    lines.extend(written.corpus_lines.iter().map(|l| format!("  {l}")));
+    Ok(crate::Report {
+        summary: Some(lines.join("\n") + "\n"),
+        notices: written
+            .corpus_skipped
+            .iter()
+            .map(|l| format!("warning: {l}"))
+            .collect(),
+        ..crate::Report::default()
+    })
 }

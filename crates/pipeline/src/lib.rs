@@ -29,123 +29,44 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod animate;
+pub mod asset_report;
+pub mod bake;
+pub mod cloth;
+pub mod convert;
 pub mod demo;
 pub mod dump;
+mod error;
+pub mod eval;
+pub mod footlock;
+pub mod ik;
+pub mod inspect;
+mod keys;
 pub mod load;
 pub mod memory;
 pub mod outputs;
+pub mod progress;
+pub mod render;
+mod report;
 pub mod retarget;
+pub mod retime;
+pub mod sequence;
 pub mod write;
 
-use std::error::Error as StdError;
+pub use animate::run as animate;
+pub use bake::run as bake;
+pub use cloth::run as cloth;
+pub use convert::run as convert;
+pub use demo::run as demo;
+pub use eval::run as eval;
+pub use footlock::run as footlock;
+pub use ik::run as ik;
+pub use inspect::run as inspect;
+pub use render::run as render;
+pub use report::Report;
+pub use retarget::run as retarget;
+pub use retime::run as retime;
+pub use sequence::run as sequence;
 
+pub use error::{chain, PipelineError};
 pub use rigport_model::budget::{MemoryBudget, OverBudget};
-
-/// Why a pipeline step failed. [`PipelineError::is_usage`] and [`PipelineError::is_output`]
-/// tell the CLI's exit codes apart (usage 2, output 3, else input 1).
-#[derive(Debug, thiserror::Error)]
-pub enum PipelineError {
-    /// The request cannot be carried out as given (an output extension rigport does not
-    /// write, an output that is one of the inputs); the message says what to change.
-    #[error("{0}")]
-    Usage(String),
-    /// An output could not be written or is not writable.
-    #[error("cannot write {path}")]
-    Output {
-        /// The output path, as given.
-        path: String,
-        /// Why.
-        #[source]
-        source: Box<dyn StdError + Send + Sync>,
-    },
-    /// The step would use more memory than the budget allows.
-    #[error(transparent)]
-    Budget(#[from] OverBudget),
-    /// The inputs do not group into assets.
-    #[error(transparent)]
-    Detect(#[from] rigport_import::detect::DetectError),
-    /// An input could not be imported.
-    #[error(transparent)]
-    Import(#[from] rigport_import::ImportError),
-    /// A step failed on valid inputs: the message names the step and the asset.
-    #[error("{message}")]
-    Step {
-        /// What failed.
-        message: String,
-        /// Why.
-        #[source]
-        source: Box<dyn StdError + Send + Sync>,
-    },
-    /// The built-in demo failed (a rigport bug).
-    #[error(transparent)]
-    Demo(#[from] rigport_demo::DemoError),
-    /// An asset could not be exported.
-    #[error(transparent)]
-    Export(#[from] rigport_export::ExportError),
-    /// A pose or keys file is invalid (the message names the JSON path).
-    #[error(transparent)]
-    Json(#[from] rigport_import::json::JsonError),
-    /// Evaluating a pose failed.
-    #[error(transparent)]
-    Eval(#[from] rigport_eval::EvalError),
-    /// Sampling a clip failed.
-    #[error(transparent)]
-    Sample(#[from] rigport_eval::sample::SampleError),
-    /// An influence refit failed.
-    #[error(transparent)]
-    Refit(#[from] rigport_deform::refit::asset::RefitError),
-    /// The inputs are readable but do not make what was asked (the message says why).
-    #[error("{0}")]
-    Invalid(String),
-}
-
-impl PipelineError {
-    /// Whether this is a usage error (the CLI exits 2).
-    pub fn is_usage(&self) -> bool {
-        matches!(self, Self::Usage(_))
-    }
-
-    /// Whether an output failed (the CLI exits 3).
-    pub fn is_output(&self) -> bool {
-        matches!(self, Self::Output { .. })
-    }
-
-    /// An output error for `path`.
-    pub(crate) fn output(
-        path: &std::path::Path,
-        source: impl Into<Box<dyn StdError + Send + Sync>>,
-    ) -> Self {
-        Self::Output {
-            path: path.display().to_string(),
-            source: source.into(),
-        }
-    }
-
-    /// A failed step.
-    pub(crate) fn step(
-        message: impl Into<String>,
-        source: impl Into<Box<dyn StdError + Send + Sync>>,
-    ) -> Self {
-        Self::Step {
-            message: message.into(),
-            source: source.into(),
-        }
-    }
-}
-
-/// An error with its causes, `: `-separated (as the CLI prints errors).
-pub fn chain(err: &(dyn StdError + 'static)) -> String {
-    let mut text = err.to_string();
-    let mut source = err.source();
-    while let Some(e) = source {
-        text.push_str(": ");
-        text.push_str(&e.to_string());
-        source = e.source();
-    }
-    text
-}
-
-/// A plain message as an error source.
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub(crate) struct Message(pub String);

@@ -19,7 +19,68 @@ pub use rigport_import::detect::{Inputs, Source};
 use rigport_import::Imported;
 use rigport_model::{MemoryBudget, Warning};
 
+use crate::progress::Progress;
 use crate::PipelineError;
+
+/// What a command reads: the input files as named, whether a skeleton-only rig gets a
+/// bone mesh, and the memory budget imports and writes are checked against.
+#[derive(Clone, Debug)]
+pub struct Input {
+    /// The files, as the command line names them.
+    pub files: Inputs,
+    /// A skeleton-only rig gets a generated bone mesh (one shape per bone).
+    pub bone_mesh: bool,
+    /// The memory budget.
+    pub budget: MemoryBudget,
+}
+
+impl Input {
+    /// `paths`, with a bone mesh for skeleton-only rigs and no memory limit.
+    pub fn new(paths: Vec<PathBuf>) -> Self {
+        Self {
+            files: Inputs::new(paths),
+            bone_mesh: true,
+            budget: MemoryBudget::UNLIMITED,
+        }
+    }
+
+    /// One plan per asset.
+    ///
+    /// # Errors
+    /// As [`plan`].
+    pub fn plans(&self) -> Result<Vec<Source>, PipelineError> {
+        plan(&self.files)
+    }
+
+    /// Imports `plan` (see [`load`]).
+    ///
+    /// # Errors
+    /// As [`load`].
+    pub fn load(&self, plan: &Source) -> Result<Imported, PipelineError> {
+        load(plan, self.bone_mesh, &self.budget)
+    }
+
+    /// Resolves and imports exactly one asset, as a step of `progress`.
+    ///
+    /// # Errors
+    /// As [`single_plan`] and [`load`].
+    pub fn load_single(
+        &self,
+        progress: &dyn Progress,
+        step: &str,
+    ) -> Result<(Source, Imported), PipelineError> {
+        crate::progress::step(progress, step, || {
+            let plan = single_plan(&self.files)?;
+            let imported = self.load(&plan)?;
+            Ok((plan, imported))
+        })
+    }
+
+    /// The files these inputs read ([`input_files`]).
+    pub fn read_files(&self) -> Vec<PathBuf> {
+        input_files(&self.files)
+    }
+}
 
 /// Resolves inputs into one plan per asset (see `rigport_import::detect::plan`).
 ///

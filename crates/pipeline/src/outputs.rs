@@ -21,7 +21,8 @@ use std::path::{Path, PathBuf};
 use rigport_export::ExportError;
 use rigport_model::OutputFormat;
 
-use crate::{Message, PipelineError};
+use crate::error::Message;
+use crate::PipelineError;
 
 /// The format an output path asks for, by its extension ([`OutputFormat::of_path`]).
 ///
@@ -113,4 +114,22 @@ pub fn write_failure(err: ExportError, path: &Path) -> PipelineError {
 /// The file cannot be written.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
     rigport_export::write_atomic(path, bytes).map_err(|e| PipelineError::output(path, e))
+}
+
+/// The checks every command that writes an asset makes before any work: the output's
+/// format (by its extension), and that the output is none of the files read (`input`'s
+/// and `extra`), nor a special file.
+///
+/// # Errors
+/// A usage or output error ([`format_of`], [`check_outputs`]).
+pub(crate) fn check_request(
+    input: &crate::load::Input,
+    output: &std::path::Path,
+    extra: &[&std::path::Path],
+) -> Result<rigport_model::OutputFormat, PipelineError> {
+    let mut read = input.read_files();
+    read.extend(extra.iter().map(|p| p.to_path_buf()));
+    let format = format_of(output)?;
+    check_outputs(&[output], &read)?;
+    Ok(format)
 }

@@ -25,7 +25,70 @@ use rigport_ik::retarget::{auto_map, retarget, JointMap, RetargetInput, Retarget
 use rigport_model::{Asset, Warning};
 use serde_json::{json, Value};
 
-use crate::PipelineError;
+use crate::load::Input;
+use crate::progress::{step, Progress};
+use crate::write::{write_output, Output};
+use crate::{PipelineError, Report};
+
+/// What `retarget` puts onto which rig, and where it writes.
+#[derive(Clone, Debug)]
+pub struct RetargetRequest {
+    /// The rig the motion goes onto (read like any input).
+    pub onto: Input,
+    /// The source clip (the first when `None`).
+    pub clip: Option<String>,
+    /// A `MAP.json` (default: the built-in maps, chosen by joint names).
+    pub map: Option<std::path::PathBuf>,
+    /// Planting and hand matching.
+    pub options: RetargetOptions,
+    /// Give the report as JSON ([`Report::output`]) rather than a summary.
+    pub json: bool,
+    /// The output file and how it is written.
+    pub output: Output,
+}
+
+/// Reads the motion (`input`) and the rig (`request.onto`), puts the clip onto the rig,
+/// and writes the rig with it; the report comes back as a summary or as JSON.
+///
+/// # Errors
+/// As [`onto`], the imports and [`write_output`].
+pub fn run(
+    input: &Input,
+    request: &RetargetRequest,
+    progress: &dyn Progress,
+) -> Result<Report, PipelineError> {
+    let mut read = request.onto.read_files();
+    read.extend(request.map.iter().cloned());
+    let read: Vec<&std::path::Path> = read.iter().map(std::path::PathBuf::as_path).collect();
+    crate::outputs::check_request(input, &request.output.path, &read)?;
+    let (plan, source) = input.load_single(progress, "reading motion")?;
+    let (rig_plan, target) = request.onto.load_single(progress, "reading rig")?;
+    let done = step(progress, "retargeting", || {
+        onto(
+            &source.asset,
+            target.asset,
+            request.clip.as_deref(),
+            request.map.as_deref(),
+            &request.options,
+        )
+    })
+    .map_err(|e| PipelineError::step(format!("{} onto {}", plan.label(), rig_plan.label()), e))?;
+    let json = request.json.then(|| report_json(&done));
+    let summary = done.report.summary();
+    let (asset, mut warnings) = (done.asset, target.warnings);
+    warnings.extend(done.warnings);
+    let line = write_output(asset, warnings, &request.output, &input.budget, progress)?;
+    let mut report = Report::logged(line);
+    match json {
+        Some(json) => {
+            let text = serde_json::to_string_pretty(&json)
+                .map_err(|e| PipelineError::step("cannot write the report as JSON", e))?;
+            report.output = Some(text + "\n");
+        }
+        None => report.summary = Some(summary + "\n"),
+    }
+    Ok(report)
+}
 
 /// A retargeted rig.
 pub struct Done {

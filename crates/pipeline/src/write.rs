@@ -35,6 +35,7 @@ use rigport_model::{
 };
 
 use crate::outputs::write_failure;
+use crate::progress::{step, Progress};
 use crate::PipelineError;
 
 /// How an asset is written.
@@ -53,6 +54,117 @@ pub struct WriteOptions {
     /// A `.usda` writes unskinned morph-animated meshes as `points.timeSamples`
     /// ([`UsdOptions::morphs_as_points`]).
     pub morphs_as_points: bool,
+}
+
+/// Where and how a command writes its asset.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Output {
+    /// The file; its extension names the format ([`OutputFormat::of_path`]).
+    pub path: PathBuf,
+    /// How the writer fits influences and labels the stage.
+    pub options: WriteOptions,
+    /// Reduce every clip's keys within this world-space distance first ([`reduce_clips`]).
+    pub reduce_tolerance: Option<f32>,
+}
+
+impl Output {
+    /// `path` with the default options and no key reduction.
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        Self {
+            path: path.into(),
+            ..Self::default()
+        }
+    }
+
+    /// The format the path's extension names.
+    ///
+    /// # Errors
+    /// An extension rigport does not write (a usage error).
+    pub fn format(&self) -> Result<OutputFormat, PipelineError> {
+        crate::outputs::format_of(&self.path)
+    }
+}
+
+/// Writes `asset` to `output` as the whole write step of a command: key reduction (when
+/// asked), the memory check, the influence fit, the writer, and `warnings` (from import
+/// and earlier steps) given to `progress` together with the writer's before anything is
+/// written, so a caller that refuses them gets no file. Returns the line that says what
+/// was written.
+///
+/// # Errors
+/// Over the budget; a refit or export that fails; refused warnings; an unwritable output.
+pub fn write_output(
+    mut asset: Asset,
+    mut warnings: Vec<Warning>,
+    output: &Output,
+    budget: &MemoryBudget,
+    progress: &dyn Progress,
+) -> Result<String, PipelineError> {
+    if let Some(tolerance) = output.reduce_tolerance {
+        reduce_clips(&mut asset, tolerance, &mut warnings)?;
+    }
+    let path = &output.path;
+    let format = output.format()?;
+    let opts = &output.options;
+    check_memory(&asset, path, format, budget)?;
+    if format.is_gltf() && opts.max_influences.is_some_and(|k| k > 4) {
+        if let Some(note) = four_influence_note(&asset) {
+            progress.info(&format!("influences: {note}"));
+        }
+    }
+    let fitted = match opts.influences_fit {
+        InfluencesFit::Refit => step(progress, "refitting influences", || {
+            fit_influences(&asset, opts, format)
+        })?,
+        InfluencesFit::Truncate => fit_influences(&asset, opts, format)?,
+    };
+    if let Some(report) = fitted.as_ref().and_then(|f| f.refit.as_ref()) {
+        for line in describe_refit(report, opts.max_influences.unwrap_or(4)) {
+            progress.info(&format!("influences: {line}"));
+        }
+    }
+    let asset = fitted.as_ref().map_or(&asset, |f| &f.asset);
+    if format.is_gltf() && opts.skinning == Some(SkinningMethod::Dqs) {
+        return Err(PipelineError::Invalid("glTF defines only linear blend skinning; `rigport bake --skinning dqs` bakes a DQS result into a glTF, and a .usda output can declare DQS".into()));
+    }
+    let building = if format.is_gltf() {
+        "building glTF"
+    } else {
+        "building USD"
+    };
+    let prepared = step(progress, building, || prepare(asset, path, format, opts))?;
+    warnings.extend(prepared.warnings().iter().cloned());
+    progress.warnings(&warnings)?;
+    prepared.write()?;
+    Ok(written_line(path, asset))
+}
+
+/// "wrote PATH: J joints, M meshes (V vertices), S skins, C clips (each clip's name,
+/// duration and keys)".
+fn written_line(path: &Path, asset: &Asset) -> String {
+    let vertices: usize = asset.meshes.iter().map(|m| m.vertex_count()).sum();
+    let frames: Vec<String> = asset
+        .clips
+        .iter()
+        .map(|c| {
+            let keys = c.tracks.iter().map(|t| t.times.len()).max().unwrap_or(0);
+            format!("{:?} {:.3} s, {keys} keys", c.name, c.duration())
+        })
+        .collect();
+    format!(
+        "wrote {}: {} joints, {} meshes ({} vertices), {} skins, {} clips{}",
+        path.display(),
+        asset.skeleton.len(),
+        asset.meshes.len(),
+        vertices,
+        asset.skins.len(),
+        asset.clips.len(),
+        if frames.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", frames.join("; "))
+        }
+    )
 }
 
 /// Reduces the keys of every clip while every joint's world position stays within

@@ -6,9 +6,9 @@ use rigport_model::{Asset, TrackTarget};
 use serde::Serialize;
 
 /// What is in a rig (`rigport inspect`): its joints, meshes, skins and clips, as text
-/// ([`Report::write_text`]) or JSON (serde).
+/// ([`AssetReport::write_text`]) or JSON (serde).
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Report {
+pub struct AssetReport {
     /// Where the rig came from (its main file).
     pub source: String,
     /// The asset's name.
@@ -95,7 +95,7 @@ pub struct ClipReport {
     pub animated_joints: usize,
 }
 
-impl Report {
+impl AssetReport {
     /// The report of `asset`, read from `source`, with its import `warnings`.
     ///
     /// ```
@@ -103,13 +103,13 @@ impl Report {
     ///
     /// let root = Joint { name: "hips".into(), parent: None, rest_local: Transform::IDENTITY };
     /// let asset = Asset { skeleton: Skeleton::new(vec![root]).expect("one root"), ..Asset::default() };
-    /// let report = rigport_export::report::Report::new("hips.bvh".into(), &asset, Vec::new());
+    /// let report = rigport_pipeline::asset_report::AssetReport::new("hips.bvh".into(), &asset, Vec::new());
     /// let mut text = Vec::new();
     /// report.write_text(&mut text)?;
     /// assert!(String::from_utf8_lossy(&text).contains("joints: 1\n       0 hips (root)"));
     /// # Ok::<(), std::io::Error>(())
     /// ```
-    pub fn new(source: String, asset: &Asset, warnings: Vec<String>) -> Report {
+    pub fn new(source: String, asset: &Asset, warnings: Vec<String>) -> AssetReport {
         let skel = &asset.skeleton;
         let joints = skel
             .joints()
@@ -181,7 +181,7 @@ impl Report {
                 }
             })
             .collect();
-        Report {
+        AssetReport {
             source,
             name: asset.name.clone(),
             meters_per_unit: asset.meters_per_unit,

@@ -1,0 +1,117 @@
+//! `rigport cloth`: a garment simulated on the animated body and baked into the output
+//! (the work is `rigport_deform::cloth::asset`).
+
+use std::path::PathBuf;
+
+use rigport_deform::cloth::asset::{self, GarmentSource};
+use rigport_deform::cloth::{ClothOptions, PinSelection};
+use rigport_model::Warning;
+
+use crate::load::Input;
+use crate::outputs::check_request;
+use crate::progress::Progress;
+use crate::write::{write_output, Output, WriteOptions};
+use crate::{PipelineError, Report};
+
+/// What `cloth` simulates, and where it writes.
+#[derive(Clone, Debug, Default)]
+pub struct ClothRequest {
+    /// The garment: the name of an unskinned mesh of the input, or an `.obj` file.
+    pub garment: String,
+    /// The pinned vertices (none: the garment's own control points).
+    pub pins: Vec<PinSelection>,
+    /// The clip (the first when `None`).
+    pub clip: Option<String>,
+    /// Frames per second of the simulation's output.
+    pub fps: Option<f32>,
+    /// Seconds to simulate (looping the clip).
+    pub seconds: Option<f32>,
+    /// Solver substeps per frame.
+    pub substeps: Option<u32>,
+    /// Collision thickness.
+    pub thickness: Option<f32>,
+    /// Shared morph targets (PCA) instead of one per frame.
+    pub targets: Option<u32>,
+    /// The output file.
+    pub output: PathBuf,
+}
+
+/// Reads `input`, simulates the garment on one clip, and writes the rig with the garment
+/// baked in (glTF: morph targets; USD: time-sampled points).
+///
+/// # Errors
+/// A garment that cannot be read or found; a failed simulation; as the import and
+/// [`write_output`].
+pub fn run(
+    input: &Input,
+    request: &ClothRequest,
+    progress: &dyn Progress,
+) -> Result<Report, PipelineError> {
+    let garment_path = PathBuf::from(&request.garment);
+    let garment_file = garment_path.is_file();
+    let extra: Vec<&std::path::Path> = garment_file
+        .then_some(garment_path.as_path())
+        .into_iter()
+        .collect();
+    check_request(input, &request.output, &extra)?;
+    let (plan, imported) = input.load_single(progress, "reading input")?;
+    let (mut asset, mut warnings): (_, Vec<Warning>) = (imported.asset, imported.warnings);
+    let source = if garment_file {
+        let obj = rigport_import::obj::import(&garment_path).map_err(|e| {
+            PipelineError::step(
+                format!("cannot read the garment {}", garment_path.display()),
+                e,
+            )
+        })?;
+        warnings.extend(obj.warnings);
+        let mesh = obj.asset.meshes.into_iter().next().ok_or_else(|| {
+            PipelineError::Invalid(format!(
+                "the garment {} holds no mesh",
+                garment_path.display()
+            ))
+        })?;
+        GarmentSource::Mesh(Box::new(mesh))
+    } else {
+        GarmentSource::Named(&request.garment)
+    };
+    let opts = ClothOptions {
+        clip: request.clip.as_deref(),
+        fps: request.fps,
+        seconds: request.seconds,
+        substeps: request.substeps,
+        thickness: request.thickness,
+        ..ClothOptions::default()
+    };
+    let report = asset::run(
+        &mut asset,
+        source,
+        &request.pins,
+        &opts,
+        request.targets.map(|k| k as usize),
+        &mut warnings,
+        |done, total| progress.count("simulating cloth", done, total),
+    )
+    .map_err(|e| {
+        PipelineError::step(
+            format!("cannot simulate the garment on {}", plan.label()),
+            e,
+        )
+    })?;
+    let output = Output {
+        path: request.output.clone(),
+        options: WriteOptions {
+            morphs_as_points: true,
+            ..WriteOptions::default()
+        },
+        reduce_tolerance: None,
+    };
+    let mut done = Report::logged(write_output(
+        asset,
+        warnings,
+        &output,
+        &input.budget,
+        progress,
+    )?);
+    done.log.push(report.to_string());
+    Ok(done)
+}

@@ -1,0 +1,115 @@
+//! `rigport footlock`: hold mocap feet still during their ground contacts.
+
+use rigport_ik::footlock::{footlock, resolve_feet, up_in_model, FootlockOptions};
+use serde_json::json;
+
+use crate::load::Input;
+use crate::outputs::check_request;
+use crate::progress::{step, Progress};
+use crate::write::{write_output, Output};
+use crate::{PipelineError, Report};
+
+/// What `footlock` cleans, and where it writes.
+#[derive(Clone, Debug)]
+pub struct FootlockRequest {
+    /// The clip (the first when `None`).
+    pub clip: Option<String>,
+    /// The feet as `ANKLE[:TOE]` joint names (found by name when empty).
+    pub feet: Vec<String>,
+    /// Contact thresholds, blending and stretch.
+    pub options: FootlockOptions,
+    /// Give the report as JSON ([`Report::output`]) rather than a table.
+    pub json: bool,
+    /// The output file and how it is written.
+    pub output: Output,
+}
+
+/// Reads `input`, finds the feet and their contacts in one clip, pins them, and writes the
+/// rig; the contacts and slides come back as a table or as JSON.
+///
+/// # Errors
+/// Invalid options; no such clip, or none; feet not found; as the import and
+/// [`write_output`].
+pub fn run(
+    input: &Input,
+    request: &FootlockRequest,
+    progress: &dyn Progress,
+) -> Result<Report, PipelineError> {
+    check_request(input, &request.output.path, &[])?;
+    let options = &request.options;
+    options.validate().map_err(PipelineError::failed)?;
+    let (plan, imported) = input.load_single(progress, "reading input")?;
+    let (mut asset, mut warnings) = (imported.asset, imported.warnings);
+    let index = asset
+        .clip_index(request.clip.as_deref())
+        .map_err(|e| PipelineError::step(plan.label(), e))?
+        .ok_or_else(|| {
+            PipelineError::Invalid(format!("{}: the rig has no clip to clean", plan.label()))
+        })?;
+    let (legs, found_by) = resolve_feet(&asset.skeleton, &request.feet)
+        .map_err(|e| PipelineError::step(format!("{}: cannot find the feet", plan.label()), e))?;
+    let clip = &asset.clips[index];
+    let locked = step(progress, "locking feet", || {
+        let up = up_in_model(&asset.frame);
+        footlock(&asset.skeleton, clip, &legs, up, options)
+    })
+    .map_err(|e| PipelineError::step(format!("cannot lock the feet of clip {:?}", clip.name), e))?;
+    let mut rows = Vec::new();
+    let feet: Vec<_> = locked
+        .feet
+        .iter()
+        .map(|f| {
+            let contacts: Vec<_> = f
+                .contacts
+                .iter()
+                .map(|c| {
+                    json!({
+            "joint": c.joint, "start_frame": c.start_frame, "end_frame": c.end_frame,
+            "start_time": c.start_time, "end_time": c.end_time})
+                })
+                .collect();
+            let windows: Vec<_> = f
+                .contacts
+                .iter()
+                .map(|c| format!("{} {:.3}-{:.3} s", c.joint, c.start_time, c.end_time))
+                .collect();
+            rows.push(format!(
+                "| {} | {} | {:.2e} / {:.2e} | {:.2e} / {:.2e} | {:.2}% |",
+                f.label,
+                windows.join(", "),
+                f.before.max,
+                f.before.mean,
+                f.after.max,
+                f.after.mean,
+                100.0 * f.stretch
+            ));
+            json!({"label": f.label, "ankle": f.ankle, "toe": f.toe, "contacts": contacts,
+            "slide_before": {"max": f.before.max, "mean": f.before.mean},
+            "slide_after": {"max": f.after.max, "mean": f.after.mean},
+            "stretch": f.stretch, "unreached_frames": f.unreached})
+        })
+        .collect();
+    let json = json!({"clip": clip.name, "frames": locked.frames, "fps": locked.fps,
+        "height": locked.height, "feet_found_by": found_by, "feet": feet});
+    let table = format!(
+        "{} frames at {} fps, skeleton height {:.4}, feet: {found_by}; slides in heights\n\
+         | foot | contacts | slide before max / mean | after max / mean | stretch |\n\
+         | --- | --- | ---: | ---: | ---: |\n{}\n",
+        locked.frames,
+        locked.fps,
+        locked.height,
+        rows.join("\n")
+    );
+    warnings.extend(locked.warnings);
+    asset.clips[index] = locked.clip;
+    let line = write_output(asset, warnings, &request.output, &input.budget, progress)?;
+    let mut report = Report::logged(line);
+    if request.json {
+        let text = serde_json::to_string_pretty(&json)
+            .map_err(|e| PipelineError::step("cannot write the report as JSON", e))?;
+        report.output = Some(text + "\n");
+    } else {
+        report.summary = Some(table);
+    }
+    Ok(report)
+}

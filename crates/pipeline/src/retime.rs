@@ -1,0 +1,105 @@
+//! `rigport retime`: resample, speed up, warp, reverse or trim a clip.
+//!
+//! ```
+//! use rigport_anim::retime::Retime;
+//! use rigport_pipeline::retime::{Change, RetimeOptions};
+//! use rigport_pipeline::{load::Input, progress::Silent, retime, write::Output};
+//!
+//! let dir = tempfile::tempdir()?;
+//! let out = dir.path().join("slow.glb");
+//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+//! let options = RetimeOptions {
+//!     clip: None,
+//!     change: Change::Retime(Retime::Speed(0.5)),
+//!     output: Output::new(&out),
+//! };
+//! let report = retime(&input, &options, &Silent)?;
+//! assert!(report.log[0].starts_with("wrote "));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use rigport_anim::retime::{retime, Retime};
+use rigport_anim::sequence::trim;
+use rigport_model::{Clip, Warning};
+
+use crate::load::Input;
+use crate::outputs::check_request;
+use crate::progress::Progress;
+use crate::write::{write_output, Output};
+use crate::{PipelineError, Report};
+
+/// How the clip's timing changes.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Change {
+    /// Resampled, sped up, warped or reversed ([`Retime`]).
+    Retime(Retime),
+    /// Only the keys between `start` and `end` seconds are kept.
+    Trim {
+        /// Seconds.
+        start: f32,
+        /// Seconds.
+        end: f32,
+    },
+}
+
+/// What `retime` changes and writes.
+#[derive(Clone, Debug)]
+pub struct RetimeOptions {
+    /// The clip (the first when `None`).
+    pub clip: Option<String>,
+    /// The change.
+    pub change: Change,
+    /// The output file and how it is written.
+    pub output: Output,
+}
+
+fn keys_of(clip: &Clip) -> usize {
+    clip.tracks.iter().map(|t| t.times.len()).max().unwrap_or(0)
+}
+
+/// Reads `input`, changes the timing of one clip, and writes the rig.
+///
+/// # Errors
+/// No such clip, or none; a change the clip cannot take; as the import and
+/// [`write_output`].
+pub fn run(
+    input: &Input,
+    options: &RetimeOptions,
+    progress: &dyn Progress,
+) -> Result<Report, PipelineError> {
+    check_request(input, &options.output.path, &[])?;
+    let (plan, imported) = input.load_single(progress, "reading input")?;
+    let (mut asset, mut warnings) = (imported.asset, imported.warnings);
+    let index = asset
+        .clip_index(options.clip.as_deref())
+        .map_err(|e| PipelineError::step(plan.label(), e))?
+        .ok_or_else(|| {
+            PipelineError::Invalid(format!("{}: the rig has no clip to retime", plan.label()))
+        })?;
+    let before = &asset.clips[index];
+    let failed = |e| PipelineError::step(format!("cannot retime clip {:?}", before.name), e);
+    let after = match &options.change {
+        Change::Retime(how) => retime(before, &asset.skeleton, how).map_err(failed)?,
+        Change::Trim { start, end } => {
+            trim(before, &asset.skeleton, *start, *end).map_err(|e| {
+                PipelineError::step(
+                    format!("cannot retime clip {:?}", before.name),
+                    PipelineError::step(format!("trim {start}..{end}"), e),
+                )
+            })?
+        }
+    };
+    warnings.push(Warning::Note {
+        location: format!("clip {:?}", before.name),
+        message: format!(
+            "retimed: {:.4} s with {} keys -> {:.4} s with {} keys",
+            before.duration(),
+            keys_of(before),
+            after.duration(),
+            keys_of(&after)
+        ),
+    });
+    asset.clips[index] = after;
+    let line = write_output(asset, warnings, &options.output, &input.budget, progress)?;
+    Ok(Report::logged(line))
+}

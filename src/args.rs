@@ -1,0 +1,162 @@
+//! The argument groups and value parsers the commands share: where a rig comes from
+//! ([`InputArgs`]), where and how an asset is written ([`OutputArgs`]), and the one check
+//! of each kind of number (a frame rate, a distance), so every flag says the same thing.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use rigport_model::{InfluencesFit, SkinningMethod, UpAxis};
+use rigport_pipeline::load::{Input, Inputs};
+use rigport_pipeline::write::{Output, WriteOptions};
+
+/// Where a rig comes from.
+#[derive(Clone, Debug, Args)]
+pub struct InputArgs {
+    /// Input files or folders: a .glb/.gltf; an .obj with Pinocchio skeleton and attachment
+    /// .out files (told apart by name or content); a USC CSCI 520 skin.config; or a folder
+    /// holding one of these sets. Required unless --mesh, --skeleton or --attachment
+    /// names the files.
+    #[arg(required_unless_present_any = ["mesh", "skeleton", "attachment"])]
+    pub inputs: Vec<PathBuf>,
+    /// The OBJ mesh of a Pinocchio rig.
+    #[arg(long, value_name = "M.obj")]
+    pub mesh: Option<PathBuf>,
+    /// Pinocchio `skeleton.out` (index x y z parent per line).
+    #[arg(long, value_name = "S.out")]
+    pub skeleton: Option<PathBuf>,
+    /// Pinocchio `attachment.out` (one row of bone weights per OBJ vertex).
+    #[arg(long, value_name = "A.out")]
+    pub attachment: Option<PathBuf>,
+    /// An AMC motion for the .asf skeleton among the inputs (repeat for several clips;
+    /// .amc files may also be given as inputs).
+    #[arg(long, value_name = "M.amc")]
+    pub motion: Vec<PathBuf>,
+    /// Frame rate of AMC motions, which do not state one (default: 120, CMU's rate).
+    #[arg(long, value_name = "FPS", value_parser = frame_rate)]
+    pub amc_fps: Option<f32>,
+    /// Do not generate a bone mesh for skeleton-only inputs (ASF/AMC, BVH). By default each
+    /// bone gets a small skinned shape so viewers show the motion.
+    #[arg(long)]
+    pub no_bone_mesh: bool,
+}
+
+impl InputArgs {
+    /// The pipeline's view of these arguments, within this run's memory budget.
+    pub fn to_input(&self) -> Input {
+        Input {
+            files: Inputs {
+                paths: self.inputs.clone(),
+                mesh: self.mesh.clone(),
+                skeleton: self.skeleton.clone(),
+                attachment: self.attachment.clone(),
+                motions: self.motion.clone(),
+                amc_fps: self.amc_fps,
+            },
+            bone_mesh: !self.no_bone_mesh,
+            budget: crate::memory::budget(),
+        }
+    }
+}
+
+/// Where and how an asset is written.
+#[derive(Debug, Args)]
+pub struct OutputArgs {
+    /// Output file: .glb, .gltf (+ a .bin of the same stem beside it), .usda, .usdc or .usdz.
+    #[arg(long, short, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Influences kept per vertex: 1 to 8 (glTF default 4; above 4, vertices with more get
+    /// a second set, JOINTS_1/WEIGHTS_1, which three.js, model-viewer, Filament, Bevy and
+    /// Unity ignore). USD keeps every influence unless this is given.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    pub max_influences: Option<u8>,
+    /// How a vertex with more influences than the limit drops the rest: `truncate` keeps
+    /// its largest weights, renormalized (what Blender, gltfpack and Assimp do); `refit`
+    /// fits K weights so the deformation stays closest to all weights' over the clips'
+    /// frames (or a range-of-motion pose set) and prints both deviations.
+    #[arg(long, value_enum, default_value_t = InfluencesFit::Truncate)]
+    pub influences_fit: InfluencesFit,
+    /// Remove animation keys while every joint's world position stays within D (in the
+    /// rig's length unit) of the full clip at every original key time.
+    #[arg(long, value_name = "D", value_parser = distance)]
+    pub reduce_tolerance: Option<f32>,
+    /// Skinning method a .usda declares (primvars:skel:skinningMethod; default: each skin's
+    /// own, as the source declares it). glTF is always LBS; use `rigport bake --skinning
+    /// dqs` to bake DQS into a glTF.
+    #[arg(long, value_enum)]
+    pub skinning: Option<SkinningMethod>,
+    /// The `upAxis` a .usda declares (default: the source's; the root prim's transform
+    /// converts). glTF is always +Y up in metres.
+    #[arg(long, value_enum, value_name = "AXIS")]
+    pub up_axis: Option<UpAxis>,
+    /// The `metersPerUnit` a .usda declares (default: the source's, 1 when it states none;
+    /// the root prim's transform converts).
+    #[arg(long, value_name = "M")]
+    pub meters_per_unit: Option<f64>,
+}
+
+impl OutputArgs {
+    /// The pipeline's view of these arguments.
+    pub fn to_output(&self) -> Output {
+        Output {
+            path: self.output.clone(),
+            options: WriteOptions {
+                max_influences: self.max_influences.map(usize::from),
+                influences_fit: self.influences_fit,
+                skinning: self.skinning,
+                up_axis: self.up_axis,
+                meters_per_unit: self.meters_per_unit,
+                morphs_as_points: false,
+            },
+            reduce_tolerance: self.reduce_tolerance,
+        }
+    }
+}
+
+/// A frame rate (`--fps`, `--amc-fps`): a positive, finite number of frames per second.
+pub fn frame_rate(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(fps) if fps.is_finite() && fps > 0.0 => Ok(fps),
+        _ => Err("expected a positive frame rate".into()),
+    }
+}
+
+/// A distance that may be 0 (`--reduce-tolerance`, `--threshold`).
+pub fn distance(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(d) if d.is_finite() && d >= 0.0 => Ok(d),
+        _ => Err("expected a distance >= 0".into()),
+    }
+}
+
+/// A number that may be 0 (`--lambda`).
+pub fn non_negative(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(d) if d.is_finite() && d >= 0.0 => Ok(d),
+        _ => Err("expected a number >= 0".into()),
+    }
+}
+
+/// A positive distance or factor (`--tolerance`, `--speed`).
+pub fn positive(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(d) if d.is_finite() && d > 0.0 => Ok(d),
+        _ => Err("expected a positive number".into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_checked_once_for_every_flag() {
+        assert_eq!(frame_rate("30"), Ok(30.0));
+        for bad in ["0", "-1", "inf", "NaN", "x"] {
+            assert!(frame_rate(bad).is_err(), "{bad}");
+        }
+        assert_eq!(distance("0"), Ok(0.0));
+        assert!(distance("-0.1").is_err());
+        assert!(positive("0").is_err());
+        assert_eq!(positive("0.5"), Ok(0.5));
+    }
+}
