@@ -1,77 +1,9 @@
 //! Errors of reading and writing USD layers: where (file and line, column or byte
 //! offset) and what.
 
-use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// Where in a layer a problem is: the file, and a line and column or a byte offset when
-/// known.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Location {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line number.
-    pub line: Option<usize>,
-    /// 1-based column (only with `line`).
-    pub column: Option<usize>,
-    /// Byte offset for binary layers.
-    pub byte_offset: Option<u64>,
-}
-
-impl Location {
-    /// The whole file.
-    pub fn file(path: &Path) -> Self {
-        Self {
-            path: path.to_path_buf(),
-            line: None,
-            column: None,
-            byte_offset: None,
-        }
-    }
-
-    /// A 1-based line of the file; line 0 (data from a binary file, which has no lines)
-    /// names the file only.
-    pub fn line(path: &Path, line: usize) -> Self {
-        Self {
-            line: (line > 0).then_some(line),
-            ..Self::file(path)
-        }
-    }
-
-    /// A 1-based line and column of the file.
-    pub fn line_column(path: &Path, line: usize, column: usize) -> Self {
-        Self {
-            line: Some(line),
-            column: Some(column),
-            ..Self::file(path)
-        }
-    }
-
-    /// A byte offset inside the file.
-    pub fn byte(path: &Path, offset: u64) -> Self {
-        Self {
-            byte_offset: Some(offset),
-            ..Self::file(path)
-        }
-    }
-}
-
-impl fmt::Display for Location {
-    /// `file:line:column`, `file:line`, `file: at byte N`, or `file`.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.path.display())?;
-        if let Some(line) = self.line {
-            write!(f, ":{line}")?;
-            if let Some(col) = self.column {
-                write!(f, ":{col}")?;
-            }
-        }
-        if let Some(b) = self.byte_offset {
-            write!(f, ": at byte {b}")?;
-        }
-        Ok(())
-    }
-}
+pub use rigport_location::Location;
 
 /// What is wrong with a layer.
 #[derive(Debug, thiserror::Error)]
