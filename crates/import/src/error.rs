@@ -94,6 +94,10 @@ pub enum Problem {
         /// The value as written.
         found: String,
     },
+    /// A USD layer that cannot be read ([`rigport_usd::Problem`]; its empty-file, syntax,
+    /// truncation and free-text problems map to this enum's).
+    #[error(transparent)]
+    Usd(rigport_usd::Problem),
     /// The imported asset breaks the model's invariants ([`rigport_model::Asset::validate`]);
     /// every problem is listed. Reported rather than trusted: a parse that succeeded
     /// should never get here.

@@ -187,6 +187,7 @@ impl From<rigport_usd::UsdError> for ImportError {
             rigport_usd::Problem::Syntax { expected, found } => Problem::Syntax { expected, found },
             rigport_usd::Problem::Invalid(m) => Problem::Invalid(m),
             rigport_usd::Problem::Truncated(m) => Problem::Truncated(m),
+            p => Problem::Usd(p),
         };
         ImportError {
             location: e.location,
