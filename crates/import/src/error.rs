@@ -2,6 +2,8 @@ pub use rigport_location::Location;
 
 use rigport_model::{AssetError, SkeletonProblem};
 
+use crate::problem::{Hierarchy, Limit, Mismatch, Missing, Repeated, Rule};
+
 /// What is wrong with an input.
 #[derive(Debug, thiserror::Error)]
 pub enum Problem {
@@ -94,6 +96,27 @@ pub enum Problem {
         /// The value as written.
         found: String,
     },
+    /// Bytes that are not UTF-8 in a text format.
+    #[error("not UTF-8 text")]
+    NotUtf8,
+    /// The parent structure of the joints or bones is broken (as the file numbers them).
+    #[error(transparent)]
+    Hierarchy(#[from] Hierarchy),
+    /// More than rigport's types hold (32-bit indices and floats, key times).
+    #[error(transparent)]
+    Limit(#[from] Limit),
+    /// Two counts in the input that must agree and do not.
+    #[error(transparent)]
+    Mismatch(#[from] Mismatch),
+    /// Something the format requires is not there.
+    #[error(transparent)]
+    Missing(#[from] Missing),
+    /// Something the format allows once is given again.
+    #[error(transparent)]
+    Repeated(#[from] Repeated),
+    /// A well-formed input that breaks a rule of its format.
+    #[error(transparent)]
+    Rule(#[from] Rule),
     /// A USD layer that cannot be read ([`rigport_usd::Problem`]; its empty-file, syntax,
     /// truncation and free-text problems map to this enum's).
     #[error(transparent)]
@@ -155,6 +178,11 @@ impl ImportError {
             location: Box::new(location),
             problem,
         }
+    }
+
+    /// A typed problem (any class of [`Problem`]) at `location`.
+    pub fn at(location: Location, problem: impl Into<Problem>) -> Self {
+        Self::new(location, problem.into())
     }
 
     /// An [`Problem::Invalid`] error at `location`.
