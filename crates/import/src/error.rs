@@ -2,7 +2,7 @@ pub use rigport_location::Location;
 
 use rigport_model::{AssetError, SkeletonProblem};
 
-use crate::problem::{Hierarchy, Limit, Mismatch, Missing, Repeated, Rule};
+use crate::problem::{Hierarchy, Limit, Mismatch, Missing, Repeated, Rule, Uri};
 
 /// What is wrong with an input.
 #[derive(Debug, thiserror::Error)]
@@ -117,6 +117,9 @@ pub enum Problem {
     /// A well-formed input that breaks a rule of its format.
     #[error(transparent)]
     Rule(#[from] Rule),
+    /// The bytes a glTF `uri` names cannot be had.
+    #[error(transparent)]
+    Uri(#[from] Uri),
     /// A USD layer that cannot be read ([`rigport_usd::Problem`]; its empty-file, syntax,
     /// truncation and free-text problems map to this enum's).
     #[error(transparent)]

@@ -537,7 +537,7 @@ pub enum Repeated {
 pub enum Rule {
     /// A value that must be a positive number (`timeCodesPerSecond`).
     #[error("{0} must be a positive number")]
-    NotPositive(String),
+    NotPositive(&'static str),
     /// A USD `upAxis` other than `Y` or `Z`.
     #[error("upAxis must be \"Y\" or \"Z\"")]
     UpAxis,
@@ -617,7 +617,83 @@ pub enum Rule {
     /// A GLB whose first chunk is not JSON.
     #[error("the first GLB chunk must be JSON, found {0:?}")]
     FirstChunk(String),
-    /// A glTF index past the array it indexes.
-    #[error("index out of range")]
-    Index,
+    /// glTF JSON that breaks the schema: the first problem, and how many more there are.
+    #[error(fmt = schema)]
+    Schema {
+        /// The first problem.
+        first: Schema,
+        /// How many more.
+        more: usize,
+    },
+}
+
+/// What breaks the glTF schema ([`Rule::Schema`]), as the `gltf` crate's validation tells.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Schema {
+    /// An index past the array it indexes.
+    IndexOutOfRange,
+    /// A value the schema does not allow.
+    Invalid,
+    /// A required value that is absent.
+    Missing,
+    /// A size beyond this system's limits.
+    Oversize,
+    /// A required extension rigport does not read.
+    Unsupported(String),
+}
+
+fn schema(first: &Schema, more: &usize, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    match first {
+        Schema::IndexOutOfRange => f.write_str("index out of range")?,
+        Schema::Invalid => f.write_str("invalid value")?,
+        Schema::Missing => f.write_str("required value missing")?,
+        Schema::Oversize => f.write_str("size exceeds this system's limits")?,
+        Schema::Unsupported(extension) => {
+            write!(f, "required extension {extension} is not supported")?;
+        }
+    }
+    match more {
+        0 => Ok(()),
+        n => write!(f, " (and {n} more glTF schema problems)"),
+    }
+}
+
+/// Why the bytes a glTF `uri` names cannot be had.
+#[derive(Debug, thiserror::Error)]
+pub enum Uri {
+    /// A `data:` URI without its comma.
+    #[error("malformed data URI: no ','")]
+    NoComma,
+    /// A `data:` URI that is not base64.
+    #[error("data URI {0:?} is not base64-encoded")]
+    NotBase64(String),
+    /// A `data:` URI whose payload is not valid base64.
+    #[error("data URI holds invalid base64")]
+    InvalidBase64,
+    /// A URI scheme other than `data:` and `file:`.
+    #[error("{what} URI {uri:?}: only data: URIs and files are supported")]
+    Scheme {
+        /// What the URI names (`buffer`, `image`).
+        what: &'static str,
+        /// The URI.
+        uri: String,
+    },
+    /// A percent-encoded path that is not UTF-8.
+    #[error("{what} URI {uri:?} is not UTF-8 once decoded")]
+    NotUtf8 {
+        /// What the URI names.
+        what: &'static str,
+        /// The URI.
+        uri: String,
+    },
+    /// A file that cannot be read.
+    #[error("cannot read {what} file {}: {error}", file.display())]
+    File {
+        /// What the URI names.
+        what: &'static str,
+        /// The file.
+        file: PathBuf,
+        /// Why.
+        error: std::io::Error,
+    },
 }
