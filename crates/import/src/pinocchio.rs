@@ -642,7 +642,11 @@ fn assemble_from<'a>(
     }
     let order = check_topology(&skeleton.parents).map_err(|(joint, problem)| {
         let problem = match (joint, problem) {
-            (Some(j), Problem::Invalid(m)) => Problem::Invalid(format!("skeleton joint {j}: {m}")),
+            (Some(joint), Problem::Hierarchy(problem)) => Hierarchy::OfJoint {
+                joint,
+                problem: Box::new(problem),
+            }
+            .into(),
             (_, p) => p,
         };
         ImportError::new(here(), problem)
@@ -772,34 +776,22 @@ fn assemble_from<'a>(
 fn check_topology(parents: &[Option<usize>]) -> Result<Vec<usize>, (Option<usize>, Problem)> {
     let count = parents.len();
     if count == 0 {
-        return Err((None, Problem::Invalid("the skeleton has no joints".into())));
+        return Err((None, Hierarchy::NoJoints.into()));
     }
     for (j, parent) in parents.iter().enumerate() {
         match *parent {
             Some(p) if p >= count => {
                 return Err((
                     Some(j),
-                    Problem::Invalid(format!(
-                        "parent {p} of joint {j} does not exist: the skeleton has {count} joints (0..={})",
-                        count - 1
-                    )),
+                    Hierarchy::ParentMissing {
+                        joint: j,
+                        parent: p,
+                        count,
+                    }
+                    .into(),
                 ))
             }
-            Some(p) if p == j && j == 0 => {
-                return Err((
-                    Some(j),
-                    Problem::Invalid(
-                        "joint 0 has parent 0, i.e. is its own parent: the root must have parent -1"
-                            .into(),
-                    ),
-                ))
-            }
-            Some(p) if p == j => {
-                return Err((
-                    Some(j),
-                    Problem::Invalid(format!("joint {j} has parent {j}, i.e. is its own parent")),
-                ))
-            }
+            Some(p) if p == j => return Err((Some(j), Hierarchy::SelfParent(j).into())),
             _ => {}
         }
     }
@@ -820,30 +812,18 @@ fn check_topology(parents: &[Option<usize>]) -> Result<Vec<usize>, (Option<usize
         (Some(first), Some(second)) => {
             return Err((
                 Some(second),
-                Problem::Invalid(format!(
-                    "joint {second} is a second root (parent -1) besides joint {first}: a Pinocchio skeleton has exactly one root"
-                )),
+                Hierarchy::SecondPinocchioRoot { first, second }.into(),
             ))
         }
         (Some(root), None) => {
-            return Err((
-                Some(0),
-                Problem::Invalid(format!(
-                    "joint 0 has parent {}, but joint {root} is the root: Pinocchio's root must be joint 0 (weight column k is the bone ending at joint k + 1)",
-                    parents.first().copied().flatten().unwrap_or(0)
-                )),
-            ))
+            let parent = parents.first().copied().flatten().unwrap_or(0);
+            return Err((Some(0), Hierarchy::RootNotFirst { parent, root }.into()));
         }
         // Every finite parent graph without a root has a cycle, reported above.
-        (None, _) => return Err((None, Problem::Invalid("the skeleton has no root (parent -1)".into()))),
+        (None, _) => return Err((None, Hierarchy::NoRootJoint.into())),
     }
     if count < 2 {
-        return Err((
-            Some(0),
-            Problem::Invalid(
-                "the skeleton has only a root: at least one bone (2 joints) is needed".into(),
-            ),
-        ));
+        return Err((Some(0), Hierarchy::OnlyRoot.into()));
     }
     Ok(order)
 }

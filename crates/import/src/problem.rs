@@ -119,6 +119,61 @@ pub enum Hierarchy {
     /// ASF bones whose parents form a cycle.
     #[error("bones {} form a parent cycle, not connected to the root", .0.join(" -> "))]
     Cycle(Vec<String>),
+    /// A Pinocchio skeleton without joints.
+    #[error("the skeleton has no joints")]
+    NoJoints,
+    /// A Pinocchio parent past the joints.
+    #[error(
+        "parent {parent} of joint {joint} does not exist: the skeleton has {count} joints (0..={})",
+        count - 1
+    )]
+    ParentMissing {
+        /// The joint.
+        joint: usize,
+        /// Its parent.
+        parent: usize,
+        /// How many joints there are (at least 1).
+        count: usize,
+    },
+    /// A Pinocchio joint that is its own parent (joint 0 is told it must have parent -1).
+    #[error(fmt = own_parent)]
+    SelfParent(usize),
+    /// A second Pinocchio root.
+    #[error(
+        "joint {second} is a second root (parent -1) besides joint {first}: a Pinocchio skeleton \
+         has exactly one root"
+    )]
+    SecondPinocchioRoot {
+        /// The first root.
+        first: usize,
+        /// The second.
+        second: usize,
+    },
+    /// A Pinocchio root other than joint 0.
+    #[error(
+        "joint 0 has parent {parent}, but joint {root} is the root: Pinocchio's root must be \
+         joint 0 (weight column k is the bone ending at joint k + 1)"
+    )]
+    RootNotFirst {
+        /// Joint 0's parent.
+        parent: usize,
+        /// The root.
+        root: usize,
+    },
+    /// A Pinocchio skeleton without a joint of parent `-1`.
+    #[error("the skeleton has no root (parent -1)")]
+    NoRootJoint,
+    /// A Pinocchio skeleton of one joint.
+    #[error("the skeleton has only a root: at least one bone (2 joints) is needed")]
+    OnlyRoot,
+    /// A problem of one joint of a skeleton given as data (not a file with lines).
+    #[error("skeleton joint {joint}: {problem}")]
+    OfJoint {
+        /// The joint.
+        joint: usize,
+        /// Its problem.
+        problem: Box<Hierarchy>,
+    },
     /// Two ASF bones with one name, or a bone named as rigport names a leaf bone's end
     /// joint.
     #[error(fmt = same_name)]
@@ -128,6 +183,15 @@ pub enum Hierarchy {
         /// The leaf bone whose end joint has that name, if that is the clash.
         leaf: Option<String>,
     },
+}
+
+fn own_parent(joint: &usize, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    match joint {
+        0 => f.write_str(
+            "joint 0 has parent 0, i.e. is its own parent: the root must have parent -1",
+        ),
+        j => write!(f, "joint {j} has parent {j}, i.e. is its own parent"),
+    }
 }
 
 fn same_name(bone: &str, leaf: &Option<String>, f: &mut fmt::Formatter<'_>) -> fmt::Result {
