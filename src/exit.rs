@@ -1,4 +1,8 @@
-//! Exit codes, documented in `rigport --help`.
+//! Exit codes, documented in `rigport --help`, and pipeline errors worded for the command
+//! line (the libraries name no flag).
+
+use rigport_import::detect::{DetectError, PinocchioFile};
+use rigport_pipeline::PipelineError;
 
 /// An input could not be read or is invalid (the message names file and line).
 pub const BAD_INPUT: u8 = 1;
@@ -46,11 +50,42 @@ pub struct DeniedWarnings {
 
 /// A pipeline's error as the command line words it: refused warnings name
 /// `--deny-warnings` ([`DeniedWarnings`]); everything else is shown as it is.
-pub fn command_line(err: rigport_pipeline::PipelineError) -> anyhow::Error {
-    match err {
-        rigport_pipeline::PipelineError::Denied(d) => DeniedWarnings { count: d.count }.into(),
-        err => err.into(),
-    }
+///
+/// The input errors about what the files are (the library names the [`Inputs`] fields)
+/// name the flags that set them, with exit code 1 as the library's error.
+///
+/// [`Inputs`]: rigport_pipeline::load::Inputs
+pub fn command_line(err: PipelineError) -> anyhow::Error {
+    let detect = match err {
+        PipelineError::Denied(d) => return DeniedWarnings { count: d.count }.into(),
+        PipelineError::Detect(ref detect) => detect,
+        err => return err.into(),
+    };
+    let message = match detect {
+        DetectError::FpsWithoutAsf => "--amc-fps sets the frame rate of AMC motions and needs \
+            an .asf input; to resample a clip use `rigport retime --fps`"
+            .to_string(),
+        DetectError::BadAmcFps(fps) => {
+            format!("--amc-fps {fps}: the AMC frame rate must be a positive number")
+        }
+        DetectError::IncompletePinocchio(missing) => {
+            let flags: Vec<&str> = missing
+                .iter()
+                .map(|file| match file {
+                    PinocchioFile::Mesh => "--mesh",
+                    PinocchioFile::Skeleton => "--skeleton",
+                    PinocchioFile::Attachment => "--attachment",
+                })
+                .collect();
+            format!(
+                "a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}",
+                flags.join(", ")
+            )
+        }
+        DetectError::NoInput => "no input given (see --help)".to_string(),
+        _ => return err.into(),
+    };
+    anyhow::Error::msg(message)
 }
 
 /// The exit code for an error, from the markers in its chain.

@@ -173,3 +173,51 @@ fn a_huge_but_finite_quaternion_is_normalized_not_refused() {
         "the huge quaternion poses like the unit one: {max:e}"
     );
 }
+
+/// The input errors about flags name them (the library names the inputs; the CLI words
+/// them with its flags) and exit 1.
+#[test]
+fn input_errors_name_the_flags() {
+    let dir = scratch();
+    let out = dir.path().join("out.glb");
+    let out = out.to_str().unwrap();
+    let fixtures = repo().join("fixtures");
+    let obj = fixtures.join("pinocchio/branch.obj");
+    let bvh = fixtures.join("bvh/end_sites.bvh");
+    let (obj, bvh) = (obj.to_str().unwrap(), bvh.to_str().unwrap());
+    for (args, message) in [
+        (
+            vec!["convert", "--mesh", obj, "--attachment", obj, "-o", out],
+            "error: a Pinocchio rig needs a mesh, a skeleton and an attachment; missing --skeleton\n",
+        ),
+        (
+            vec!["convert", bvh, "--amc-fps", "30", "-o", out],
+            "error: --amc-fps sets the frame rate of AMC motions and needs an .asf input; to \
+             resample a clip use `rigport retime --fps`\n",
+        ),
+        // The deprecated `convert --fps` is the same flag, with a note.
+        (
+            vec!["convert", bvh, "--fps", "30", "-o", out],
+            "error: --amc-fps sets the frame rate of AMC motions and needs an .asf input; to \
+             resample a clip use `rigport retime --fps`\n",
+        ),
+    ] {
+        let r = rigport(&args);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.ends_with(message), "{args:?}: {stderr}");
+    }
+    // A frame rate that is not positive is refused by the one frame-rate check (exit 2).
+    let r = rigport(&["convert", bvh, "--amc-fps", "0", "-o", out]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("'--amc-fps <FPS>': expected a positive frame rate"),
+        "{stderr}"
+    );
+    let r = rigport(&["convert", bvh, "--fps", "30", "-o", out]);
+    assert!(
+        String::from_utf8_lossy(&r.stderr).contains("deprecated for convert"),
+        "the deprecated --fps is noted"
+    );
+}

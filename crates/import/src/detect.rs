@@ -172,8 +172,8 @@ impl Inputs {
     }
 }
 
-/// Why a set of inputs does not make assets. The messages name the CLI flags that set the
-/// corresponding [`Inputs`] fields.
+/// Why a set of inputs does not make assets. The messages name the [`Inputs`] fields, not
+/// the flags of a command line that set them: a CLI names its flags itself.
 #[derive(Debug, thiserror::Error)]
 pub enum DetectError {
     /// A file or folder could not be read.
@@ -201,11 +201,11 @@ pub enum DetectError {
     /// AMC motions without exactly one `.asf`.
     #[error("{0}: AMC motions need exactly one .asf skeleton among the inputs")]
     AmcWithoutAsf(String),
-    /// An AMC frame rate without an `.asf`.
-    #[error("--fps sets the frame rate of AMC motions and needs an .asf input; to resample a clip use `rigport retime --fps`")]
+    /// An AMC frame rate ([`Inputs::amc_fps`]) without an `.asf`.
+    #[error("the frame rate of AMC motions needs an .asf input")]
     FpsWithoutAsf,
-    /// A bad AMC frame rate.
-    #[error("--fps {0}: the AMC frame rate must be a positive number")]
+    /// A bad AMC frame rate ([`Inputs::amc_fps`]).
+    #[error("{0}: the AMC frame rate must be a positive number")]
     BadAmcFps(f32),
     /// Two OBJ files.
     #[error("{0}: only one .obj per Pinocchio rig")]
@@ -224,9 +224,9 @@ pub enum DetectError {
     /// More `.out` files than a rig has.
     #[error("{0}: more .out files than a Pinocchio rig has")]
     TooManyOuts(String),
-    /// An incomplete Pinocchio rig.
-    #[error("a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}", .0.join(", "))]
-    IncompletePinocchio(Vec<&'static str>),
+    /// An incomplete Pinocchio rig: the files it lacks, in [`PinocchioFile`] order.
+    #[error("a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}", join(.0))]
+    IncompletePinocchio(Vec<PinocchioFile>),
     /// A folder without one recognizable asset.
     #[error("{path}: expected one .obj with one skeleton and one attachment .out file (or one .glb/.gltf); found {objs} .obj, {skeletons} skeleton, {attachments} attachment, {gltfs} glTF files")]
     Folder {
@@ -242,8 +242,39 @@ pub enum DetectError {
         gltfs: usize,
     },
     /// No input.
-    #[error("no input given (see --help)")]
+    #[error("no input given")]
     NoInput,
+}
+
+/// One of the three files of a Pinocchio rig ([`Inputs::mesh`], [`Inputs::skeleton`],
+/// [`Inputs::attachment`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PinocchioFile {
+    /// The OBJ mesh.
+    Mesh,
+    /// The `skeleton.out`.
+    Skeleton,
+    /// The `attachment.out`.
+    Attachment,
+}
+
+impl std::fmt::Display for PinocchioFile {
+    /// `mesh`, `skeleton` or `attachment`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Mesh => "mesh",
+            Self::Skeleton => "skeleton",
+            Self::Attachment => "attachment",
+        })
+    }
+}
+
+fn join(files: &[PinocchioFile]) -> String {
+    files
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// A path's extension, lower case (`""` without one).
@@ -441,9 +472,9 @@ pub fn plan(inputs: &Inputs) -> Result<Vec<Source>, DetectError> {
         (None, None, None) => {}
         (mesh, skeleton, attachment) => {
             let missing = [
-                ("--mesh", mesh.is_none()),
-                ("--skeleton", skeleton.is_none()),
-                ("--attachment", attachment.is_none()),
+                (PinocchioFile::Mesh, mesh.is_none()),
+                (PinocchioFile::Skeleton, skeleton.is_none()),
+                (PinocchioFile::Attachment, attachment.is_none()),
             ]
             .iter()
             .filter(|(_, m)| *m)

@@ -1,90 +1,8 @@
-use std::fmt;
-use std::path::{Path, PathBuf};
+pub use rigport_location::Location;
 
 use rigport_model::{AssetError, SkeletonProblem};
 
-/// Where in an input a problem is: the file, and a line and column, a JSON path or a byte
-/// offset when known.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Location {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line number.
-    pub line: Option<usize>,
-    /// 1-based column (only with `line`).
-    pub column: Option<usize>,
-    /// JSON pointer-like path (`/skins/0/joints/3`) for JSON-based formats.
-    pub json_path: Option<String>,
-    /// Byte offset for binary formats.
-    pub byte_offset: Option<u64>,
-}
-
-impl Location {
-    /// The whole file.
-    pub fn file(path: &Path) -> Self {
-        Self {
-            path: path.to_path_buf(),
-            line: None,
-            column: None,
-            json_path: None,
-            byte_offset: None,
-        }
-    }
-
-    /// A 1-based line of the file; line 0 (data from a binary file, which has no lines)
-    /// names the file only.
-    pub fn line(path: &Path, line: usize) -> Self {
-        Self {
-            line: (line > 0).then_some(line),
-            ..Self::file(path)
-        }
-    }
-
-    /// A 1-based line and column of the file.
-    pub fn line_column(path: &Path, line: usize, column: usize) -> Self {
-        Self {
-            line: Some(line),
-            column: Some(column),
-            ..Self::file(path)
-        }
-    }
-
-    /// A JSON path inside the file.
-    pub fn json(path: &Path, json_path: impl Into<String>) -> Self {
-        Self {
-            json_path: Some(json_path.into()),
-            ..Self::file(path)
-        }
-    }
-
-    /// A byte offset inside the file.
-    pub fn byte(path: &Path, offset: u64) -> Self {
-        Self {
-            byte_offset: Some(offset),
-            ..Self::file(path)
-        }
-    }
-}
-
-impl fmt::Display for Location {
-    /// `file:line:column`, `file:line`, `file: at /json/path`, `file: at byte N`, or `file`.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.path.display())?;
-        if let Some(line) = self.line {
-            write!(f, ":{line}")?;
-            if let Some(col) = self.column {
-                write!(f, ":{col}")?;
-            }
-        }
-        if let Some(p) = &self.json_path {
-            write!(f, ": at {p}")?;
-        }
-        if let Some(b) = self.byte_offset {
-            write!(f, ": at byte {b}")?;
-        }
-        Ok(())
-    }
-}
+use crate::problem::{Hierarchy, Limit, Mismatch, Missing, Repeated, Rule, Uri};
 
 /// What is wrong with an input.
 #[derive(Debug, thiserror::Error)]
@@ -178,6 +96,34 @@ pub enum Problem {
         /// The value as written.
         found: String,
     },
+    /// Bytes that are not UTF-8 in a text format.
+    #[error("not UTF-8 text")]
+    NotUtf8,
+    /// The parent structure of the joints or bones is broken (as the file numbers them).
+    #[error(transparent)]
+    Hierarchy(#[from] Hierarchy),
+    /// More than rigport's types hold (32-bit indices and floats, key times).
+    #[error(transparent)]
+    Limit(#[from] Limit),
+    /// Two counts in the input that must agree and do not.
+    #[error(transparent)]
+    Mismatch(#[from] Mismatch),
+    /// Something the format requires is not there.
+    #[error(transparent)]
+    Missing(#[from] Missing),
+    /// Something the format allows once is given again.
+    #[error(transparent)]
+    Repeated(#[from] Repeated),
+    /// A well-formed input that breaks a rule of its format.
+    #[error(transparent)]
+    Rule(#[from] Rule),
+    /// The bytes a glTF `uri` names cannot be had.
+    #[error(transparent)]
+    Uri(#[from] Uri),
+    /// A USD layer that cannot be read ([`rigport_usd::Problem`]; its empty-file, syntax,
+    /// truncation and free-text problems map to this enum's).
+    #[error(transparent)]
+    Usd(rigport_usd::Problem),
     /// The imported asset breaks the model's invariants ([`rigport_model::Asset::validate`]);
     /// every problem is listed. Reported rather than trusted: a parse that succeeded
     /// should never get here.
@@ -237,6 +183,11 @@ impl ImportError {
         }
     }
 
+    /// A typed problem (any class of [`Problem`]) at `location`.
+    pub fn at(location: Location, problem: impl Into<Problem>) -> Self {
+        Self::new(location, problem.into())
+    }
+
     /// An [`Problem::Invalid`] error at `location`.
     pub fn invalid(location: Location, message: impl Into<String>) -> Self {
         Self::new(location, Problem::Invalid(message.into()))
@@ -289,6 +240,7 @@ pub enum NumberIssue {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
     #[test]
     fn displays_file_line_column() {

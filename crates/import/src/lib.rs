@@ -18,6 +18,7 @@ pub mod mtl;
 mod number;
 pub mod obj;
 pub mod pinocchio;
+pub mod problem;
 mod text;
 pub mod usda;
 
@@ -65,7 +66,7 @@ pub(crate) fn utf8<'a>(bytes: &'a [u8], path: &std::path::Path) -> Result<&'a st
     std::str::from_utf8(bytes).map_err(|e| {
         let before = bytes.get(..e.valid_up_to()).unwrap_or_default();
         let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-        ImportError::invalid(Location::line(path, line), "not UTF-8 text")
+        ImportError::new(Location::line(path, line), Problem::NotUtf8)
     })
 }
 

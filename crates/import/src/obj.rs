@@ -34,6 +34,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 use rigport_model::{Asset, Mesh, Warning};
 
+use crate::problem::{Limit, Missing, Rule};
 use crate::text::{self, Lines};
 use crate::{read_file, ImportError, Imported, Location, Problem};
 
@@ -459,15 +460,12 @@ impl Raw {
             }
         }
         if self.positions.is_empty() {
-            return Err(ImportError::invalid(
-                Location::file(path),
-                "no vertices: the file has no `v` lines",
-            ));
+            return Err(ImportError::at(Location::file(path), Missing::Vertices));
         }
         // One decision for every output: a mesh without triangles has nothing to skin or
         // draw (glTF cannot even hold it), so it is refused here, where the file is known.
         if self.faces.is_empty() {
-            return Err(ImportError::invalid(Location::file(path), NO_FACES));
+            return Err(ImportError::at(Location::file(path), Missing::Faces));
         }
         let location = path.display().to_string();
         let mut warnings = Vec::new();
@@ -520,10 +518,7 @@ impl Raw {
                         .ok()
                         .filter(|&o| o != u32::MAX)
                         .ok_or_else(|| {
-                            ImportError::invalid(
-                                Location::line(path, face.line),
-                                "too many vertices for 32-bit indices",
-                            )
+                            ImportError::at(Location::line(path, face.line), Limit::Vertices)
                         })?;
                     // The first n_src entries are the `v` lines, unchanged.
                     let p = out_pos.get(c.v as usize).copied().unwrap_or_default();
@@ -695,20 +690,20 @@ fn resolve_index(
     }
     let x: i64 = text::number(part, "index", at)?;
     let resolved = match x {
-        0 => {
-            return Err(ImportError::invalid(
-                at(),
-                format!("index 0 in {token:?}: OBJ indices start at 1"),
-            ))
-        }
+        0 => return Err(ImportError::at(at(), Rule::ZeroIndex(token.to_string()))),
         x if x > 0 => x - 1,
         // -1 is the last element read so far.
         x => {
             let r = i64::try_from(count).unwrap_or(i64::MAX).saturating_add(x);
             if r < 0 {
-                return Err(ImportError::invalid(
+                let token = token.to_string();
+                return Err(ImportError::at(
                     at(),
-                    format!("relative index {x} in {token:?} reaches before the first element: only {count} read so far"),
+                    Rule::RelativeIndex {
+                        index: x,
+                        token,
+                        count,
+                    },
                 ));
             }
             r
@@ -717,7 +712,10 @@ fn resolve_index(
     u32::try_from(resolved)
         .ok()
         .filter(|&r| r < NONE - 1)
-        .ok_or_else(|| ImportError::invalid(at(), format!("index {x} in {token:?} is too large")))
+        .ok_or_else(|| {
+            let token = token.to_string();
+            ImportError::at(at(), Limit::Index { index: x, token })
+        })
 }
 
 #[cfg(test)]

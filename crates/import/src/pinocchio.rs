@@ -37,6 +37,7 @@ use rigport_model::{
     Skeleton, SkinBinding, Transform, Warning,
 };
 
+use crate::problem::{Hierarchy, Mismatch, Missing, Rule};
 use crate::text::{self, Lines, Number};
 use crate::{exact_fields, obj, read_file, utf8, ImportError, Imported, Location, Problem};
 
@@ -113,7 +114,7 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
                 weights.root_weights.as_deref(),
                 &skeleton_indices(&order),
                 pino.positions.len().saturating_sub(1),
-                &|m| ImportError::invalid(Location::file(attachment), m),
+                &|| Location::file(attachment),
             )
             .ok(),
             _ => None,
@@ -198,11 +199,12 @@ pub fn parse_skeleton(text: &str, path: &Path) -> Result<PinocchioSkeleton, Impo
         let ordinal = skeleton.positions.len();
         let index: usize = text::number(fields[0], "joint index", || at_token(fields[0]))?;
         if index != ordinal {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 at(),
-                format!(
-                    "joint index {index} where {ordinal} was expected: joints must be numbered 0, 1, 2, ... in file order"
-                ),
+                Hierarchy::Numbering {
+                    found: index,
+                    expected: ordinal,
+                },
             ));
         }
         let mut p = [0.0_f32; 3];
@@ -213,9 +215,12 @@ pub fn parse_skeleton(text: &str, path: &Path) -> Result<PinocchioSkeleton, Impo
         let parent = match parent {
             -1 => None,
             p => Some(usize::try_from(p).map_err(|_| {
-                ImportError::invalid(
+                ImportError::at(
                     at(),
-                    format!("parent {p} of joint {index} is not a joint index (the root's parent is -1)"),
+                    Hierarchy::ParentNotIndex {
+                        joint: index,
+                        parent: p,
+                    },
                 )
             })?),
         };
@@ -260,9 +265,9 @@ pub fn parse_attachment(
     vertex_count: usize,
 ) -> Result<(Attachment, Vec<Warning>), ImportError> {
     if joint_count < 2 {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             Location::file(path),
-            format!("a skeleton of {joint_count} joints has no bone to weight"),
+            Missing::Bones(joint_count),
         ));
     }
     let bones = joint_count - 1;
@@ -285,13 +290,12 @@ pub fn parse_attachment(
         let at = || Location::line(path, line_no);
         if row_count == vertex_count {
             let extra = 1 + lines.filter(|(_, l)| !l.trim_ascii().is_empty()).count();
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 at(),
-                format!(
-                    "{} weight rows for {vertex_count} OBJ vertices (`v` lines): this row and {} more have no vertex",
-                    vertex_count + extra,
-                    extra - 1
-                ),
+                Mismatch::ExtraRows {
+                    vertices: vertex_count,
+                    extra,
+                },
             ));
         }
         parse_row(line, &mut buf).map_err(|(_, token)| {
@@ -331,10 +335,7 @@ pub fn parse_attachment(
         }
         let sum: f64 = buf.iter().map(|&w| f64::from(w)).sum();
         if sum <= 0.0 {
-            return Err(ImportError::invalid(
-                at(),
-                "all weights are zero: the vertex would follow no bone",
-            ));
+            return Err(ImportError::at(at(), Missing::NonzeroWeight));
         }
         let error = (sum - 1.0).abs();
         if error > 1e-6 {
@@ -351,16 +352,15 @@ pub fn parse_attachment(
         last_line = line_no;
     }
     if row_count < vertex_count {
-        let problem = format!(
-            "{row_count} weight rows for {vertex_count} OBJ vertices (`v` lines): the rows of vertices {}..={vertex_count} are missing",
-            row_count + 1
-        );
         if row_count == 0 {
             return Err(ImportError::new(Location::file(path), Problem::Empty));
         }
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             Location::line(path, last_line + 1),
-            problem,
+            Mismatch::MissingRows {
+                rows: row_count,
+                vertices: vertex_count,
+            },
         ));
     }
     let location = path.display().to_string();
@@ -514,13 +514,13 @@ pub fn assemble_attachment(
 ) -> Result<Imported, ImportError> {
     let bones = skeleton.positions.len().saturating_sub(1);
     if weights.bones != bones || weights.weights.len() % bones.max(1) != 0 {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             Location::file(Path::new(name)),
-            format!(
-                "{} weights in rows of {}, for {bones} bones",
-                weights.weights.len(),
-                weights.bones
-            ),
+            Mismatch::RowLength {
+                weights: weights.weights.len(),
+                row_len: weights.bones,
+                bones,
+            },
         ));
     }
     let root = weights.root_weights.as_deref();
@@ -540,24 +540,28 @@ pub fn assemble_attachment(
 /// `k`'s skeleton index): zero weights dropped, renormalized, largest first (ties by joint).
 ///
 /// # Errors
-/// Via `invalid`: a row of the wrong length, a negative or non-finite weight, a row with no
+/// At `here()`: a row of the wrong length, a negative or non-finite weight, a row with no
 /// weight.
 fn source_influences<'a>(
     rows: impl ExactSizeIterator<Item = &'a [f32]>,
     root_weights: Option<&[f32]>,
     new_index: &[u32],
     bones: usize,
-    invalid: &dyn Fn(String) -> ImportError,
+    here: &dyn Fn() -> Location,
 ) -> Result<Influences, ImportError> {
     // Built flat (one allocation) rather than one Vec per row.
     let mut entries: Vec<Influence> = Vec::with_capacity(rows.len() * 4);
     let mut ends: Vec<usize> = Vec::with_capacity(rows.len());
     for (v, row) in rows.enumerate() {
         if row.len() != bones {
-            return Err(invalid(format!(
-                "weight row {v} has {} weights for {bones} bones",
-                row.len()
-            )));
+            return Err(ImportError::at(
+                here(),
+                Mismatch::RowWeights {
+                    row: v,
+                    weights: row.len(),
+                    bones,
+                },
+            ));
         }
         let start = entries.len();
         let root = root_weights.and_then(|r| r.get(v)).copied();
@@ -568,7 +572,7 @@ fn source_influences<'a>(
         let mut sum = 0.0_f64;
         for (k, w) in columns {
             if !w.is_finite() || w < 0.0 {
-                return Err(invalid(format!("weight row {v} holds {w}")));
+                return Err(ImportError::at(here(), Rule::Weight { row: v, weight: w }));
             }
             if w >= WEIGHT_EPSILON {
                 sum += f64::from(w);
@@ -579,7 +583,7 @@ fn source_influences<'a>(
             }
         }
         if sum <= 0.0 {
-            return Err(invalid(format!("weight row {v} has no weight")));
+            return Err(ImportError::at(here(), Missing::RowWeight(v)));
         }
         let kept = entries.get_mut(start..).unwrap_or_default();
         for inf in kept.iter_mut() {
@@ -623,20 +627,26 @@ fn assemble_from<'a>(
     precomputed: Option<Influences>,
 ) -> Result<Imported, ImportError> {
     let here = || Location::file(Path::new(name));
-    let invalid = |message: String| ImportError::invalid(here(), message);
     let joint_count = skeleton.positions.len();
     if skeleton.parents.len() != joint_count {
-        return Err(invalid(format!(
-            "the skeleton has {joint_count} positions but {} parents",
-            skeleton.parents.len()
-        )));
+        return Err(ImportError::at(
+            here(),
+            Mismatch::Parents {
+                positions: joint_count,
+                parents: skeleton.parents.len(),
+            },
+        ));
     }
     if let Some(j) = skeleton.positions.iter().position(|p| !p.is_finite()) {
-        return Err(invalid(format!("joint {j}'s position is not finite")));
+        return Err(ImportError::at(here(), Rule::NonFinitePosition(j)));
     }
     let order = check_topology(&skeleton.parents).map_err(|(joint, problem)| {
         let problem = match (joint, problem) {
-            (Some(j), Problem::Invalid(m)) => Problem::Invalid(format!("skeleton joint {j}: {m}")),
+            (Some(joint), Problem::Hierarchy(problem)) => Hierarchy::OfJoint {
+                joint,
+                problem: Box::new(problem),
+            }
+            .into(),
             (_, p) => p,
         };
         ImportError::new(here(), problem)
@@ -647,16 +657,25 @@ fn assemble_from<'a>(
     let row_count = rows.len();
     let source_count = mesh.source_vertex_count();
     if row_count != source_count {
-        return Err(invalid(format!(
-            "{row_count} weight rows for a mesh of {source_count} source vertices"
-        )));
+        return Err(ImportError::at(
+            here(),
+            Mismatch::WeightRows {
+                rows: row_count,
+                vertices: source_count,
+            },
+        ));
     }
     if let Some(root) = root_weights {
         if root.len() != row_count {
-            return Err(invalid(format!(
-                "{} root weights for {row_count} weight rows",
-                root.len()
-            )));
+            return Err(ImportError::at(
+                here(),
+                Mismatch::For {
+                    found: root.len(),
+                    what: "root weights",
+                    expected: row_count,
+                    per: "weight rows",
+                },
+            ));
         }
     }
 
@@ -668,10 +687,15 @@ fn assemble_from<'a>(
     let origin = |k: usize| parent_of(k).map_or_else(|| position(k), position);
     if let Some(names) = bone_names {
         if names.len() != joint_count {
-            return Err(invalid(format!(
-                "{} bone names for {joint_count} Pinocchio joints (one per joint, the root's first)",
-                names.len()
-            )));
+            return Err(ImportError::at(
+                here(),
+                Mismatch::For {
+                    found: names.len(),
+                    what: "bone names",
+                    expected: joint_count,
+                    per: "Pinocchio joints (one per joint, the root's first)",
+                },
+            ));
         }
     }
     let joints: Vec<Joint> = order
@@ -706,7 +730,7 @@ fn assemble_from<'a>(
     // per output vertex.
     let by_source = match precomputed {
         Some(done) => done,
-        None => source_influences(rows, root_weights, &new_index, bones, &invalid)?,
+        None => source_influences(rows, root_weights, &new_index, bones, &here)?,
     };
     let identity = mesh.source_vertex.len() == row_count
         && mesh
@@ -752,34 +776,22 @@ fn assemble_from<'a>(
 fn check_topology(parents: &[Option<usize>]) -> Result<Vec<usize>, (Option<usize>, Problem)> {
     let count = parents.len();
     if count == 0 {
-        return Err((None, Problem::Invalid("the skeleton has no joints".into())));
+        return Err((None, Hierarchy::NoJoints.into()));
     }
     for (j, parent) in parents.iter().enumerate() {
         match *parent {
             Some(p) if p >= count => {
                 return Err((
                     Some(j),
-                    Problem::Invalid(format!(
-                        "parent {p} of joint {j} does not exist: the skeleton has {count} joints (0..={})",
-                        count - 1
-                    )),
+                    Hierarchy::ParentMissing {
+                        joint: j,
+                        parent: p,
+                        count,
+                    }
+                    .into(),
                 ))
             }
-            Some(p) if p == j && j == 0 => {
-                return Err((
-                    Some(j),
-                    Problem::Invalid(
-                        "joint 0 has parent 0, i.e. is its own parent: the root must have parent -1"
-                            .into(),
-                    ),
-                ))
-            }
-            Some(p) if p == j => {
-                return Err((
-                    Some(j),
-                    Problem::Invalid(format!("joint {j} has parent {j}, i.e. is its own parent")),
-                ))
-            }
+            Some(p) if p == j => return Err((Some(j), Hierarchy::SelfParent(j).into())),
             _ => {}
         }
     }
@@ -800,30 +812,18 @@ fn check_topology(parents: &[Option<usize>]) -> Result<Vec<usize>, (Option<usize
         (Some(first), Some(second)) => {
             return Err((
                 Some(second),
-                Problem::Invalid(format!(
-                    "joint {second} is a second root (parent -1) besides joint {first}: a Pinocchio skeleton has exactly one root"
-                )),
+                Hierarchy::SecondPinocchioRoot { first, second }.into(),
             ))
         }
         (Some(root), None) => {
-            return Err((
-                Some(0),
-                Problem::Invalid(format!(
-                    "joint 0 has parent {}, but joint {root} is the root: Pinocchio's root must be joint 0 (weight column k is the bone ending at joint k + 1)",
-                    parents.first().copied().flatten().unwrap_or(0)
-                )),
-            ))
+            let parent = parents.first().copied().flatten().unwrap_or(0);
+            return Err((Some(0), Hierarchy::RootNotFirst { parent, root }.into()));
         }
         // Every finite parent graph without a root has a cycle, reported above.
-        (None, _) => return Err((None, Problem::Invalid("the skeleton has no root (parent -1)".into()))),
+        (None, _) => return Err((None, Hierarchy::NoRootJoint.into())),
     }
     if count < 2 {
-        return Err((
-            Some(0),
-            Problem::Invalid(
-                "the skeleton has only a root: at least one bone (2 joints) is needed".into(),
-            ),
-        ));
+        return Err((Some(0), Hierarchy::OnlyRoot.into()));
     }
     Ok(order)
 }

@@ -28,6 +28,8 @@ pub mod stage;
 pub mod usdz;
 pub mod values;
 
-pub use error::{utf8, Location, Problem, UsdError};
+pub use error::{
+    utf8, CrateProblem, Location, Nesting, PackageProblem, Problem, UsdError, WriteProblem,
+};
 pub use parse::Layer;
 pub use usdz::read_layer;

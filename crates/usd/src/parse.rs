@@ -25,7 +25,7 @@ use std::path::Path;
 
 use super::lex::{Lexer, Tok, Token};
 use super::precision::{is_float_type, is_half_type, round_to_half};
-use crate::error::{Location, Problem, UsdError};
+use crate::error::{Location, Nesting, Problem, UsdError};
 
 /// Deepest nesting of prims, variants and values accepted. Real layers nest prims a few
 /// dozen levels and values three (a matrix in a list); 200 is far beyond both and keeps
@@ -299,9 +299,12 @@ impl<'a> Parser<'a> {
     fn enter(&mut self, at: &Token<'_>) -> Result<(), UsdError> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(UsdError::invalid(
+            return Err(UsdError::new(
                 self.lx.location(at.start),
-                format!("nested more than {MAX_DEPTH} levels deep"),
+                Problem::NestedTooDeep {
+                    what: Nesting::Text,
+                    limit: MAX_DEPTH,
+                },
             ));
         }
         Ok(())

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use super::crate_file;
 use super::parse::{self, Layer};
-use crate::error::{utf8, Location, UsdError};
+use crate::error::{utf8, Location, PackageProblem, Problem, UsdError};
 
 /// The first bytes of a zip archive (a local file header).
 const ZIP_MAGIC: &[u8; 4] = b"PK\x03\x04";
@@ -31,9 +31,9 @@ pub fn read_layer(bytes: &[u8], path: &Path) -> Result<Layer, UsdError> {
         let (member, data) = root_layer(bytes, path)?;
         let inner = PathBuf::from(format!("{}[{member}]", path.display()));
         if data.starts_with(ZIP_MAGIC) {
-            return Err(UsdError::invalid(
+            return Err(UsdError::new(
                 Location::file(&inner),
-                "the root layer of a .usdz is itself a package",
+                PackageProblem::Nested.into(),
             ));
         }
         read_layer(&data, &inner)
@@ -45,13 +45,13 @@ pub fn read_layer(bytes: &[u8], path: &Path) -> Result<Layer, UsdError> {
 /// The name and bytes of a package's first member.
 fn root_layer(bytes: &[u8], path: &Path) -> Result<(String, Vec<u8>), UsdError> {
     let zip_error = |e: zip::result::ZipError| {
-        UsdError::invalid(Location::file(path), format!("not a readable .usdz: {e}"))
+        UsdError::new(Location::file(path), PackageProblem::Unreadable(e).into())
     };
     let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(zip_error)?;
     if archive.is_empty() {
-        return Err(UsdError::invalid(
+        return Err(UsdError::new(
             Location::file(path),
-            "the .usdz package is empty (it needs a root layer)",
+            PackageProblem::Empty.into(),
         ));
     }
     let mut member = archive.by_index(0).map_err(zip_error)?;
@@ -60,20 +60,19 @@ fn root_layer(bytes: &[u8], path: &Path) -> Result<(String, Vec<u8>), UsdError> 
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     if !matches!(ext.as_deref(), Some("usd" | "usda" | "usdc")) {
-        return Err(UsdError::invalid(
+        return Err(UsdError::new(
             Location::file(path),
-            format!(
-                "the first file of a .usdz must be its root layer (.usda/.usdc), found {name:?}"
-            ),
+            PackageProblem::FirstNotLayer(name).into(),
         ));
     }
     let offset = member.data_start();
     // The size comes from the archive's directory: never trust it for a reservation.
     let mut data = Vec::with_capacity((member.size() as usize).min(bytes.len()));
-    member.read_to_end(&mut data).map_err(|e| {
-        UsdError::invalid(
+    member.read_to_end(&mut data).map_err(|error| {
+        let name = name.clone();
+        UsdError::new(
             Location::byte(path, offset),
-            format!("cannot read {name:?} from the package: {e}"),
+            PackageProblem::Member { name, error }.into(),
         )
     })?;
     Ok((name, data))
@@ -100,25 +99,25 @@ pub fn write_package(
     let mut out = Vec::new();
     let mut central = Vec::new();
     let mut names: Vec<&str> = Vec::new();
-    let invalid = |m: String| UsdError::invalid(Location::file(path), m);
+    let refuse = |p: PackageProblem| UsdError::new(Location::file(path), p.into());
     for (name, data) in members {
         if name.is_empty()
             || name.starts_with('/')
             || name.contains('\\')
             || name.split('/').any(|part| part == ".." || part.is_empty())
         {
-            return Err(invalid(format!("{name:?} cannot be a member of a .usdz")));
+            return Err(refuse(PackageProblem::BadName(name.to_string())));
         }
         if names.contains(&name) {
-            return Err(invalid(format!("{name:?} is given twice for the .usdz")));
+            return Err(refuse(PackageProblem::Twice(name.to_string())));
         }
         names.push(name);
         let size = u32::try_from(data.len())
-            .map_err(|_| invalid(format!("{name:?} is over 4 GiB (zip64 is not written)")))?;
-        let offset = u32::try_from(out.len())
-            .map_err(|_| invalid("the package is over 4 GiB (zip64 is not written)".into()))?;
+            .map_err(|_| refuse(PackageProblem::Over4Gib(Some(name.to_string()))))?;
+        let offset =
+            u32::try_from(out.len()).map_err(|_| refuse(PackageProblem::Over4Gib(None)))?;
         let name_len = u16::try_from(name.len())
-            .map_err(|_| invalid(format!("{name:?} is too long a name")))?;
+            .map_err(|_| refuse(PackageProblem::NameTooLong(name.to_string())))?;
         // Padding so that the data starts at a multiple of the alignment; an extra field
         // needs 4 bytes of header.
         let unpadded = out.len() + 30 + name.len();
@@ -161,9 +160,14 @@ pub fn write_package(
         central.extend_from_slice(&offset.to_le_bytes());
         central.extend_from_slice(name.as_bytes());
     }
-    let count = u16::try_from(names.len()).map_err(|_| invalid("too many files".into()))?;
-    let cd_offset = u32::try_from(out.len())
-        .map_err(|_| invalid("the package is over 4 GiB (zip64 is not written)".into()))?;
+    let count = u16::try_from(names.len()).map_err(|_| {
+        let too_many = Problem::TooMany {
+            what: "files",
+            count: None,
+        };
+        UsdError::new(Location::file(path), too_many)
+    })?;
+    let cd_offset = u32::try_from(out.len()).map_err(|_| refuse(PackageProblem::Over4Gib(None)))?;
     let cd_size = central.len() as u32;
     out.extend_from_slice(&central);
     out.extend_from_slice(&0x0605_4b50_u32.to_le_bytes());

@@ -4,9 +4,10 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::Path;
 
+use crate::problem::{Mismatch, Rule};
 use crate::{text, ImportError, Location, Problem};
 
-use super::lines::{column, content, duplicate, invalid, number, syntax, Lines};
+use super::lines::{column, content, duplicate, line_error, number, syntax, Lines};
 use super::types::{Amc, AmcFrame, AngleUnit, Asf, HeldValue, Skipped};
 
 /// Parses an AMC motion of `asf`. `path` is used in messages and kept in [`Amc::path`].
@@ -75,10 +76,13 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
             match unit {
                 Some(unit) => {
                     if amc.angle.is_some_and(|previous| previous != unit) {
-                        return Err(invalid(
+                        return Err(line_error(
                             path,
                             line_no,
-                            format!("{line} contradicts the angle unit given on line {angle_line}"),
+                            Rule::AngleUnit {
+                                line: line.to_string(),
+                                first_line: angle_line,
+                            },
                         ));
                     }
                     amc.angle = Some(unit);
@@ -141,10 +145,10 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
             ));
         };
         let Some(frame) = amc.frames.last() else {
-            return Err(invalid(
+            return Err(line_error(
                 path,
                 line_no,
-                format!("the bone line for {first:?} comes before the first frame number"),
+                Rule::BeforeFirstFrame(first.to_string()),
             ));
         };
         let frame_number = frame.number;
@@ -182,18 +186,15 @@ pub fn parse_amc(text: &str, path: &Path, asf: &Asf) -> Result<Amc, ImportError>
                     .map(|b| &b.dofs)
                     .unwrap_or(&asf.root.order)
             };
-            let names: Vec<&str> = dofs.iter().map(|d| d.as_str()).collect();
-            return Err(invalid(
+            return Err(line_error(
                 path,
                 line_no,
-                format!(
-                    "{first:?} has {count} values, but its dofs ({}) need {expected}",
-                    if names.is_empty() {
-                        "none".to_string()
-                    } else {
-                        names.join(" ")
-                    }
-                ),
+                Mismatch::BoneValues {
+                    bone: first.to_string(),
+                    count,
+                    dofs: dofs.iter().map(|d| d.as_str()).collect(),
+                    expected,
+                },
             ));
         }
     }

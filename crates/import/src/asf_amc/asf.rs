@@ -6,11 +6,12 @@ use std::path::Path;
 use glam::DVec3;
 use rigport_model::conventions::EulerOrder;
 
+use crate::problem::{Mismatch, Missing, Repeated, Rule};
 use crate::{text, ImportError, Location, Problem};
 
 use super::hierarchy::resolve_hierarchy;
 use super::lines::{
-    column, content, dof_list, duplicate, euler_order, invalid, number, syntax, vec3, Lines,
+    column, content, dof_list, duplicate, euler_order, line_error, number, syntax, vec3, Lines,
 };
 use super::types::{AngleUnit, Asf, Bone, Dof, Root, Skipped, Units};
 
@@ -250,7 +251,7 @@ impl<'a, 't> AsfParser<'a, 't> {
             if eof {
                 ImportError::new(Location::line(self.path, line_no), Problem::Truncated(what))
             } else {
-                invalid(self.path, line_no, what)
+                ImportError::invalid(Location::line(self.path, line_no), what)
             }
         };
         match self.section {
@@ -263,11 +264,7 @@ impl<'a, 't> AsfParser<'a, 't> {
                         ("orientation", root.orientation.is_none()),
                     ];
                     if let Some((key, _)) = missing.iter().find(|(_, m)| *m) {
-                        return Err(invalid(
-                            self.path,
-                            root.line,
-                            format!("`:root` has no `{key}` line"),
-                        ));
+                        return Err(line_error(self.path, root.line, Missing::RootLine(key)));
                     }
                 }
             }
@@ -322,9 +319,9 @@ impl<'a, 't> AsfParser<'a, 't> {
             "length" => {
                 let length = number(path, line_no, raw, value, "length unit")?;
                 if length <= 0.0 {
-                    return Err(ImportError::invalid(
+                    return Err(ImportError::at(
                         Location::line_column(path, line_no, column(raw, value)),
-                        format!("the length unit must be positive, got {length}"),
+                        Rule::LengthUnit(length),
                     ));
                 }
                 self.units.length = Some(length);
@@ -427,13 +424,10 @@ impl<'a, 't> AsfParser<'a, 't> {
         draft.in_limits = false;
         let within = "the bone block";
         match lower.as_str() {
-            "begin" => Err(invalid(
+            "begin" => Err(line_error(
                 path,
                 line_no,
-                format!(
-                    "`begin` inside the bone block opened on line {} (missing `end`)",
-                    draft.begin_line
-                ),
+                Rule::BeginInBone(draft.begin_line),
             )),
             "end" => {
                 if let Some(extra) = args.first() {
@@ -463,15 +457,18 @@ impl<'a, 't> AsfParser<'a, 't> {
                     ));
                 };
                 if name.eq_ignore_ascii_case("root") {
-                    return Err(ImportError::invalid(
+                    return Err(ImportError::at(
                         Location::line_column(path, line_no, column(raw, name)),
-                        format!("a bone cannot be named {name:?}: the name is reserved for the root"),
+                        Rule::ReservedName(name.to_string()),
                     ));
                 }
                 if let Some(first) = self.names.get(*name) {
-                    return Err(ImportError::invalid(
+                    return Err(ImportError::at(
                         Location::line_column(path, line_no, column(raw, name)),
-                        format!("two bones are named {name:?} (the first on line {first})"),
+                        Repeated::BoneName {
+                            name: name.to_string(),
+                            first_line: *first,
+                        },
                     ));
                 }
                 once(&mut draft.name, name.to_string(), path, line_no, "name", within)?;
@@ -492,9 +489,9 @@ impl<'a, 't> AsfParser<'a, 't> {
                 };
                 let length = number(path, line_no, raw, value, "length")?;
                 if length < 0.0 {
-                    return Err(ImportError::invalid(
+                    return Err(ImportError::at(
                         Location::line_column(path, line_no, column(raw, value)),
-                        format!("a bone length must not be negative, got {length}"),
+                        Rule::NegativeLength(length),
                     ));
                 }
                 once(&mut draft.length, length, path, line_no, "length", within)
@@ -540,15 +537,9 @@ impl<'a, 't> AsfParser<'a, 't> {
     }
 
     fn finish_bone(&mut self, draft: BoneDraft, end_line: usize) -> Result<(), ImportError> {
-        let missing = |key: &str| {
-            invalid(
-                self.path,
-                end_line,
-                format!(
-                    "the bone block opened on line {} has no `{key}`",
-                    draft.begin_line
-                ),
-            )
+        let missing = |key: &'static str| {
+            let begin_line = draft.begin_line;
+            line_error(self.path, end_line, Missing::BoneEntry { begin_line, key })
         };
         let (name, line) = draft.name.clone().ok_or_else(|| missing("name"))?;
         let (direction, _) = draft.direction.ok_or_else(|| missing("direction"))?;
@@ -558,14 +549,14 @@ impl<'a, 't> AsfParser<'a, 't> {
         let limits = match draft.limits {
             Some((limits, limits_line)) => {
                 if limits.len() != dofs.len() {
-                    return Err(invalid(
+                    return Err(line_error(
                         self.path,
                         limits_line,
-                        format!(
-                            "bone {name:?} has {} limit pairs for {} dofs",
-                            limits.len(),
-                            dofs.len()
-                        ),
+                        Mismatch::Limits {
+                            bone: name,
+                            limits: limits.len(),
+                            dofs: dofs.len(),
+                        },
                     ));
                 }
                 limits
@@ -636,7 +627,7 @@ impl<'a, 't> AsfParser<'a, 't> {
             (root.order, root.axis, root.position, root.orientation)
         else {
             // close_section has checked the `:root` entries.
-            return Err(invalid(self.path, root.line, "`:root` is incomplete"));
+            return Err(line_error(self.path, root.line, Missing::Root));
         };
         let mut asf = Asf {
             path: self.path.to_path_buf(),

@@ -5,9 +5,10 @@ use std::collections::HashMap;
 
 use rigport_model::{parents_first_order, SkeletonProblem};
 
+use crate::problem::Hierarchy;
 use crate::{ImportError, Location, Problem};
 
-use super::lines::{column, invalid};
+use super::lines::{column, line_error};
 use super::types::{Asf, Bone};
 
 /// Sets every bone's parent from the `:hierarchy` lines and checks the tree.
@@ -48,16 +49,16 @@ pub(super) fn resolve_hierarchy(
         };
         for child_token in tokens {
             if child_token.eq_ignore_ascii_case("root") {
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     Location::line_column(&path, line_no, column(raw, child_token)),
-                    "the root cannot be a child",
+                    Hierarchy::RootAsChild,
                 ));
             }
             let child = lookup(child_token)?;
             if parent == Some(child) {
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     Location::line_column(&path, line_no, column(raw, child_token)),
-                    format!("bone {child_token:?} is listed as its own child"),
+                    Hierarchy::OwnChild(child_token.to_string()),
                 ));
             }
             let Some(slot) = parents.get_mut(child) else {
@@ -67,11 +68,13 @@ pub(super) fn resolve_hierarchy(
                 let previous = previous
                     .and_then(|p| asf.bones.get(p))
                     .map_or("root", |b| b.name.as_str());
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     Location::line_column(&path, line_no, column(raw, child_token)),
-                    format!(
-                        "bone {child_token:?} already is a child of {previous:?} (line {first})"
-                    ),
+                    Hierarchy::SecondParent {
+                        bone: child_token.to_string(),
+                        parent: previous.to_string(),
+                        line: first,
+                    },
                 ));
             }
             *slot = Some((parent, line_no));
@@ -79,13 +82,10 @@ pub(super) fn resolve_hierarchy(
     }
     for (bone, parent) in asf.bones.iter_mut().zip(&parents) {
         let Some((parent, line)) = *parent else {
-            return Err(invalid(
+            return Err(line_error(
                 &path,
                 bone.line,
-                format!(
-                    "bone {:?} is not listed as a child in `:hierarchy`, so it has no place in the skeleton",
-                    bone.name
-                ),
+                Hierarchy::NotListed(bone.name.clone()),
             ));
         };
         bone.parent = parent;
@@ -117,15 +117,8 @@ pub(super) fn hierarchy_error(
             .filter_map(|&j| bone_of(j).and_then(|b| asf.bones.get(b)))
             .collect();
         let line = bones.iter().map(|b| b.hierarchy_line).min().unwrap_or(0);
-        let names: Vec<&str> = bones.iter().map(|b| b.name.as_str()).collect();
-        return invalid(
-            &asf.path,
-            line,
-            format!(
-                "bones {} form a parent cycle, not connected to the root",
-                names.join(" -> ")
-            ),
-        );
+        let names = bones.iter().map(|b| b.name.clone()).collect();
+        return line_error(&asf.path, line, Hierarchy::Cycle(names));
     }
     ImportError::new(
         Location::file(&asf.path),

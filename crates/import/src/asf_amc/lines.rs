@@ -6,6 +6,7 @@ use std::path::Path;
 use glam::DVec3;
 use rigport_model::conventions::EulerOrder;
 
+use crate::problem::Repeated;
 pub(super) use crate::text::{column, Lines};
 use crate::{text, ImportError, Location, Problem};
 
@@ -52,8 +53,9 @@ pub(super) fn duplicate(path: &Path, line: usize, what: String, first_line: usiz
     )
 }
 
-pub(super) fn invalid(path: &Path, line: usize, message: impl Into<String>) -> ImportError {
-    ImportError::invalid(Location::line(path, line), message)
+/// `problem` at a line of `path`.
+pub(super) fn line_error(path: &Path, line: usize, problem: impl Into<Problem>) -> ImportError {
+    ImportError::at(Location::line(path, line), problem)
 }
 
 /// A finite number.
@@ -117,9 +119,9 @@ pub(super) fn dof_list(
             .filter(|d| allow_length || *d != Dof::L)
             .ok_or_else(|| syntax(path, line, raw, token, expected))?;
         if dofs.contains(&dof) {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 Location::line_column(path, line, column(raw, token)),
-                format!("dof {} is listed twice", dof.as_str()),
+                Repeated::Dof(dof.as_str()),
             ));
         }
         dofs.push(dof);

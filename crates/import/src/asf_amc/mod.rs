@@ -82,6 +82,7 @@ use std::path::{Path, PathBuf};
 
 use rigport_model::{Asset, Warning};
 
+use crate::problem::Rule;
 use crate::{read_file, utf8, ImportError, Imported, Location};
 
 use self::skeleton::build_skeleton;
@@ -126,10 +127,7 @@ fn check_fps(fps: f32, path: &Path) -> Result<(), ImportError> {
     if fps.is_finite() && fps > 0.0 {
         Ok(())
     } else {
-        Err(ImportError::invalid(
-            Location::file(path),
-            format!("the frame rate must be finite and positive, got {fps} fps"),
-        ))
+        Err(ImportError::at(Location::file(path), Rule::FrameRate(fps)))
     }
 }
 

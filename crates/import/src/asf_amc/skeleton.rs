@@ -7,10 +7,11 @@ use glam::{DQuat, DVec3};
 use rigport_model::conventions::EulerOrder;
 use rigport_model::{parents_first_order, Joint, JointIndex, Skeleton, Transform};
 
+use crate::problem::{Hierarchy, Limit};
 use crate::{ImportError, Location, Problem};
 
 use super::hierarchy::hierarchy_error;
-use super::lines::invalid;
+use super::lines::line_error;
 use super::types::{Asf, Bone};
 
 /// The skeleton and where each ASF node (0 = root, `1 + b` = bone `b`) went.
@@ -47,13 +48,14 @@ pub(super) fn build_skeleton(asf: &Asf) -> Result<Rig, ImportError> {
     for bone in &asf.bones {
         if let Some(p) = bone.parent {
             let Some(flag) = has_children.get_mut(p) else {
-                return Err(invalid(
+                return Err(line_error(
                     path,
                     bone.hierarchy_line,
-                    format!(
-                        "bone {:?} names parent bone #{p}, but there are {bone_count} bones",
-                        bone.name
-                    ),
+                    Hierarchy::ParentBone {
+                        bone: bone.name.clone(),
+                        parent: p,
+                        count: bone_count,
+                    },
                 ));
             };
             *flag = true;
@@ -115,15 +117,11 @@ pub(super) fn build_skeleton(asf: &Asf) -> Result<Rig, ImportError> {
             } else {
                 (None, joint)
             };
-            let message = match end {
-                Some(end) => format!(
-                    "bone {:?} has the name rigport gives the end joint of leaf bone {:?}",
-                    bone.name,
-                    bone_name(asf, end.node)
-                ),
-                None => format!("two bones are named {:?}", bone.name),
+            let problem = Hierarchy::SameName {
+                bone: bone.name.clone(),
+                leaf: end.map(|end| bone_name(asf, end.node).to_string()),
             };
-            return Err(invalid(path, line_of(bone.node), message));
+            return Err(line_error(path, line_of(bone.node), problem));
         }
     }
     let parents: Vec<Option<usize>> = source.iter().map(|j| j.parent).collect();
@@ -137,9 +135,8 @@ pub(super) fn build_skeleton(asf: &Asf) -> Result<Rig, ImportError> {
     })?;
     let mut new_index = vec![0_u32; source.len()];
     for (k, &s) in order.iter().enumerate() {
-        let k = u32::try_from(k).map_err(|_| {
-            ImportError::invalid(Location::file(path), "more joints than fit 32-bit indices")
-        })?;
+        let k =
+            u32::try_from(k).map_err(|_| ImportError::at(Location::file(path), Limit::Joints))?;
         if let Some(slot) = new_index.get_mut(s) {
             *slot = k;
         }
@@ -151,13 +148,13 @@ pub(super) fn build_skeleton(asf: &Asf) -> Result<Rig, ImportError> {
         };
         let translation = joint.translation.as_vec3();
         if !translation.is_finite() {
-            return Err(invalid(
+            return Err(line_error(
                 path,
                 line_of(joint.node),
-                format!(
-                    "joint {:?}: its rest offset {} does not fit 32-bit floats",
-                    joint.name, joint.translation
-                ),
+                Limit::RestOffset {
+                    joint: joint.name.clone(),
+                    offset: joint.translation,
+                },
             ));
         }
         joints.push(Joint {

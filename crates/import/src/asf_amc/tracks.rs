@@ -5,9 +5,10 @@ use std::ops::Range;
 use glam::{DQuat, DVec3, Vec3};
 use rigport_model::{Clip, Interpolation, JointIndex, Track, TrackTarget, Warning};
 
+use crate::problem::{Limit, Mismatch};
 use crate::{ImportError, Location, Problem};
 
-use super::lines::invalid;
+use super::lines::line_error;
 use super::skeleton::{euler, Rig};
 use super::types::{Amc, AmcFrame, Asf, Dof};
 
@@ -42,14 +43,15 @@ pub(super) fn build_clip(
     let channels = asf.channel_count();
     let frame_count = amc.frames.len();
     if amc.channels != channels || frame_count.checked_mul(channels) != Some(amc.values.len()) {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             Location::file(path),
-            format!(
-                "the motion has {} values per frame ({} in all for {frame_count} frames), but the skeleton {} has {channels} dofs: it was parsed against another skeleton",
-                amc.channels,
-                amc.values.len(),
-                asf.path.display()
-            ),
+            Mismatch::AmcSkeleton {
+                per_frame: amc.channels,
+                values: amc.values.len(),
+                frames: frame_count,
+                skeleton: asf.path.clone(),
+                dofs: channels,
+            },
         ));
     }
     if frame_count == 0 {
@@ -62,11 +64,9 @@ pub(super) fn build_clip(
     for k in 0..frame_count {
         let t = (k as f64 / f64::from(fps)) as f32;
         if !t.is_finite() || times.last().is_some_and(|&previous| t <= previous) {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 Location::file(path),
-                format!(
-                    "frame {k} at {fps} fps has no 32-bit key time after the previous frame's: too many frames for this rate"
-                ),
+                Limit::KeyTime { frame: k, fps },
             ));
         }
         times.push(t);
@@ -152,17 +152,18 @@ pub(super) fn build_clip(
                 };
                 let p: Vec3 = (node.rest + offset).as_vec3();
                 if !p.is_finite() {
-                    return Err(invalid(
+                    let joint = rig
+                        .skeleton
+                        .joints()
+                        .get(node.joint.get())
+                        .map_or("?", |j| j.name.as_str());
+                    return Err(line_error(
                         path,
                         frame.line,
-                        format!(
-                            "frame {}: the translation of joint {:?} does not fit 32-bit floats",
-                            frame.number,
-                            rig.skeleton
-                                .joints()
-                                .get(node.joint.get())
-                                .map_or("?", |j| j.name.as_str())
-                        ),
+                        Limit::Translation {
+                            frame: frame.number,
+                            joint: joint.to_string(),
+                        },
                     ));
                 }
                 out.extend(p.to_array());

@@ -3,6 +3,7 @@
 use glam::Vec3;
 use rigport_model::Warning;
 
+use crate::problem::{Mismatch, Missing, Repeated};
 use crate::{ImportError, Location, Problem};
 
 use super::parser::{keyword, Parser};
@@ -81,9 +82,9 @@ impl<'a> Parser<'a, '_> {
             words.pop();
         }
         if words.is_empty() {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 self.at(kw),
-                format!("{} needs a joint name on its line", kw.text),
+                Missing::JointName(kw.text.to_string()),
             ));
         }
         let name = words.iter().map(|t| t.text).collect::<Vec<_>>().join("_");
@@ -124,22 +125,20 @@ impl<'a> Parser<'a, '_> {
         let count: usize =
             crate::text::number(count_token.text, "channel count", || self.at(count_token))?;
         if count > Channel::ALL.len() {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 self.at(count_token),
-                format!(
-                    "CHANNELS {count}: a joint has at most 6 channels (3 positions, 3 rotations)"
-                ),
+                Mismatch::Channels(count),
             ));
         }
         let mut channels: Vec<Channel> = Vec::with_capacity(count);
         while channels.len() < count {
             let Some(t) = self.next_on_line() else {
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     self.at(kw),
-                    format!(
-                        "CHANNELS {count} lists {} channel names on its line",
-                        channels.len()
-                    ),
+                    Mismatch::ChannelNames {
+                        count,
+                        names: channels.len(),
+                    },
                 ));
             };
             let c = Channel::parse(t.text).ok_or_else(|| {
@@ -149,19 +148,13 @@ impl<'a> Parser<'a, '_> {
                 )
             })?;
             if channels.contains(&c) {
-                return Err(ImportError::invalid(
-                    self.at(t),
-                    format!("channel {} is listed twice", c.name()),
-                ));
+                return Err(ImportError::at(self.at(t), Repeated::Channel(c.name())));
             }
             channels.push(c);
         }
         if let Some(t) = self.next_on_line() {
             return Err(if Channel::parse(t.text).is_some() {
-                ImportError::invalid(
-                    self.at(t),
-                    format!("CHANNELS {count} lists more than {count} channel names"),
-                )
+                ImportError::at(self.at(t), Mismatch::MoreChannelNames(count))
             } else {
                 self.syntax(t, "the end of the line after the channel names")
             });

@@ -106,6 +106,7 @@ use std::path::Path;
 
 use rigport_model::{Asset, Joint, JointIndex, Skeleton, Transform, Warning};
 
+use crate::problem::{Hierarchy, Limit, Mismatch, Repeated, Rule};
 use crate::{read_file, ImportError, Imported, Location, Problem};
 
 use self::parser::keyword;
@@ -248,12 +249,9 @@ pub fn to_asset(name: &str, bvh: &Bvh) -> Result<Imported, ImportError> {
 
     let total = bvh.joints.len() + bvh.end_sites.len();
     let joint_index = |i: usize| {
-        u32::try_from(i).map(JointIndex).map_err(|_| {
-            ImportError::invalid(
-                Location::file(path),
-                format!("{total} joints: more than a skeleton can index"),
-            )
-        })
+        u32::try_from(i)
+            .map(JointIndex)
+            .map_err(|_| ImportError::at(Location::file(path), Limit::SkeletonJoints(total)))
     };
     // Each name given so far and the line of the joint holding it.
     let mut taken: HashMap<String, usize> = HashMap::with_capacity(total);
@@ -322,61 +320,62 @@ fn check(bvh: &Bvh, at_line: &dyn Fn(usize) -> Location) -> Result<usize, Import
     for (i, j) in bvh.joints.iter().enumerate() {
         if let Some(p) = j.parent {
             if p >= i {
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     at_line(j.line),
-                    format!(
-                        "joint {i} ({:?}) names parent {p}, which is not an earlier joint",
-                        j.name
-                    ),
+                    Hierarchy::ParentNotEarlier {
+                        joint: i,
+                        name: j.name.clone(),
+                        parent: p,
+                    },
                 ));
             }
         }
         if j.first_channel != channels {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 at_line(j.line),
-                format!(
-                    "joint {:?} starts at channel {} but the joints before it have {channels}",
-                    j.name, j.first_channel
-                ),
+                Mismatch::FirstChannel {
+                    joint: j.name.clone(),
+                    first: j.first_channel,
+                    before: channels,
+                },
             ));
         }
         for (k, c) in j.channels.iter().enumerate() {
             if j.channels.get(..k).is_some_and(|before| before.contains(c)) {
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     at_line(j.line),
-                    format!("joint {:?} lists channel {} twice", j.name, c.name()),
+                    Repeated::JointChannel {
+                        joint: j.name.clone(),
+                        channel: c.name(),
+                    },
                 ));
             }
         }
         channels += j.channels.len();
     }
     if let Some(e) = bvh.end_sites.iter().find(|e| e.parent >= bvh.joints.len()) {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             at_line(e.line),
-            format!(
-                "the end site names joint {}, but there are {} joints",
-                e.parent,
-                bvh.joints.len()
-            ),
+            Hierarchy::EndSiteJoint {
+                joint: e.parent,
+                count: bvh.joints.len(),
+            },
         ));
     }
     if !(bvh.frame_time.is_finite() && bvh.frame_time > 0.0) {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             at_line(bvh.motion_line),
-            format!(
-                "Frame Time {:?} is not a number of seconds > 0",
-                bvh.frame_time
-            ),
+            Rule::FrameTime(format!("{:?}", bvh.frame_time)),
         ));
     }
     if bvh.frame_count.checked_mul(channels) != Some(bvh.motion.len()) {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             at_line(bvh.motion_line),
-            format!(
-                "{} motion values for {} frames of {channels} channels",
-                bvh.motion.len(),
-                bvh.frame_count
-            ),
+            Mismatch::MotionValues {
+                values: bvh.motion.len(),
+                frames: bvh.frame_count,
+                channels,
+            },
         ));
     }
     Ok(channels)

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use rigport_model::Warning;
 
+use crate::problem::Rule;
 use crate::text::{self, column, Lines, Number};
 use crate::{number, ImportError, Location, Problem};
 
@@ -58,9 +59,9 @@ impl<'a> Parser<'a, '_> {
             Location::line_column(path, line, col)
         })?;
         if frame_time <= 0.0 {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 Location::line_column(path, line, col),
-                format!("Frame Time {value} is not a number of seconds > 0"),
+                Rule::FrameTime(value.to_string()),
             ));
         }
 

@@ -6,6 +6,7 @@ use std::path::Path;
 use rigport_model::Warning;
 
 use super::types::{BvhEndSite, BvhJoint};
+use crate::problem::Missing;
 use crate::text::{self, Cursor, Token};
 use crate::{ImportError, Location, Problem};
 
@@ -53,13 +54,11 @@ impl<'a> Parser<'a, '_> {
     pub(super) fn expect_on_line(
         &mut self,
         after: Token<'_>,
-        expected: &str,
+        expected: &'static str,
     ) -> Result<Token<'a>, ImportError> {
         self.next_on_line().ok_or_else(|| {
-            ImportError::invalid(
-                self.at(after),
-                format!("{} needs {expected} on its line", after.text),
-            )
+            let keyword = after.text.to_string();
+            ImportError::at(self.at(after), Missing::OnLine { keyword, expected })
         })
     }
 

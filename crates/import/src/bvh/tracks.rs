@@ -3,6 +3,7 @@
 use glam::{DQuat, DVec3};
 use rigport_model::{Clip, Interpolation, JointIndex, Track, TrackTarget};
 
+use crate::problem::{Limit, Missing};
 use crate::{ImportError, Location};
 
 use super::types::{Bvh, BvhJoint};
@@ -20,20 +21,16 @@ pub(super) fn clip(
         .map(|k| (k as f64 * bvh.frame_time) as f32)
         .collect();
     if times.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             at_line(bvh.motion_line),
-            format!(
-                "Frame Time {:?} s is too small for {frames} frames to get increasing f32 key times",
-                bvh.frame_time
-            ),
+            Limit::FrameTime {
+                frame_time: bvh.frame_time,
+                frames,
+            },
         ));
     }
-    let broken = |j: &BvhJoint| {
-        ImportError::invalid(
-            at_line(j.line),
-            format!("the motion has no values for joint {:?}", j.name),
-        )
-    };
+    let broken =
+        |j: &BvhJoint| ImportError::at(at_line(j.line), Missing::JointValues(j.name.clone()));
     let joints = &bvh.joints;
     // Joints' tracks are independent: a large clip builds them on two threads, the joints
     // split where half the channels are done, and keeps them in joint order.

@@ -10,6 +10,7 @@ use rigport_model::{
     Skeleton, SkinBinding,
 };
 
+use crate::problem::Mismatch;
 use crate::{ImportError, Location, Problem};
 
 use super::rest::rest_local_transform;
@@ -76,13 +77,12 @@ pub(super) fn assemble(
     if let Some(weights) = weights {
         // parse_weights made one row per `v` line, which is what source_vertex names.
         if mesh.source_vertex_count() > weights.vertex_count() {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 here(),
-                format!(
-                    "{} weight rows for a mesh of {} source vertices",
-                    weights.vertex_count(),
-                    mesh.source_vertex_count()
-                ),
+                Mismatch::WeightRows {
+                    rows: weights.vertex_count(),
+                    vertices: mesh.source_vertex_count(),
+                },
             ));
         }
         skins.push(SkinBinding {

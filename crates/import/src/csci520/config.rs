@@ -4,6 +4,7 @@ use std::path::Path;
 
 use rigport_model::Warning;
 
+use crate::problem::Missing;
 use crate::{ImportError, Location, Problem};
 
 use super::types::{ConfigEntry, SkinConfig};
@@ -40,9 +41,12 @@ pub fn parse_config(text: &str, path: &Path) -> Result<(SkinConfig, Vec<Warning>
         let at = || Location::line(path, line_no);
         if let Some(name) = line.strip_prefix('*') {
             if let Some((previous, previous_line)) = pending {
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     Location::line(path, previous_line),
-                    format!("*{previous} has no value: the next line that is not blank or a comment (line {line_no}) starts another option"),
+                    Missing::OptionValue {
+                        option: previous.to_string(),
+                        next_line: line_no,
+                    },
                 ));
             }
             let name = name.trim_ascii();
@@ -109,9 +113,9 @@ pub fn parse_config(text: &str, path: &Path) -> Result<(SkinConfig, Vec<Warning>
         }
     }
     if let Some((name, line)) = pending {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             Location::line(path, line),
-            format!("*{name} has no value: the file ends"),
+            Missing::OptionValueAtEnd(name.to_string()),
         ));
     }
     Ok((cfg, warnings))

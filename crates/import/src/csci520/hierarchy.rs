@@ -4,6 +4,7 @@ use std::path::Path;
 
 use rigport_model::{parents_first_order, SkeletonProblem};
 
+use crate::problem::{Hierarchy, Limit};
 use crate::text::{self, Lines};
 use crate::{ImportError, Location, Problem};
 
@@ -38,10 +39,7 @@ pub fn parse_hierarchy(text: &str, path: &Path) -> Result<Vec<Option<usize>>, Im
             let parent = match value {
                 -1 => None,
                 p => Some(usize::try_from(p).map_err(|_| {
-                    ImportError::invalid(
-                        at(),
-                        format!("joint {joint} has parent {p}: the root's parent is -1, every other is a joint index"),
-                    )
+                    ImportError::at(at(), Hierarchy::ParentNotJoint { joint, parent: p })
                 })?),
             };
             parents.push(parent);
@@ -53,9 +51,9 @@ pub fn parse_hierarchy(text: &str, path: &Path) -> Result<Vec<Option<usize>>, Im
         return Err(ImportError::new(Location::file(path), Problem::Empty));
     }
     if u32::try_from(count).is_err() {
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             Location::file(path),
-            format!("{count} joints is more than rigport's joint indices hold"),
+            Limit::JointCount(count),
         ));
     }
     let line_of = |joint: usize| match lines.get(joint) {
@@ -65,19 +63,17 @@ pub fn parse_hierarchy(text: &str, path: &Path) -> Result<Vec<Option<usize>>, Im
     for (joint, parent) in parents.iter().enumerate() {
         match *parent {
             Some(p) if p >= count => {
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     line_of(joint),
-                    format!(
-                        "joint {joint} has parent {p}, but there are only {count} joints (0..={})",
-                        count - 1
-                    ),
+                    Hierarchy::ParentBeyond {
+                        joint,
+                        parent: p,
+                        count,
+                    },
                 ))
             }
             Some(p) if p == joint => {
-                return Err(ImportError::invalid(
-                    line_of(joint),
-                    format!("joint {joint} is its own parent"),
-                ))
+                return Err(ImportError::at(line_of(joint), Hierarchy::OwnParent(joint)))
             }
             _ => {}
         }
@@ -97,14 +93,11 @@ pub fn parse_hierarchy(text: &str, path: &Path) -> Result<Vec<Option<usize>>, Im
         .map(|(j, _)| j);
     match (roots.next(), roots.next()) {
         (Some(_), None) => Ok(parents),
-        (Some(first), Some(second)) => Err(ImportError::invalid(
+        (Some(first), Some(second)) => Err(ImportError::at(
             line_of(second),
-            format!("joint {second} is a second root (parent -1) besides joint {first}: the rig must have exactly one root"),
+            Hierarchy::SecondRoot { first, second },
         )),
         // A finite parent array without a root has a cycle, reported above.
-        (None, _) => Err(ImportError::invalid(
-            Location::file(path),
-            "no joint has parent -1: the rig has no root",
-        )),
+        (None, _) => Err(ImportError::at(Location::file(path), Hierarchy::NoRoot)),
     }
 }

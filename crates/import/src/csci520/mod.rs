@@ -67,6 +67,7 @@ use glam::DVec3;
 use rigport_model::conventions::EulerOrder;
 use rigport_model::{JointIndex, Warning};
 
+use crate::problem::{Missing, Rule};
 use crate::{obj, read_file, utf8, ImportError, Imported, Location};
 
 use self::assemble::assemble;
@@ -96,13 +97,10 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
     let config_bytes = read_file(config)?;
     let (cfg, mut warnings) = parse_config(utf8(&config_bytes, config)?, config)?;
     let dir = config.parent().unwrap_or(Path::new(""));
-    let required = |entry: &Option<ConfigEntry<String>>, option: &str| {
-        entry.clone().ok_or_else(|| {
-            ImportError::invalid(
-                Location::file(config),
-                format!("the required option *{option} is missing"),
-            )
-        })
+    let required = |entry: &Option<ConfigEntry<String>>, option: &'static str| {
+        entry
+            .clone()
+            .ok_or_else(|| ImportError::at(Location::file(config), Missing::Option(option)))
     };
     let mesh_entry = required(&cfg.mesh_filename, "meshFilename")?;
     let hierarchy_entry = required(&cfg.joint_hierarchy_filename, "jointHierarchyFilename")?;
@@ -196,14 +194,13 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
     for &id in &ik_ids {
         match seen.get_mut(id) {
             None => {
-                let message = format!(
-                    "*IKJointIDs: joint {id} does not exist: {} has {joint_count} joints (0..={})",
-                    hierarchy_path.display(),
-                    joint_count.saturating_sub(1)
-                );
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     Location::line(config, ik_line.unwrap_or(0)),
-                    message,
+                    Rule::IkJoint {
+                        joint: id,
+                        hierarchy: hierarchy_path.to_path_buf(),
+                        count: joint_count,
+                    },
                 ));
             }
             Some(true) => duplicates += 1,

@@ -4,6 +4,7 @@ use std::path::Path;
 
 use rigport_model::{Influence, Influences, Warning};
 
+use crate::problem::{Limit, Mismatch};
 use crate::text::{self, Lines};
 use crate::{exact_fields, ImportError, Location, Problem};
 
@@ -68,23 +69,29 @@ pub fn parse_weights(
             header.push((line_no, token));
         }
     }
-    let header_count = |index: usize, what: &'static str, expected: usize, source: &str| {
-        let (line, token) = header.get(index).copied().unwrap_or((0, ""));
-        let at = || Location::line(path, line);
-        let count = if index == 0 {
-            "row count"
-        } else {
-            "column count"
+    let header_count =
+        |index: usize, what: &'static str, expected: usize, counted: &'static str| {
+            let (line, token) = header.get(index).copied().unwrap_or((0, ""));
+            let at = || Location::line(path, line);
+            let count = if index == 0 {
+                "row count"
+            } else {
+                "column count"
+            };
+            let value: i64 = text::number(token, count, at)?;
+            if usize::try_from(value).ok() != Some(expected) {
+                return Err(ImportError::at(
+                    at(),
+                    Mismatch::Header {
+                        value,
+                        what,
+                        counted,
+                        expected,
+                    },
+                ));
+            }
+            Ok(())
         };
-        let value: i64 = text::number(token, count, at)?;
-        if usize::try_from(value).ok() != Some(expected) {
-            return Err(ImportError::invalid(
-                at(),
-                format!("the header declares {value} {what}s, but {source} {expected}"),
-            ));
-        }
-        Ok(())
-    };
     header_count(0, "row", vertex_count, "the mesh has (OBJ `v` lines)")?;
     header_count(1, "column", joint_count, "the hierarchy has joints:")?;
 
@@ -177,9 +184,9 @@ pub fn parse_weights(
             continue;
         }
         if !sum.is_finite() {
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 Location::line(path, first_line),
-                format!("the weights of vertex {v} sum to more than f64 holds"),
+                Limit::WeightSum(v),
             ));
         }
         let error = (sum - 1.0).abs();
@@ -192,9 +199,9 @@ pub fn parse_weights(
         };
         if !scale.is_finite() {
             // A sum below 1 / f64::MAX (a lone `1e-320`) cannot be renormalized.
-            return Err(ImportError::invalid(
+            return Err(ImportError::at(
                 Location::line(path, first_line),
-                format!("the weights of vertex {v} sum to {sum:e}, too small to renormalize"),
+                Limit::TinyWeightSum { vertex: v, sum },
             ));
         }
         for &(_, joint, w, _) in row {

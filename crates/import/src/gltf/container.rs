@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use ::gltf::Semantic;
 use rigport_model::Warning;
 
+use crate::problem::{Missing, Repeated, Rule, Schema, Uri};
 use crate::{ImportError, Location, Problem};
 
 fn le_u32(bytes: &[u8], at: usize) -> Option<u32> {
@@ -23,8 +24,9 @@ pub(super) fn split_glb<'b>(
     let truncated = |offset: usize, msg: String| {
         ImportError::new(Location::byte(path, offset as u64), Problem::Truncated(msg))
     };
-    let invalid =
-        |offset: usize, msg: String| ImportError::invalid(Location::byte(path, offset as u64), msg);
+    let refuse = |offset: usize, problem: Problem| {
+        ImportError::new(Location::byte(path, offset as u64), problem)
+    };
     let (Some(version), Some(length)) = (le_u32(bytes, 4), le_u32(bytes, 8)) else {
         return Err(truncated(
             bytes.len(),
@@ -35,10 +37,7 @@ pub(super) fn split_glb<'b>(
         ));
     };
     if version != 2 {
-        return Err(invalid(
-            4,
-            format!("GLB container version {version}; only version 2 is supported"),
-        ));
+        return Err(refuse(4, Rule::GlbVersion(version).into()));
     }
     let total = length as usize;
     if total > bytes.len() {
@@ -99,18 +98,13 @@ pub(super) fn split_glb<'b>(
         let data = &bytes[start..end];
         match kind {
             b"JSON" if json.is_none() && pos == 12 => json = Some(data),
-            b"JSON" => return Err(invalid(pos + 4, "a second JSON chunk".into())),
+            b"JSON" => return Err(refuse(pos + 4, Repeated::Chunk("JSON").into())),
             _ if json.is_none() => {
-                return Err(invalid(
-                    pos + 4,
-                    format!(
-                        "the first GLB chunk must be JSON, found {:?}",
-                        String::from_utf8_lossy(kind)
-                    ),
-                ))
+                let kind = String::from_utf8_lossy(kind).into_owned();
+                return Err(refuse(pos + 4, Rule::FirstChunk(kind).into()));
             }
             b"BIN\0" if bin.is_none() => bin = Some(data),
-            b"BIN\0" => return Err(invalid(pos + 4, "a second BIN chunk".into())),
+            b"BIN\0" => return Err(refuse(pos + 4, Repeated::Chunk("BIN").into())),
             // glTF 2.0 §4.4.3.1: chunks of unknown types must be ignored.
             _ => {}
         }
@@ -214,12 +208,15 @@ pub(super) fn parse_document(
         for (p, prim) in mesh.primitives.iter().enumerate() {
             let position = prim.attributes.get(&Checked::Valid(Semantic::Positions));
             if position.is_some_and(|index| index.value() >= root.accessors.len()) {
-                return Err(ImportError::invalid(
+                return Err(ImportError::at(
                     Location::json(
                         path,
                         format!("/meshes/{m}/primitives/{p}/attributes/POSITION"),
                     ),
-                    "index out of range",
+                    Rule::Schema {
+                        first: Schema::IndexOutOfRange,
+                        more: 0,
+                    },
                 ));
             }
         }
@@ -263,23 +260,19 @@ pub(super) fn parse_document(
     }
     if let Some((first_path, first)) = kept.first() {
         let (at_path, value) = split_path_value(first_path.as_str());
-        let what = match first {
-            SchemaError::IndexOutOfBounds => "index out of range".to_string(),
-            SchemaError::Invalid => "invalid value".to_string(),
-            SchemaError::Missing => "required value missing".to_string(),
-            SchemaError::Oversize => "size exceeds this system's limits".to_string(),
-            SchemaError::Unsupported => format!(
-                "required extension {} is not supported",
-                value.unwrap_or_default()
-            ),
+        let first = match first {
+            SchemaError::IndexOutOfBounds => Schema::IndexOutOfRange,
+            SchemaError::Invalid => Schema::Invalid,
+            SchemaError::Missing => Schema::Missing,
+            SchemaError::Oversize => Schema::Oversize,
+            SchemaError::Unsupported => Schema::Unsupported(value.unwrap_or_default().to_string()),
         };
-        let more = match kept.len() {
-            1 => String::new(),
-            n => format!(" (and {} more glTF schema problems)", n - 1),
-        };
-        return Err(ImportError::invalid(
+        return Err(ImportError::at(
             Location::json(path, json_pointer(at_path)),
-            format!("{what}{more}"),
+            Rule::Schema {
+                first,
+                more: kept.len() - 1,
+            },
         ));
     }
     Ok(::gltf::Document::from_json_without_validation(root))
@@ -345,17 +338,17 @@ pub(super) fn read_uri(
     uri: &str,
     path: &Path,
     at: &str,
-    what: &str,
+    what: &'static str,
 ) -> Result<Vec<u8>, ImportError> {
-    let err = |msg: String| ImportError::invalid(Location::json(path, at), msg);
+    let err = |problem: Uri| ImportError::at(Location::json(path, at), problem);
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((meta, payload)) = rest.split_once(',') else {
-            return Err(err("malformed data URI: no ','".into()));
+            return Err(err(Uri::NoComma));
         };
         if !meta.ends_with(";base64") {
-            return Err(err(format!("data URI {meta:?} is not base64-encoded")));
+            return Err(err(Uri::NotBase64(meta.to_string())));
         }
-        return decode_base64(payload).ok_or_else(|| err("data URI holds invalid base64".into()));
+        return decode_base64(payload).ok_or_else(|| err(Uri::InvalidBase64));
     }
     let file_part = uri
         .strip_prefix("file://")
@@ -367,20 +360,20 @@ pub(super) fn read_uri(
             let first_slash = uri.find('/');
             if let Some(colon) = scheme_end {
                 if first_slash.is_none_or(|s| colon < s) {
-                    return Err(err(format!(
-                        "{what} URI {uri:?}: only data: URIs and files are supported"
-                    )));
+                    let uri = uri.to_string();
+                    return Err(err(Uri::Scheme { what, uri }));
                 }
             }
             uri
         }
     };
-    let decoded = percent_decode(relative)
-        .ok_or_else(|| err(format!("{what} URI {uri:?} is not UTF-8 once decoded")))?;
+    let decoded = percent_decode(relative).ok_or_else(|| {
+        let uri = uri.to_string();
+        err(Uri::NotUtf8 { what, uri })
+    })?;
     let base = path.parent().unwrap_or(Path::new(""));
     let file: PathBuf = base.join(decoded);
-    std::fs::read(&file)
-        .map_err(|e| err(format!("cannot read {what} file {}: {e}", file.display())))
+    std::fs::read(&file).map_err(|error| err(Uri::File { what, file, error }))
 }
 
 pub(super) fn load_buffers<'b>(
@@ -392,12 +385,10 @@ pub(super) fn load_buffers<'b>(
     for buffer in doc.buffers() {
         let at = format!("/buffers/{}", buffer.index());
         let data: Cow<'b, [u8]> = match buffer.source() {
-            ::gltf::buffer::Source::Bin => Cow::Borrowed(blob.take().ok_or_else(|| {
-                ImportError::invalid(
-                    Location::json(path, &at),
-                    "has no uri, so it must be the GLB BIN chunk, but there is none",
-                )
-            })?),
+            ::gltf::buffer::Source::Bin => Cow::Borrowed(
+                blob.take()
+                    .ok_or_else(|| ImportError::at(Location::json(path, &at), Missing::BinChunk))?,
+            ),
             ::gltf::buffer::Source::Uri(uri) => {
                 Cow::Owned(read_uri(uri, path, &format!("{at}/uri"), "buffer")?)
             }

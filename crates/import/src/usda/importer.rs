@@ -116,7 +116,7 @@ impl<'l> Importer<'l, '_> {
 
     /// An error about prim `prim`: `file: </prim>: message`.
     pub(super) fn err(&self, prim: &str, message: impl std::fmt::Display) -> ImportError {
-        ImportError::invalid(self.file(), format!("<{prim}>: {message}"))
+        ImportError::invalid(self.file().with_prim(prim), message.to_string())
     }
 
     /// An error about a value written on `line`.
@@ -127,13 +127,13 @@ impl<'l> Importer<'l, '_> {
         message: impl std::fmt::Display,
     ) -> ImportError {
         ImportError::invalid(
-            Location::line(self.path, line),
-            format!("<{prim}>: {message}"),
+            Location::line(self.path, line).with_prim(prim),
+            message.to_string(),
         )
     }
 
     pub(super) fn location(&self, prim: &str) -> String {
-        format!("{}: <{prim}>", self.path.display())
+        self.file().with_prim(prim).to_string()
     }
 
     pub(super) fn note(&mut self, prim: &str, message: impl Into<String>) {

@@ -7,6 +7,7 @@ use super::importer::Importer;
 use super::parse;
 use super::stage;
 use super::values::{number, token};
+use crate::problem::Rule;
 use crate::{ImportError, Location};
 
 /// USD's fallback `metersPerUnit` when a stage does not author it (centimetres,
@@ -22,15 +23,15 @@ impl<'l> Importer<'l, '_> {
     }
 
     pub(super) fn layer_metadata(&mut self) -> Result<(), ImportError> {
-        let rate = |key: &str| -> Result<Option<f64>, ImportError> {
+        let rate = |key: &'static str| -> Result<Option<f64>, ImportError> {
             let Some(m) = self.layer_meta(key) else {
                 return Ok(None);
             };
             match number(&m.value) {
                 Some(n) if n.is_finite() && n > 0.0 => Ok(Some(n)),
-                _ => Err(ImportError::invalid(
+                _ => Err(ImportError::at(
                     Location::line(self.path, m.line),
-                    format!("{key} must be a positive number"),
+                    Rule::NotPositive(key),
                 )),
             }
         };
@@ -45,9 +46,9 @@ impl<'l> Importer<'l, '_> {
                 Some("Y") => self.up_axis = UpAxis::Y,
                 Some("Z") => self.up_axis = UpAxis::Z,
                 _ => {
-                    return Err(ImportError::invalid(
+                    return Err(ImportError::at(
                         Location::line(self.path, m.line),
-                        "upAxis must be \"Y\" or \"Z\"",
+                        Rule::UpAxis,
                     ))
                 }
             }
@@ -71,9 +72,9 @@ impl<'l> Importer<'l, '_> {
             None => Ok(DEFAULT_METERS_PER_UNIT),
             Some(m) => match number(&m.value) {
                 Some(n) if n.is_finite() && n > 0.0 => Ok(n),
-                _ => Err(ImportError::invalid(
+                _ => Err(ImportError::at(
                     Location::line(self.path, m.line),
-                    "metersPerUnit must be a positive number",
+                    Rule::NotPositive("metersPerUnit"),
                 )),
             },
         }

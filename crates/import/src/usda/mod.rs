@@ -139,7 +139,7 @@ use rigport_model::UpAxis;
 use self::importer::Importer;
 pub use self::metadata::{DEFAULT_METERS_PER_UNIT, DEFAULT_TIME_CODES_PER_SECOND};
 use self::stage::Stage;
-use crate::{read_file, ImportError, Imported, Location, Problem};
+use crate::{read_file, ImportError, Imported, Problem};
 
 /// Imports a `.usda` file.
 ///
@@ -180,24 +180,18 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
 }
 
 impl From<rigport_usd::UsdError> for ImportError {
-    /// The same location and problem (a USD layer error names a file and a line and
-    /// column, or a byte offset).
+    /// The same location (one type: [`rigport_location::Location`]) and problem.
     fn from(e: rigport_usd::UsdError) -> Self {
-        let at = &e.location;
-        let location = Location {
-            byte_offset: at.byte_offset,
-            ..match (at.line, at.column) {
-                (Some(l), Some(c)) => Location::line_column(&at.path, l, c),
-                (Some(l), None) => Location::line(&at.path, l),
-                _ => Location::file(&at.path),
-            }
-        };
         let problem = match e.problem {
             rigport_usd::Problem::Empty => Problem::Empty,
             rigport_usd::Problem::Syntax { expected, found } => Problem::Syntax { expected, found },
             rigport_usd::Problem::Invalid(m) => Problem::Invalid(m),
             rigport_usd::Problem::Truncated(m) => Problem::Truncated(m),
+            p => Problem::Usd(p),
         };
-        ImportError::new(location, problem)
+        ImportError {
+            location: e.location,
+            problem,
+        }
     }
 }

@@ -6,8 +6,54 @@
 //! Every read is bounds-checked; a corrupt stream is an error, never a panic.
 
 /// Why a compressed stream could not be decoded (the caller adds the byte offset).
-#[derive(Debug)]
-pub(crate) struct CodingError(pub String);
+#[derive(Debug, thiserror::Error)]
+pub enum CodingError {
+    /// The LZ4 data decompresses to another size than the stream declares.
+    #[error("LZ4 data decompresses to {found} bytes, {expected} expected")]
+    Size {
+        /// Bytes decompressed.
+        found: usize,
+        /// Bytes declared.
+        expected: usize,
+    },
+    /// No bytes where some are declared.
+    #[error("an empty compressed buffer")]
+    Empty,
+    /// An LZ4 block that does not decode (`chunk` numbers it in a chunked buffer).
+    #[error(fmt = corrupt_lz4)]
+    CorruptLz4 {
+        /// The chunk, in a chunked buffer.
+        chunk: Option<i8>,
+        /// The decoder's reason.
+        error: lz4_flex::block::DecompressError,
+    },
+    /// A negative chunk count.
+    #[error("a negative LZ4 chunk count {0}")]
+    NegativeChunks(i8),
+    /// A chunk without its size.
+    #[error("LZ4 chunk {0} has no size")]
+    ChunkWithoutSize(i8),
+    /// A chunk with a negative size.
+    #[error("LZ4 chunk {0} has a negative size")]
+    NegativeChunkSize(i8),
+    /// A chunk past the end of the data.
+    #[error("LZ4 chunk {0} ends past the compressed data")]
+    ChunkPastEnd(i8),
+    /// Integer codes shorter than their count needs.
+    #[error("the integer codes end early")]
+    IntegersEndEarly,
+}
+
+fn corrupt_lz4(
+    chunk: &Option<i8>,
+    error: &lz4_flex::block::DecompressError,
+    f: &mut std::fmt::Formatter<'_>,
+) -> std::fmt::Result {
+    match chunk {
+        Some(k) => write!(f, "corrupt LZ4 data in chunk {k} ({error})"),
+        None => write!(f, "corrupt LZ4 data ({error})"),
+    }
+}
 
 /// Decompresses a `TfFastCompression` buffer holding exactly `out_len` bytes.
 ///
@@ -16,10 +62,10 @@ pub(crate) struct CodingError(pub String);
 pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, CodingError> {
     let out = decompress_prefix(input, out_len)?;
     if out.len() != out_len {
-        return Err(CodingError(format!(
-            "LZ4 data decompresses to {} bytes, {out_len} expected",
-            out.len()
-        )));
+        return Err(CodingError::Size {
+            found: out.len(),
+            expected: out_len,
+        });
     }
     Ok(out)
 }
@@ -35,31 +81,33 @@ pub(crate) fn decompress_prefix(input: &[u8], max_len: usize) -> Result<Vec<u8>,
         return if out_len == 0 {
             Ok(out)
         } else {
-            Err(CodingError("an empty compressed buffer".into()))
+            Err(CodingError::Empty)
         };
     };
     // `TfFastCompression` stores the chunk count in a (signed) `char`.
     let chunks = first as i8;
     let written = if chunks == 0 {
         lz4_flex::block::decompress_into(rest, &mut out)
-            .map_err(|e| CodingError(format!("corrupt LZ4 data ({e})")))?
+            .map_err(|error| CodingError::CorruptLz4 { chunk: None, error })?
     } else if chunks < 0 {
-        return Err(CodingError(format!("a negative LZ4 chunk count {chunks}")));
+        return Err(CodingError::NegativeChunks(chunks));
     } else {
         let mut written = 0;
         for k in 0..chunks {
             let (size, after) = rest
                 .split_first_chunk::<4>()
-                .ok_or_else(|| CodingError(format!("LZ4 chunk {k} has no size")))?;
+                .ok_or(CodingError::ChunkWithoutSize(k))?;
             let size = usize::try_from(i32::from_le_bytes(*size))
-                .map_err(|_| CodingError(format!("LZ4 chunk {k} has a negative size")))?;
-            let chunk = after.get(..size).ok_or_else(|| {
-                CodingError(format!("LZ4 chunk {k} ends past the compressed data"))
-            })?;
+                .map_err(|_| CodingError::NegativeChunkSize(k))?;
+            let chunk = after.get(..size).ok_or(CodingError::ChunkPastEnd(k))?;
             rest = after.get(size..).unwrap_or_default();
             let target = out.get_mut(written..).unwrap_or_default();
-            written += lz4_flex::block::decompress_into(chunk, target)
-                .map_err(|e| CodingError(format!("corrupt LZ4 data in chunk {k} ({e})")))?;
+            written += lz4_flex::block::decompress_into(chunk, target).map_err(|error| {
+                CodingError::CorruptLz4 {
+                    chunk: Some(k),
+                    error,
+                }
+            })?;
         }
         written
     };
@@ -110,7 +158,7 @@ pub(crate) fn decode_ints(
         return Ok(Vec::new());
     }
     let w = width.bytes();
-    let short = || CodingError("the integer codes end early".into());
+    let short = || CodingError::IntegersEndEarly;
     let common = read_int(data, 0, w).ok_or_else(short)?;
     let codes_len = (count * 2).div_ceil(8);
     let codes = data.get(w..w + codes_len).ok_or_else(short)?;

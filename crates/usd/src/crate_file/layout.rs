@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use super::coding::{self, Width};
-use crate::error::{Location, Problem, UsdError};
+use crate::error::{CrateProblem, Location, Problem, UsdError};
 
 /// The 8 bytes every crate file starts with.
 pub const MAGIC: &[u8; 8] = b"PXR-USDC";
@@ -81,7 +81,7 @@ impl<'a> CrateFile<'a> {
             return Err(file.truncated(0, BOOTSTRAP_LEN as u64, "the 88-byte header"));
         }
         if !data.starts_with(MAGIC) {
-            return Err(file.invalid(0, "not a USD crate file (no PXR-USDC header)"));
+            return Err(file.error(0, CrateProblem::NotCrate));
         }
         let v = data.get(8..11).unwrap_or_default();
         file.version = (
@@ -91,13 +91,7 @@ impl<'a> CrateFile<'a> {
         );
         let (major, minor, patch) = file.version;
         if major != 0 || minor < 4 {
-            return Err(file.invalid(
-                8,
-                format!(
-                    "crate version {major}.{minor}.{patch} is not supported (rigport reads \
-                     0.4.0 and later; re-save the file with a current USD)"
-                ),
-            ));
+            return Err(file.error(8, CrateProblem::Version((major, minor, patch))));
         }
         let toc = file.u64(&mut Cursor { pos: 16 })?;
         let sections = file.sections(toc)?;
@@ -132,8 +126,30 @@ impl<'a> CrateFile<'a> {
     // Errors and primitive reads
     // -------------------------------------------------------------------------------
 
-    pub(crate) fn invalid(&self, at: u64, message: impl Into<String>) -> UsdError {
-        UsdError::invalid(Location::byte(self.path, at), message)
+    /// `problem` at byte `at` of the file.
+    pub(crate) fn error(&self, at: u64, problem: impl Into<Problem>) -> UsdError {
+        UsdError::new(Location::byte(self.path, at), problem.into())
+    }
+
+    /// An index past the `count` entries of a table.
+    pub(crate) fn index_error(
+        &self,
+        at: u64,
+        what: &'static str,
+        index: i64,
+        count: Option<usize>,
+        plural: &'static str,
+    ) -> UsdError {
+        self.error(
+            at,
+            Problem::IndexOutOfRange {
+                what,
+                index,
+                may_be_unset: false,
+                count,
+                plural,
+            },
+        )
     }
 
     pub(crate) fn truncated(&self, at: u64, need: u64, what: &str) -> UsdError {
@@ -150,14 +166,13 @@ impl<'a> CrateFile<'a> {
     pub(crate) fn spend(&self, at: u64, n: u64) -> Result<(), UsdError> {
         let left = self.budget.get();
         if n > left {
-            return Err(self.invalid(
+            return Err(self.error(
                 at,
-                format!(
-                    "the file claims more data than it can hold ({n} more elements; at most \
-                     {} are decoded for a file of {} bytes)",
-                    element_budget(self.data.len()),
-                    self.data.len()
-                ),
+                CrateProblem::OverBudget {
+                    claimed: n,
+                    budget: element_budget(self.data.len()),
+                    file_len: self.data.len(),
+                },
             ));
         }
         self.budget.set(left - n);
@@ -219,7 +234,7 @@ impl<'a> CrateFile<'a> {
             u64::from(self.u32(c)?)
         };
         self.spend(at, n)?;
-        usize::try_from(n).map_err(|_| self.invalid(at, format!("count {n} is too large")))
+        usize::try_from(n).map_err(|_| self.error(at, CrateProblem::CountTooLarge(n)))
     }
 
     pub(crate) fn version_at_least(&self, minor: u8) -> bool {
@@ -231,25 +246,15 @@ impl<'a> CrateFile<'a> {
             .get(index as usize)
             .map(String::as_str)
             .ok_or_else(|| {
-                self.invalid(
-                    at,
-                    format!(
-                        "token index {index} out of range ({} tokens)",
-                        self.tokens.len()
-                    ),
-                )
+                let count = Some(self.tokens.len());
+                self.index_error(at, "token", index.into(), count, "tokens")
             })
     }
 
     pub(crate) fn string(&self, at: u64, index: u32) -> Result<&str, UsdError> {
         let token = self.strings.get(index as usize).ok_or_else(|| {
-            self.invalid(
-                at,
-                format!(
-                    "string index {index} out of range ({} strings)",
-                    self.strings.len()
-                ),
-            )
+            let count = Some(self.strings.len());
+            self.index_error(at, "string", index.into(), count, "strings")
         })?;
         self.token(at, *token)
     }
@@ -257,12 +262,15 @@ impl<'a> CrateFile<'a> {
     pub(crate) fn path_at(&self, at: u64, index: u32) -> Result<&str, UsdError> {
         match self.paths.get(index as usize) {
             Some(Some(p)) => Ok(p),
-            _ => Err(self.invalid(
+            _ => Err(self.error(
                 at,
-                format!(
-                    "path index {index} out of range or unset ({} paths)",
-                    self.paths.len()
-                ),
+                Problem::IndexOutOfRange {
+                    what: "path",
+                    index: index.into(),
+                    may_be_unset: true,
+                    count: Some(self.paths.len()),
+                    plural: "paths",
+                },
             )),
         }
     }
@@ -278,12 +286,19 @@ impl<'a> CrateFile<'a> {
         let at = c.pos;
         let size = self.u64(c)?;
         let bytes = self.bytes(c, size, "compressed integers")?;
-        let encoded = coding::encoded_size(count, width)
-            .ok_or_else(|| self.invalid(at, format!("{count} integers is too many")))?;
+        let encoded = coding::encoded_size(count, width).ok_or_else(|| {
+            self.error(
+                at,
+                Problem::TooMany {
+                    what: "integers",
+                    count: Some(count as u64),
+                },
+            )
+        })?;
         self.spend(at, encoded as u64 / 4)?;
         // The encoder writes at most `encoded` bytes; the stream may decode to fewer.
-        let raw = decompress_up_to(bytes, encoded).map_err(|e| self.invalid(at, e.0))?;
-        coding::decode_ints(&raw, count, width).map_err(|e| self.invalid(at, e.0))
+        let raw = decompress_up_to(bytes, encoded).map_err(|e| self.error(at, e))?;
+        coding::decode_ints(&raw, count, width).map_err(|e| self.error(at, e))
     }
 
     // -------------------------------------------------------------------------------
@@ -294,7 +309,7 @@ impl<'a> CrateFile<'a> {
         let mut c = Cursor { pos: toc };
         let n = self.u64(&mut c)?;
         if n > 64 {
-            return Err(self.invalid(toc, format!("{n} sections in the table of contents")));
+            return Err(self.error(toc, CrateProblem::Sections(n)));
         }
         let mut out = Vec::new();
         for _ in 0..n {
@@ -315,19 +330,19 @@ impl<'a> CrateFile<'a> {
         let size = self.u64(&mut c)?;
         let at = c.pos;
         let packed = self.bytes(&mut c, size, "the tokens")?;
-        let chars = coding::decompress(packed, raw_len).map_err(|e| self.invalid(at, e.0))?;
+        let chars = coding::decompress(packed, raw_len).map_err(|e| self.error(at, e))?;
         let mut tokens: Vec<String> = chars
             .split(|&b| b == 0)
             .take(count)
             .map(|t| String::from_utf8_lossy(t).into_owned())
             .collect();
         if tokens.len() < count {
-            return Err(self.invalid(
+            return Err(self.error(
                 at,
-                format!(
-                    "the tokens section holds {} tokens, {count} claimed",
-                    tokens.len()
-                ),
+                CrateProblem::Tokens {
+                    found: tokens.len(),
+                    claimed: count,
+                },
             ));
         }
         tokens.shrink_to_fit();
@@ -353,10 +368,14 @@ impl<'a> CrateFile<'a> {
         let size = self.u64(&mut c)?;
         let at = c.pos;
         let packed = self.bytes(&mut c, size, "the field values")?;
-        let raw_len = count
-            .checked_mul(8)
-            .ok_or_else(|| self.invalid(at, "too many fields"))?;
-        let raw = coding::decompress(packed, raw_len).map_err(|e| self.invalid(at, e.0))?;
+        let raw_len = count.checked_mul(8).ok_or_else(|| {
+            let too_many = Problem::TooMany {
+                what: "fields",
+                count: None,
+            };
+            self.error(at, too_many)
+        })?;
+        let raw = coding::decompress(packed, raw_len).map_err(|e| self.error(at, e))?;
         self.fields = names
             .iter()
             .zip(raw.chunks_exact(8))
@@ -397,14 +416,17 @@ impl<'a> CrateFile<'a> {
                 cur += 1;
                 steps += 1;
                 if steps > encoded {
-                    return Err(self.invalid(at, "the path tree's jumps revisit paths"));
+                    return Err(self.error(at, CrateProblem::PathsRevisited));
                 }
                 let (Some(&index), Some(&element), Some(&jump)) =
                     (indices.get(this), elements.get(this), jumps.get(this))
                 else {
-                    return Err(self.invalid(
+                    return Err(self.error(
                         at,
-                        format!("the path tree refers to entry {this} of {encoded}"),
+                        CrateProblem::PathEntry {
+                            entry: this,
+                            count: encoded,
+                        },
                     ));
                 };
                 let path = match &parent {
@@ -417,16 +439,14 @@ impl<'a> CrateFile<'a> {
                 let slot = usize::try_from(index)
                     .ok()
                     .and_then(|i| paths.get_mut(i))
-                    .ok_or_else(|| {
-                        self.invalid(at, format!("path index {index} out of range ({count})"))
-                    })?;
+                    .ok_or_else(|| self.index_error(at, "path", index, Some(count), ""))?;
                 *slot = Some(path.clone());
                 let has_child = jump > 0 || jump == -1;
                 let has_sibling = jump >= 0;
                 if has_child {
                     if has_sibling {
                         let sibling = usize::try_from(this as i64 + jump)
-                            .map_err(|_| self.invalid(at, "a negative path jump"))?;
+                            .map_err(|_| self.error(at, CrateProblem::NegativePathJump))?;
                         stack.push((sibling, parent.clone()));
                     }
                     parent = Some(path);
@@ -477,16 +497,17 @@ impl<'a> CrateFile<'a> {
         let mut i = spec.field_set as usize;
         loop {
             let Some(&f) = self.field_sets.get(i) else {
-                return Err(self.invalid(
+                let path = self
+                    .paths
+                    .get(spec.path as usize)
+                    .and_then(|p| p.as_deref())
+                    .unwrap_or("?");
+                return Err(self.error(
                     0,
-                    format!(
-                        "field set {} of <{}> runs past the field sets",
-                        spec.field_set,
-                        self.paths
-                            .get(spec.path as usize)
-                            .and_then(|p| p.as_deref())
-                            .unwrap_or("?")
-                    ),
+                    CrateProblem::FieldSet {
+                        field_set: spec.field_set,
+                        path: path.to_string(),
+                    },
                 ));
             };
             if f == FIELD_SET_END {
@@ -495,7 +516,7 @@ impl<'a> CrateFile<'a> {
             let &(name, rep) = self
                 .fields
                 .get(f as usize)
-                .ok_or_else(|| self.invalid(0, format!("field index {f} out of range")))?;
+                .ok_or_else(|| self.index_error(0, "field", f.into(), None, ""))?;
             out.push((self.token(0, name)?, rep));
             i += 1;
         }

@@ -52,6 +52,7 @@ mod value;
 
 use std::path::Path;
 
+pub use self::coding::CodingError;
 pub(crate) use self::layout::child_path;
 use self::layout::CrateFile;
 pub use self::layout::MAGIC;
@@ -60,7 +61,7 @@ use super::parse::{
     Layer, ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifier, Value, VariantSetSpec,
     MAX_DEPTH,
 };
-use crate::error::UsdError;
+use crate::error::{CrateProblem, Nesting, Problem, UsdError};
 
 /// `SdfSpecType` values used here.
 mod spec_type {
@@ -103,13 +104,22 @@ impl CrateFile<'_> {
         Ok(out)
     }
 
+    /// The spec at `path` is deeper than [`MAX_DEPTH`].
+    fn nested_error(&self, path: &str) -> UsdError {
+        let problem = Problem::NestedTooDeep {
+            what: Nesting::Spec(path.to_string()),
+            limit: MAX_DEPTH,
+        };
+        self.error(0, problem)
+    }
+
     fn layer(&self) -> Result<Layer, UsdError> {
         let mut layer = Layer::default();
         let Some(root) = self.spec("/") else {
             return Ok(layer);
         };
         if root.kind != spec_type::PSEUDO_ROOT {
-            return Err(self.invalid(0, "the spec at </> is not the layer's pseudo-root"));
+            return Err(self.error(0, CrateProblem::PseudoRoot));
         }
         let fields = self.fields(root)?;
         layer.meta = self.metadata(&fields, &["primChildren"])?;
@@ -170,7 +180,7 @@ impl CrateFile<'_> {
             return Ok(None);
         }
         if depth > MAX_DEPTH {
-            return Err(self.invalid(0, format!("<{path}> is nested more than {MAX_DEPTH} deep")));
+            return Err(self.nested_error(path));
         }
         let fields = self.fields(spec)?;
         let specifier = match fields.iter().find(|(k, _)| *k == "specifier") {
@@ -230,10 +240,7 @@ impl CrateFile<'_> {
                 continue;
             }
             if depth + 1 > MAX_DEPTH {
-                return Err(self.invalid(
-                    0,
-                    format!("<{set_path}> is nested more than {MAX_DEPTH} deep"),
-                ));
+                return Err(self.nested_error(&set_path));
             }
             let set_fields = self.fields(set_spec)?;
             let mut variants = Vec::new();
@@ -393,12 +400,12 @@ pub(crate) mod coding_for_tests {
 
     /// `TfFastCompression` decoding of at most `max` bytes.
     pub(crate) fn decompress(input: &[u8], max: usize) -> Result<Vec<u8>, String> {
-        crate::crate_file::coding::decompress_prefix(input, max).map_err(|e| e.0)
+        crate::crate_file::coding::decompress_prefix(input, max).map_err(|e| e.to_string())
     }
 
     /// 32-bit integer decoding.
     pub(crate) fn decode_ints(data: &[u8], n: usize) -> Result<Vec<i64>, String> {
         use crate::crate_file::coding::{decode_ints, Width};
-        decode_ints(data, n, Width::W32).map_err(|e| e.0)
+        decode_ints(data, n, Width::W32).map_err(|e| e.to_string())
     }
 }

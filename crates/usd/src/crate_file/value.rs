@@ -6,7 +6,7 @@
 
 use super::coding::{self, Width};
 use super::layout::{CrateFile, Cursor, MAX_VALUE_DEPTH};
-use crate::error::UsdError;
+use crate::error::{CrateProblem, Nesting, Problem, UsdError};
 use crate::parse::{ListOp, Value};
 
 /// A crate type number (`Usd_CrateFile::TypeEnum`).
@@ -167,9 +167,12 @@ impl CrateFile<'_> {
     pub(crate) fn value(&self, bits: u64, depth: usize) -> Result<Decoded, UsdError> {
         let rep = Rep::new(bits);
         if depth > MAX_VALUE_DEPTH {
-            return Err(self.invalid(
+            return Err(self.error(
                 rep.payload,
-                format!("values nested more than {MAX_VALUE_DEPTH} deep"),
+                Problem::NestedTooDeep {
+                    what: Nesting::Values,
+                    limit: MAX_VALUE_DEPTH,
+                },
             ));
         }
         if rep.array {
@@ -309,14 +312,27 @@ impl CrateFile<'_> {
         Ok(Decoded::Value(v))
     }
 
+    /// A time-samples offset that points out of the file, at `at`.
+    fn samples_offset_error(&self, at: u64) -> UsdError {
+        let problem = Problem::OffsetOutOfFile {
+            what: "time samples",
+            offset: None,
+        };
+        self.error(at, problem)
+    }
+
     /// A `VtValue` in a stream: an `i64` offset (from its own position) to a value
     /// representation, which is decoded; the cursor ends after that representation.
     fn vt_value(&self, c: &mut Cursor, depth: usize) -> Result<Decoded, UsdError> {
         let start = c.pos;
         let offset = self.i64(c)?;
-        c.pos = start
-            .checked_add_signed(offset)
-            .ok_or_else(|| self.invalid(start, format!("value offset {offset} out of the file")))?;
+        c.pos = start.checked_add_signed(offset).ok_or_else(|| {
+            let problem = Problem::OffsetOutOfFile {
+                what: "value",
+                offset: Some(offset),
+            };
+            self.error(start, problem)
+        })?;
         let bits = self.u64(c)?;
         self.value(bits, depth + 1)
     }
@@ -447,30 +463,33 @@ impl CrateFile<'_> {
         let jump = self.i64(c)?;
         c.pos = start
             .checked_add_signed(jump)
-            .ok_or_else(|| self.invalid(start, "time samples offset out of the file"))?;
+            .ok_or_else(|| self.samples_offset_error(start))?;
         let times_at = c.pos;
         let times = match self.value(self.u64(c)?, depth + 1)? {
             Decoded::Value(Value::List(t)) => t,
             Decoded::Value(Value::Number(t)) => vec![Value::Number(t)],
-            _ => return Err(self.invalid(times_at, "time sample times are not doubles")),
+            _ => return Err(self.error(times_at, CrateProblem::SampleTimes("doubles"))),
         };
         let start = c.pos;
         let jump = self.i64(c)?;
         c.pos = start
             .checked_add_signed(jump)
-            .ok_or_else(|| self.invalid(start, "time samples offset out of the file"))?;
+            .ok_or_else(|| self.samples_offset_error(start))?;
         let at = c.pos;
         let n = self.count(c, true)?;
         if n != times.len() {
-            return Err(self.invalid(
+            return Err(self.error(
                 at,
-                format!("{n} time sample values for {} times", times.len()),
+                CrateProblem::SampleValues {
+                    values: n,
+                    times: times.len(),
+                },
             ));
         }
         let mut out = Vec::with_capacity(n);
         for time in times {
             let Value::Number(t) = time else {
-                return Err(self.invalid(times_at, "time sample times are not numbers"));
+                return Err(self.error(times_at, CrateProblem::SampleTimes("numbers")));
             };
             let bits = self.u64(c)?;
             let v = match self.value(bits, depth + 1)? {
@@ -509,7 +528,7 @@ impl CrateFile<'_> {
             }
             t => {
                 let Some((s, n, rows, quat)) = shape(t) else {
-                    return Err(self.invalid(c.pos, format!("value type {t} has no elements")));
+                    return Err(self.error(c.pos, CrateProblem::NoElements(t)));
                 };
                 let mut comps = Vec::with_capacity(n);
                 for _ in 0..n {
@@ -601,27 +620,23 @@ impl CrateFile<'_> {
                         .into_iter()
                         .map(|i| {
                             lut.get(i as u32 as usize).cloned().ok_or_else(|| {
-                                self.invalid(
-                                    index_at,
-                                    format!("lookup index {i} out of range ({lut_n} values)"),
-                                )
+                                self.index_error(index_at, "lookup", i, Some(lut_n), "values")
                             })
                         })
                         .collect::<Result<_, _>>()?
                 }
-                other => {
-                    return Err(self.invalid(
-                        at,
-                        format!("unknown float array coding {:?}", char::from(other)),
-                    ))
-                }
+                other => return Err(self.error(at, CrateProblem::FloatCoding(char::from(other)))),
             };
             return Ok(Some(Value::List(items)));
         }
         // Uncompressed: check the whole extent first, so a huge count fails at once.
-        let total = size
-            .checked_mul(n as u64)
-            .ok_or_else(|| self.invalid(at, format!("{n} elements is too many")))?;
+        let total = size.checked_mul(n as u64).ok_or_else(|| {
+            let too_many = Problem::TooMany {
+                what: "elements",
+                count: Some(n as u64),
+            };
+            self.error(at, too_many)
+        })?;
         if c.pos.saturating_add(total) > self.data.len() as u64 {
             return Err(self.truncated(c.pos, total, &format!("an array of {n} elements")));
         }

@@ -34,7 +34,7 @@ use std::path::Path;
 use self::tables::Tables;
 use self::values::ty;
 use crate::crate_file::child_path;
-use crate::error::{Location, UsdError};
+use crate::error::{Location, UsdError, WriteProblem};
 use crate::parse::{Layer, ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifier, Value};
 
 /// `SdfSpecType` values.
@@ -85,13 +85,7 @@ fn child_names<'l>(
     let mut names: Vec<&str> = Vec::new();
     for c in &body.children {
         if names.contains(&c.name.as_str()) {
-            return Err(w.error(
-                c.line.max(line),
-                format!(
-                    "prim {:?} is written twice in one scope (merge the statements)",
-                    c.name
-                ),
-            ));
+            return Err(w.error(c.line.max(line), WriteProblem::PrimTwice(c.name.clone())));
         }
         names.push(&c.name);
     }
@@ -99,8 +93,8 @@ fn child_names<'l>(
 }
 
 impl Writer<'_> {
-    fn error(&self, line: usize, message: impl Into<String>) -> UsdError {
-        UsdError::invalid(Location::line(self.path, line), message)
+    fn error(&self, line: usize, problem: WriteProblem) -> UsdError {
+        UsdError::new(Location::line(self.path, line), problem.into())
     }
 
     /// A field: its name's token and the representation `make` writes.
@@ -111,7 +105,10 @@ impl Writer<'_> {
         line: usize,
     ) -> Result<(u32, u64), UsdError> {
         let token = self.t.token(name);
-        let rep = make(&mut self.t).map_err(|e| self.error(line, format!("{name}: {e}")))?;
+        let rep = make(&mut self.t).map_err(|message| {
+            let field = name.to_string();
+            self.error(line, WriteProblem::Field { field, message })
+        })?;
         Ok((token, rep))
     }
 
@@ -375,16 +372,13 @@ impl Writer<'_> {
                 "variantSets" => self.field("variantSetNames", list_op(ty::STRING_LIST_OP), at)?,
                 "inherits" | "specializes" => self.field(key, list_op(ty::PATH_LIST_OP), at)?,
                 "references" | "payload" | "subLayers" | "relocates" => {
-                    return Err(self.error(
-                        at,
-                        format!("{key} cannot be written to a .usdc by rigport (not supported)"),
-                    ))
+                    return Err(self.error(at, WriteProblem::Unsupported(key.to_string())))
                 }
                 "variants" => match value {
                     Value::Dict(entries) => {
                         self.field("variantSelection", |t| t.variant_selection(entries), at)?
                     }
-                    _ => return Err(self.error(at, "variants must be a dictionary")),
+                    _ => return Err(self.error(at, WriteProblem::VariantsNotDictionary)),
                 },
                 _ => {
                     let (name, t) = metadata_type(key, value);
