@@ -143,20 +143,3 @@ pub fn positive(text: &str) -> Result<f32, String> {
         _ => Err("expected a positive number".into()),
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn numbers_are_checked_once_for_every_flag() {
-        assert_eq!(frame_rate("30"), Ok(30.0));
-        for bad in ["0", "-1", "inf", "NaN", "x"] {
-            assert!(frame_rate(bad).is_err(), "{bad}");
-        }
-        assert_eq!(distance("0"), Ok(0.0));
-        assert!(distance("-0.1").is_err());
-        assert!(positive("0").is_err());
-        assert_eq!(positive("0.5"), Ok(0.5));
-    }
-}

@@ -10,8 +10,6 @@ use rigport_model::Warning;
 use rigport_pipeline::progress::{Denied, Progress};
 use rigport_pipeline::{PipelineError, Report};
 
-use crate::exit::DeniedWarnings;
-
 /// Settings every command shares.
 pub struct Context {
     /// Print nothing but errors and warnings.
@@ -39,14 +37,9 @@ impl Context {
         }
     }
 
-    /// Prints warnings (and notes) to stderr; with `--deny-warnings`, fails if there is any
-    /// warning. Notes ([`Warning::Note`]: facts, nothing lost or repaired) never fail.
-    pub fn report(&self, warnings: &[Warning]) -> Result<()> {
-        Ok(self
-            .show(warnings)
-            .map_err(|d| DeniedWarnings { count: d.count })?)
-    }
-
+    /// Prints warnings (and notes) to stderr; with `--deny-warnings`, refuses them if there
+    /// is any warning. Notes ([`Warning::Note`]: facts, nothing lost or repaired) never
+    /// fail.
     fn show(&self, warnings: &[Warning]) -> Result<(), Denied> {
         let mut count = 0;
         if let Some(captured) = &self.captured {

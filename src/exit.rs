@@ -59,6 +59,11 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
     let detect = match err {
         PipelineError::Denied(d) => return DeniedWarnings { count: d.count }.into(),
         PipelineError::Detect(ref detect) => detect,
+        PipelineError::Budget(over) => {
+            return anyhow::anyhow!(
+                "{over}; raise it with --max-memory if the machine has the memory"
+            )
+        }
         err => return err.into(),
     };
     let message = match detect {

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""One concept, one type (issue 27): fails when a concept the model defines is defined again.
+"""One concept, one type (issue 27): fails when a concept the model defines is defined again,
+or when a library names a command-line flag.
 
     python3 tools/one_concept.py          check the workspace (exit 1 on a second definition)
     python3 tools/one_concept.py --self-test
@@ -10,7 +11,9 @@ Checked in the production Rust code of `crates/*/src` and `src/` (test files and
   influence fit (Truncate and Refit) or an output format (two of Glb, Gltf, Usda, Usdc,
   Usdz, Usd), anywhere but the one definition in `crates/model`;
 - the text "clip named" in a string literal anywhere but the one clip lookup
-  (`crates/model/src/asset.rs`: `find_clip`, `Asset::clip`, `NoSuchClip`).
+  (`crates/model/src/asset.rs`: `find_clip`, `Asset::clip`, `NoSuchClip`);
+- a command-line flag (`--` and a name) in a string literal of a library crate: the
+  libraries name no flag; the CLI (`src/`) words their errors with its flags.
 """
 import re
 import sys
@@ -38,6 +41,7 @@ CLIP_LOOKUP = "crates/model/src/asset.rs"
 ENUM = re.compile(r"\benum\s+(\w+)\s*(?:<[^>]*>)?\s*\{")
 VARIANT = re.compile(r"^\s*(?:#\[[^\]]*\]\s*)*([A-Z]\w*)\s*([({]?)")
 STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
 
 
 def production_text(text: str) -> str:
@@ -98,6 +102,12 @@ def check(files) -> list[str]:
             for concept, (names_it, home) in CONCEPTS.items():
                 if names_it(unit, every) and rel != home:
                     problems.append(f"{rel}:{line}: enum {name} names {'an' if concept[0] in 'aeiou' else 'a'} {concept}; use the one in {home}")
+        if rel.startswith("crates/"):
+            for m in STRING.finditer(code):
+                flag = FLAG.search(m.group(0))
+                if flag:
+                    line = code.count("\n", 0, m.start()) + 1
+                    problems.append(f"{rel}:{line}: the library names the flag {flag.group(0)}; the CLI adds flag names")
         if rel != CLIP_LOOKUP:
             for m in STRING.finditer(code):
                 if "clip named" in m.group(0):
@@ -115,8 +125,9 @@ def self_test() -> None:
         ("crates/pipeline/src/x.rs", "pub enum Fit { Truncate, Refit }"),
         ("crates/export/src/e.rs", "pub(crate) enum Encoding { Usda, Usdc, Usdz }"),
         ("crates/x/src/y.rs", 'fn f() { let m = format!("no clip named {n:?}"); }'),
+        ("crates/pipeline/src/z.rs", 'const HINT: &str = "raise it with --max-memory";'),
     ]
-    assert len(check(bad)) == 5, check(bad)
+    assert len(check(bad)) == 6, check(bad)
     good = [
         ("crates/model/src/skin.rs", "pub enum SkinningMethod { Lbs, Dqs }"),
         ("crates/render/src/lib.rs", "pub enum View { Front, Side }"),
@@ -124,6 +135,8 @@ def self_test() -> None:
         ("crates/import/src/detect.rs", "pub enum Kind { Obj, Bvh, Gltf, Usda }"),
         ("crates/x/src/y.rs", "// no clip named here\n#[cfg(test)]\nmod tests { enum S { Lbs, Dqs } }"),
         ("crates/model/src/asset.rs", '#[error("no clip named {name:?}")]'),
+        ("src/exit.rs", 'const HINT: &str = "raise it with --max-memory";'),
+        ("crates/x/src/y.rs", 'let a = "x -- y"; let b = "a--b";'),
     ]
     assert check(good) == [], check(good)
     print("one_concept self-test: ok")
@@ -137,9 +150,9 @@ def main() -> int:
     for p in problems:
         print(p, file=sys.stderr)
     if problems:
-        print(f"one_concept: {len(problems)} second definition(s)", file=sys.stderr)
+        print(f"one_concept: {len(problems)} problem(s)", file=sys.stderr)
         return 1
-    print("one_concept: each concept is defined once")
+    print("one_concept: each concept is defined once; the libraries name no flag")
     return 0
 
 

@@ -81,8 +81,13 @@ pub fn run(ctx: &Context, args: &BatchArgs, run_item: RunItem) -> Result<()> {
         Some(args.output.clone()),
     );
     let items = manifest::load(&args.manifest, &how)?;
-    let shard = Shard::resolve(args.shard.as_deref(), |k| std::env::var(k).ok())
-        .map_err(|e| UsageError(e.to_string()))?;
+    let shard = Shard::resolve(args.shard.as_deref(), "--shard", |k| std::env::var(k).ok())
+        .map_err(|e| match e {
+            e @ rigport_batch::ShardError::MissingCount { .. } => {
+                UsageError(format!("{e} (or pass --shard I/N)"))
+            }
+            e => UsageError(e.to_string()),
+        })?;
     let options = rigport_batch::RunOptions {
         out_dir: args.output.clone(),
         jobs: args.jobs.unwrap_or(0),

@@ -1,8 +1,8 @@
 //! `rigport convert`: a rig (and its motion) to glTF or USD (`rigport_pipeline::convert`).
 
 use anyhow::{bail, Result};
-use rigport_model::Warning;
 use rigport_pipeline::convert::ConvertOptions;
+use rigport_pipeline::progress::Progress as _;
 
 use crate::args::{frame_rate, InputArgs, OutputArgs};
 use crate::context::Context;
@@ -29,10 +29,7 @@ pub fn run(ctx: &Context, args: &ConvertArgs) -> Result<()> {
             bail!("give the AMC frame rate once: --amc-fps (--fps is its deprecated name)");
         }
         input.files.amc_fps = Some(fps);
-        ctx.report(&[Warning::Note {
-            location: "--fps".into(),
-            message: "deprecated for convert: the AMC frame rate is --amc-fps (--fps means a sampling rate everywhere else)".into(),
-        }])?;
+        ctx.info("note: --fps is deprecated for convert: the AMC frame rate is --amc-fps (--fps means a sampling rate everywhere else)");
     }
     let options = ConvertOptions {
         output: args.output.to_output(),

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use rigport_model::SkinningMethod;
-use rigport_pipeline::render::RenderRequest;
+use std::str::FromStr as _;
+
+use rigport_pipeline::render::{picture_size, skinning_methods, FrameRange, RenderRequest};
 use rigport_render::{Projection, RenderOptions, View};
 
 use crate::args::{frame_rate, InputArgs};
@@ -45,14 +47,14 @@ pub struct RenderArgs {
     #[arg(long, value_name = "F", value_parser = frame_rate)]
     pub fps: Option<f32>,
     /// Keep sampled frames a..b (0-based, b excluded; `a..` and `..b` work too).
-    #[arg(long, value_name = "a..b", value_parser = parse_range)]
+    #[arg(long, value_name = "a..b", value_parser = FrameRange::from_str)]
     pub frames: Option<FrameRange>,
     /// Size of one view in pixels (`--skinning both` pictures are twice as wide).
-    #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = parse_size)]
+    #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = picture_size)]
     pub size: (u32, u32),
     /// Where the camera looks from: front (+Z), side (+X), top (+Y) or three-quarter.
-    #[arg(long, value_enum, default_value_t = ViewArg::Front)]
-    pub view: ViewArg,
+    #[arg(long, value_enum, default_value_t = View::Front)]
+    pub view: View,
     /// Orthographic (parallel) or perspective (35 deg field of view) projection.
     #[arg(long, value_enum, default_value_t = CameraArg::Ortho)]
     pub camera: CameraArg,
@@ -63,7 +65,7 @@ pub struct RenderArgs {
     /// Skinning method; `both` draws LBS (left) and DQS (right) with the same camera.
     /// Default: the method the source declares for its skin (LBS unless a USD mesh says
     /// `dualQuaternion`).
-    #[arg(long, value_name = "lbs|dqs|both", value_parser = render_skinning)]
+    #[arg(long, value_name = "lbs|dqs|both", value_parser = skinning_methods)]
     pub skinning: Option<&'static [SkinningMethod]>,
     /// Do not draw the skeleton over the mesh.
     #[arg(long)]
@@ -71,28 +73,6 @@ pub struct RenderArgs {
     /// Do not draw the frame number.
     #[arg(long)]
     pub no_frame_counter: bool,
-}
-
-/// A half-open range of frame indices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct FrameRange {
-    /// First index kept.
-    pub start: usize,
-    /// First index not kept; `None`: through the last.
-    pub end: Option<usize>,
-}
-
-/// `--view`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ViewArg {
-    /// From +Z looking towards -Z.
-    Front,
-    /// From +X.
-    Side,
-    /// From +Y, looking down.
-    Top,
-    /// From the front-right, slightly above.
-    ThreeQuarter,
 }
 
 /// `--camera`.
@@ -104,61 +84,13 @@ pub enum CameraArg {
     Perspective,
 }
 
-/// `rigport render --skinning`: one method, or `both` (LBS left, DQS right).
-fn render_skinning(s: &str) -> Result<&'static [SkinningMethod], String> {
-    match s {
-        "both" => Ok(rigport_render::LBS_AND_DQS),
-        "lbs" => Ok(&[SkinningMethod::Lbs]),
-        "dqs" => Ok(&[SkinningMethod::Dqs]),
-        _ => Err(format!("{s:?}: expected lbs, dqs or both")),
-    }
-}
-
-fn parse_range(s: &str) -> Result<FrameRange, String> {
-    let (a, b) = s
-        .split_once("..")
-        .ok_or_else(|| format!("{s:?}: expected a..b"))?;
-    let num = |t: &str| -> Result<Option<usize>, String> {
-        if t.is_empty() {
-            return Ok(None);
-        }
-        t.parse()
-            .map(Some)
-            .map_err(|_| format!("{t:?}: expected a frame index"))
-    };
-    let start = num(a)?.unwrap_or(0);
-    let end = num(b)?;
-    if end.is_some_and(|e| e <= start) {
-        return Err(format!("{s:?}: the range is empty"));
-    }
-    Ok(FrameRange { start, end })
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("{s:?}: expected WxH, e.g. 512x512"))?;
-    let px = |t: &str| -> Result<u32, String> {
-        match t.parse::<u32>() {
-            Ok(v) if (1..=16384).contains(&v) => Ok(v),
-            _ => Err(format!("{t:?}: expected 1 to 16384 pixels")),
-        }
-    };
-    Ok((px(w)?, px(h)?))
-}
-
 /// Runs `render`.
 pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
     let request = RenderRequest {
         options: RenderOptions {
             width: args.size.0,
             height: args.size.1,
-            view: match args.view {
-                ViewArg::Front => View::Front,
-                ViewArg::Side => View::Side,
-                ViewArg::Top => View::Top,
-                ViewArg::ThreeQuarter => View::ThreeQuarter,
-            },
+            view: args.view,
             projection: match args.camera {
                 CameraArg::Ortho => Projection::Orthographic,
                 CameraArg::Perspective => Projection::PERSPECTIVE,
@@ -170,7 +102,7 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
         skinning: args.skinning,
         clip: args.clip.clone(),
         fps: args.fps,
-        frames: args.frames.map(|r| (r.start, r.end)),
+        frames: args.frames,
         handles: args.handles.clone(),
         output: args.output.clone(),
     };

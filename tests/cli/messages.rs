@@ -174,6 +174,47 @@ fn a_huge_but_finite_quaternion_is_normalized_not_refused() {
     );
 }
 
+/// Every number is checked by the one parser of its kind before any work: exit 2, naming
+/// the flag and what is expected.
+#[test]
+fn bad_numbers_are_refused_by_their_one_check() {
+    let dir = scratch();
+    let out = dir.path().join("out.glb");
+    let out = out.to_str().unwrap();
+    let bvh = repo().join("fixtures/bvh/end_sites.bvh");
+    let bvh = bvh.to_str().unwrap();
+    for (args, message) in [
+        (
+            vec!["convert", bvh, "--reduce-tolerance=-1"],
+            "'--reduce-tolerance <D>': expected a distance >= 0",
+        ),
+        (
+            vec!["retime", bvh, "--speed", "0"],
+            "'--speed <S>': expected a positive number",
+        ),
+        (
+            vec!["retime", bvh, "--fps", "inf"],
+            "'--fps <F>': expected a positive frame rate",
+        ),
+        (
+            vec!["ik", bvh, "--handles", bvh, "--lambda=-1"],
+            "'--lambda <L>': expected a number >= 0",
+        ),
+        (
+            vec!["eval", bvh, "--fps", "0"],
+            "'--fps <F>': expected a positive frame rate",
+        ),
+    ] {
+        let mut args = args.clone();
+        args.extend(["-o", out]);
+        let r = rigport(&args);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+    }
+    assert!(!dir.path().join("out.glb").exists());
+}
+
 /// The input errors about flags name them (the library names the inputs; the CLI words
 /// them with its flags) and exit 1.
 #[test]

@@ -31,7 +31,7 @@ pub enum ShardError {
         text: String,
     },
     /// An index variable without its count.
-    #[error("{index_var} is set but {count_var} is not: set {count_var} to the number of shards (or pass --shard I/N)")]
+    #[error("{index_var} is set but {count_var} is not: set {count_var} to the number of shards")]
     MissingCount {
         /// The index variable.
         index_var: &'static str,
@@ -101,17 +101,18 @@ impl Shard {
         Ok(None)
     }
 
-    /// `--shard I/N` when given, else the environment's ([`Shard::from_env`]), else
-    /// every item ([`Shard::ALL`]).
+    /// `arg` (`I/N`, named `arg_name` in errors) when given, else the environment's
+    /// ([`Shard::from_env`]), else every item ([`Shard::ALL`]).
     ///
     /// # Errors
     /// As [`Shard::parse`] and [`Shard::from_env`].
     pub fn resolve(
         arg: Option<&str>,
+        arg_name: &str,
         var: impl Fn(&str) -> Option<String>,
     ) -> Result<Shard, ShardError> {
         match arg {
-            Some(text) => Shard::parse(text, "--shard"),
+            Some(text) => Shard::parse(text, arg_name),
             None => Ok(Shard::from_env(var)?.unwrap_or(Shard::ALL)),
         }
     }

@@ -1,11 +1,12 @@
 //! rigport exporters: a rig [`Asset`](rigport_model::Asset) to glTF 2.0 (`.glb` or
-//! `.gltf` + `.bin`).
+//! `.gltf` + `.bin`) and to USD (`.usda` text, `.usdc` crate, `.usdz` package).
 //!
-//! Output follows the glTF 2.0 specification and is checked against Khronos
-//! glTF-Validator: zero errors and zero warnings is the bar. Bytes are deterministic: the
-//! same asset and options always give the same file. Values are written in the asset's own
-//! units and axes ([`rigport_model::conventions`] matches glTF's: +Y up, right-handed,
-//! column-major matrices, xyzw quaternions, seconds); no conversion happens here.
+//! glTF output follows the glTF 2.0 specification and is checked against Khronos
+//! glTF-Validator: zero errors and zero warnings is the bar; USD output passes usd-core's
+//! validators. Bytes are deterministic: the same asset and options always give the same
+//! file. Each writer uses its format's own frame: the glTF writer converts the asset's
+//! units and up axis ([`rigport_model::SceneFrame`]) to +Y up in metres; the USD writer
+//! states the `upAxis` and `metersPerUnit` that match the data it writes.
 //!
 //! Lossy steps (influences beyond the per-vertex limit, renormalized weight rows, vertices
 //! without influence, tracks glTF cannot hold) succeed and are reported as

@@ -44,7 +44,7 @@ impl MemoryBudget {
 /// A request that would need more memory than the budget allows.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "{what} needs about {} of memory, over the limit of {} ({origin}); raise it with --max-memory if the machine has the memory",
+    "{what} needs about {} of memory, over the limit of {} ({origin})",
     format_bytes(*needed),
     format_bytes(*limit)
 )]
@@ -141,7 +141,7 @@ mod tests {
             .to_string();
         assert!(err.contains("writing 10000000 frames as USD text"), "{err}");
         assert!(err.contains("5.7 GB") && err.contains("2.0 GB"), "{err}");
-        assert!(err.contains("--max-memory"), "{err}");
+        assert!(err.contains("(--max-memory)"), "the origin: {err}");
     }
 
     #[test]

@@ -1,5 +1,26 @@
 //! `rigport bake`: a dual quaternion skinning result baked into an ordinary (LBS) glTF as
 //! per-frame corrective morph targets in bind space (`rigport_deform::bake::asset`).
+//!
+//! ```
+//! use rigport_model::SkinningMethod;
+//! use rigport_pipeline::bake::BakeOptions;
+//! use rigport_pipeline::{bake, load::Input, progress::Silent};
+//!
+//! let dir = tempfile::tempdir()?;
+//! let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
+//! let options = BakeOptions {
+//!     skinning: Some(SkinningMethod::Dqs),
+//!     clip: Some("bend".into()),
+//!     fps: None,
+//!     threshold: None,
+//!     correctives: None,
+//!     max_influences: 4,
+//!     output: dir.path().join("bend_dqs.glb"),
+//! };
+//! let report = bake(&input, &options, &Silent)?;
+//! assert!(report.log.last().is_some_and(|l| l.starts_with("file size: ")));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use rigport_deform::bake::asset::{bake_dqs, DqsBakeOptions};
 use rigport_model::{InfluencesFit, SkinningMethod, Warning};
@@ -43,7 +64,7 @@ pub fn run(
 ) -> Result<Report, PipelineError> {
     if !crate::outputs::format_of(&options.output)?.is_gltf() {
         return Err(PipelineError::Usage(format!(
-            "{}: bake writes glTF (.glb/.gltf); a .usda declares DQS directly (`rigport convert --skinning dqs`)",
+            "{}: bake writes glTF (.glb/.gltf); a .usda declares DQS directly (`rigport convert` to .usda with the DQS skinning method)",
             options.output.display()
         )));
     }

@@ -1,5 +1,23 @@
 //! `rigport cloth`: a garment simulated on the animated body and baked into the output
 //! (the work is `rigport_deform::cloth::asset`).
+//!
+//! ```
+//! use rigport_pipeline::cloth::ClothRequest;
+//! use rigport_pipeline::{cloth, load::Input, progress::Silent};
+//!
+//! let dir = tempfile::tempdir()?;
+//! let out = dir.path().join("dressed.glb");
+//! let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
+//! // The garment must be a mesh of the input or an .obj file.
+//! let request = ClothRequest {
+//!     garment: "Skirt".into(),
+//!     output: out.clone(),
+//!     ..ClothRequest::default()
+//! };
+//! assert!(cloth(&input, &request, &Silent).is_err());
+//! assert!(!out.exists());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use std::path::PathBuf;
 

@@ -181,7 +181,7 @@ impl PreparedDemo {
         match corpus {
             None => {}
             Some(dir) if !dir.is_dir() => corpus_lines.push(format!(
-                "corpus: {} not found; no corpus pictures (--corpus DIR to point at it)",
+                "corpus: {} not found; no corpus pictures (give the corpus folder to draw them)",
                 dir.display()
             )),
             Some(dir) => {

@@ -212,7 +212,7 @@ fn evaluate(
         None => {
             if opts.fps.is_some() {
                 return Err(PipelineError::Invalid(format!(
-                    "{label}: --fps needs a clip to sample; the rig has none"
+                    "{label}: a sampling rate needs a clip to sample; the rig has none"
                 )));
             }
             let mut pose = Pose::rest(&asset.skeleton);
@@ -232,7 +232,7 @@ fn evaluate(
                 Some(fps) => {
                     if !(fps.is_finite() && fps > 0.0) {
                         return Err(PipelineError::Invalid(format!(
-                            "--fps {fps}: expected a positive frame rate"
+                            "frame rate {fps}: expected a positive number"
                         )));
                     }
                     FrameGrid::new(compiled.start(), compiled.end(), fps)?.into_times()

@@ -1,4 +1,26 @@
 //! `rigport footlock`: hold mocap feet still during their ground contacts.
+//!
+//! ```
+//! use rigport_ik::footlock::FootlockOptions;
+//! use rigport_pipeline::footlock::FootlockRequest;
+//! use rigport_pipeline::{footlock, load::Input, progress::Silent, write::Output};
+//!
+//! let dir = tempfile::tempdir()?;
+//! let out = dir.path().join("clean.glb");
+//! // A skeleton whose joint names say nothing about feet: they must be named.
+//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+//! let request = FootlockRequest {
+//!     clip: None,
+//!     feet: Vec::new(),
+//!     options: FootlockOptions::default(),
+//!     json: false,
+//!     output: Output::new(&out),
+//! };
+//! let err = footlock(&input, &request, &Silent).unwrap_err();
+//! assert!(err.to_string().contains("cannot find the feet"), "{err}");
+//! assert!(!out.exists());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use rigport_ik::footlock::{footlock, resolve_feet, up_in_model, FootlockOptions};
 use serde_json::json;

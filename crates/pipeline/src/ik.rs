@@ -1,5 +1,29 @@
 //! `rigport ik`: IK handles over time (`HANDLES.json`), solved per frame and baked into a
 //! clip placed first.
+//!
+//! ```
+//! use rigport_ik::clip::ClipSolveOptions;
+//! use rigport_pipeline::ik::IkOptions;
+//! use rigport_pipeline::{ik, load::Input, progress::Silent, write::Output};
+//!
+//! let dir = tempfile::tempdir()?;
+//! let handles = dir.path().join("reach.handles.json");
+//! std::fs::write(&handles, r#"{"fps": 10, "handles": [{"joint": "bone_2", "relative": true,
+//!     "keys": [{"time": 0, "position": [0, 0, 0]}, {"time": 1, "position": [0.1, -0.1, 0]}]}]}"#)?;
+//! let f = "../../fixtures/pinocchio/branch";
+//! let input = Input::new(vec![format!("{f}.obj").into(), format!("{f}_skeleton.out").into(),
+//!     format!("{f}_attachment.out").into()]);
+//! let options = IkOptions {
+//!     handles,
+//!     solve: ClipSolveOptions::default(),
+//!     json: true,
+//!     output: Output::new(dir.path().join("reach.glb")),
+//! };
+//! let report = ik(&input, &options, &Silent)?;
+//! let json: serde_json::Value = serde_json::from_str(report.output.as_deref().unwrap_or(""))?;
+//! assert_eq!(json["frames"], 11);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use std::path::PathBuf;
 

@@ -1,16 +1,27 @@
-//! rigport's pipelines: what a command does between parsing its arguments and printing,
-//! callable from Rust. The CLI (`src/`) and anyone embedding rigport call the same code.
+//! rigport's pipelines: each command's whole pipeline, callable from Rust. The CLI
+//! (`src/`) parses its arguments, calls one of these functions and prints the [`Report`];
+//! `rigport batch` and anyone embedding rigport call the same functions.
 //!
-//! - [`load`]: resolve inputs into assets the way the CLI does, import one under the
-//!   memory budget, and give a skeleton-only asset a bone mesh;
+//! Every command is `rigport_pipeline::COMMAND(input, options, &dyn Progress) ->
+//! Result<Report, PipelineError>`, one module each: [`convert()`], [`inspect()`],
+//! [`eval()`], [`animate()`], [`retime()`], [`sequence()`], [`ik()`], [`footlock()`],
+//! [`retarget()`], [`bake()`], [`cloth()`], [`render()`], and [`demo()`] (no input).
+//! Each checks its output before any work, and gives [`progress::Progress::warnings`]
+//! everything lossy before writing, so a caller can refuse it ([`progress::Silent`] shows
+//! nothing and accepts all).
+//!
+//! The steps they share:
+//! - [`load`]: [`load::Input`] (the files as named, the bone-mesh setting, the memory
+//!   budget); resolve inputs into assets the way the CLI does, import one under the budget,
+//!   and give a skeleton-only asset a bone mesh;
 //! - [`outputs`]: the output format by extension, and the checks made before any work (an
 //!   output must not be an input, a special file or a `.gltf` link);
-//! - [`write`]: the influence fit (`truncate` or `refit`), key reduction, the memory check
-//!   and the writer chosen by the output's extension;
+//! - [`mod@write`]: [`write::Output`] and [`write::write_output`]: key reduction, the
+//!   memory check, the influence fit (`truncate` or `refit`) and the writer chosen by the
+//!   output's extension;
 //! - [`memory`]: this process's memory budget and the import check;
-//! - [`demo`]: the built-in demo character, written with its pictures;
 //! - [`dump`]: a rig posed or sampled, skinned and written as an `.npz` dump;
-//! - [`retarget`]: a clip put onto another rig, and its report as JSON.
+//! - [`asset_report`]: what `inspect` lists.
 //!
 //! A whole `convert`, from a BVH file to a `.usda`:
 //!

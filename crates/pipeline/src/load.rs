@@ -120,7 +120,7 @@ pub fn load(
     if bone_mesh && rigport_import::bone_mesh::add_bone_mesh(&mut imported.asset) {
         imported.warnings.push(Warning::Note {
             location: plan.label(),
-            message: "skeleton only: added a bone mesh (one shape per bone; --no-bone-mesh to leave it out)".into(),
+            message: "skeleton only: added a bone mesh (one shape per bone; the bone-mesh setting leaves it out)".into(),
         });
     }
     Ok(imported)

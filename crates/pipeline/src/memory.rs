@@ -1,13 +1,13 @@
-//! The memory budget of a process (`--max-memory`) and the check made before an import
+//! The memory budget of a process and the check made before an import
 //! (the other estimates live in the libraries beside the code that allocates; see
 //! `rigport_model::budget`).
 //!
 //! ```
 //! use rigport_pipeline::memory;
 //!
-//! let given = memory::process_budget(Some(1 << 30));
-//! assert_eq!((given.limit, given.origin), (1 << 30, "--max-memory"));
-//! let default = memory::process_budget(None);
+//! let given = memory::process_budget(Some(1 << 30), "the limit given");
+//! assert_eq!((given.limit, given.origin), (1 << 30, "the limit given"));
+//! let default = memory::process_budget(None, "the limit given");
 //! assert!(default.limit > 0);
 //! let plan = rigport_import::detect::Source::Bvh("../../fixtures/bvh/end_sites.bvh".into());
 //! assert!(memory::check_import(&plan, &given).is_ok());
@@ -21,14 +21,15 @@ use rigport_model::budget::{self, MemoryBudget, OverBudget};
 /// times the input's size (measured: 4.2x for a 36 MB AMC; text and binary inputs alike).
 const IMPORT_FACTOR: u64 = 5;
 
-/// The budget for `--max-memory` (bytes), or the default: 3/4 of the memory this process
-/// may use (the smallest of `MemTotal`, the memory limit of its cgroup or any cgroup above
-/// it, v1 or v2, and an address-space limit), or 8 GB when unknown.
-pub fn process_budget(max_memory: Option<u64>) -> MemoryBudget {
-    match max_memory {
+/// The budget `given` (bytes; `given_by` names where it came from in messages), or the
+/// default: 3/4 of the memory this process may use (the smallest of `MemTotal`, the memory
+/// limit of its cgroup or any cgroup above it, v1 or v2, and an address-space limit), or
+/// 8 GB when unknown.
+pub fn process_budget(given: Option<u64>, given_by: &'static str) -> MemoryBudget {
+    match given {
         Some(limit) => MemoryBudget {
             limit,
-            origin: "--max-memory",
+            origin: given_by,
         },
         None => match machine_memory() {
             Some(total) => MemoryBudget {
@@ -37,36 +38,6 @@ pub fn process_budget(max_memory: Option<u64>) -> MemoryBudget {
             },
             None => DEFAULT,
         },
-    }
-}
-
-/// `budget` shared by `workers` items in flight at once (`rigport batch --jobs`): each
-/// item gets an equal part, so that together they stay within the whole.
-///
-/// ```
-/// use rigport_pipeline::memory;
-///
-/// let whole = memory::process_budget(Some(2_000_000_000));
-/// let part = memory::shared(whole, 4);
-/// assert_eq!(part.limit, 500_000_000);
-/// assert!(part.origin.contains("--max-memory") && part.origin.contains("shared"));
-/// assert_eq!(memory::shared(whole, 1), whole);
-/// ```
-pub fn shared(budget: MemoryBudget, workers: usize) -> MemoryBudget {
-    let workers = workers.max(1) as u64;
-    if workers == 1 {
-        return budget;
-    }
-    let origin = match budget.origin {
-        "--max-memory" => "--max-memory, shared by the batch's --jobs items in flight",
-        o if o.starts_with("default: 3/4") => {
-            "default: 3/4 of the memory this process may use, shared by the batch's --jobs items in flight"
-        }
-        _ => "default, shared by the batch's --jobs items in flight",
-    };
-    MemoryBudget {
-        limit: budget.limit / workers,
-        origin,
     }
 }
 

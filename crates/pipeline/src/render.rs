@@ -1,6 +1,27 @@
 //! `rigport render`: pictures of a rig or clip (a PNG contact sheet, or a GIF or APNG
 //! animation), drawn on the CPU by `rigport-render`, optionally with IK handle targets as
 //! markers.
+//!
+//! ```
+//! use rigport_pipeline::render::RenderRequest;
+//! use rigport_pipeline::{load::Input, progress::Silent, render};
+//!
+//! let dir = tempfile::tempdir()?;
+//! let out = dir.path().join("walk.png");
+//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+//! let request = RenderRequest {
+//!     options: rigport_render::RenderOptions { width: 64, height: 64, ..Default::default() },
+//!     skinning: None,
+//!     clip: None,
+//!     fps: None,
+//!     frames: None,
+//!     handles: None,
+//!     output: out.clone(),
+//! };
+//! render(&input, &request, &Silent)?;
+//! assert_eq!(&std::fs::read(&out)?[1..4], b"PNG");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use std::path::{Path, PathBuf};
 
@@ -47,6 +68,91 @@ impl PictureFormat {
     }
 }
 
+/// A half-open range of sampled frames, `a..b` (0-based, `b` excluded; `a..` and `..b`
+/// too).
+///
+/// ```
+/// use rigport_pipeline::render::FrameRange;
+///
+/// assert_eq!("2..7".parse(), Ok(FrameRange { start: 2, end: Some(7) }));
+/// assert_eq!("..3".parse(), Ok(FrameRange { start: 0, end: Some(3) }));
+/// assert!("5..2".parse::<FrameRange>().is_err());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameRange {
+    /// First index kept.
+    pub start: usize,
+    /// First index not kept; `None`: through the last.
+    pub end: Option<usize>,
+}
+
+impl std::str::FromStr for FrameRange {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (a, b) = s
+            .split_once("..")
+            .ok_or_else(|| format!("{s:?}: expected a..b"))?;
+        let num = |t: &str| -> Result<Option<usize>, String> {
+            if t.is_empty() {
+                return Ok(None);
+            }
+            t.parse()
+                .map(Some)
+                .map_err(|_| format!("{t:?}: expected a frame index"))
+        };
+        let start = num(a)?.unwrap_or(0);
+        let end = num(b)?;
+        if end.is_some_and(|e| e <= start) {
+            return Err(format!("{s:?}: the range is empty"));
+        }
+        Ok(Self { start, end })
+    }
+}
+
+/// A picture size `WxH`, each 1 to 16384 pixels.
+///
+/// ```
+/// assert_eq!(rigport_pipeline::render::picture_size("640x480"), Ok((640, 480)));
+/// assert!(rigport_pipeline::render::picture_size("0x10").is_err());
+/// ```
+///
+/// # Errors
+/// Anything else, saying what is expected.
+pub fn picture_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("{s:?}: expected WxH, e.g. 512x512"))?;
+    let px = |t: &str| -> Result<u32, String> {
+        match t.parse::<u32>() {
+            Ok(v) if (1..=16384).contains(&v) => Ok(v),
+            _ => Err(format!("{t:?}: expected 1 to 16384 pixels")),
+        }
+    };
+    Ok((px(w)?, px(h)?))
+}
+
+/// Skinning methods by name: `lbs`, `dqs`, or `both` ([`rigport_render::LBS_AND_DQS`]:
+/// LBS on the left, DQS on the right).
+///
+/// ```
+/// use rigport_model::SkinningMethod;
+///
+/// assert_eq!(rigport_pipeline::render::skinning_methods("dqs"), Ok(&[SkinningMethod::Dqs][..]));
+/// assert_eq!(rigport_pipeline::render::skinning_methods("both").map(<[_]>::len), Ok(2));
+/// ```
+///
+/// # Errors
+/// Any other name.
+pub fn skinning_methods(s: &str) -> Result<&'static [SkinningMethod], String> {
+    match s {
+        "both" => Ok(rigport_render::LBS_AND_DQS),
+        "lbs" => Ok(&[SkinningMethod::Lbs]),
+        "dqs" => Ok(&[SkinningMethod::Dqs]),
+        _ => Err(format!("{s:?}: expected lbs, dqs or both")),
+    }
+}
+
 /// What `render` draws, and where it writes.
 #[derive(Clone, Debug)]
 pub struct RenderRequest {
@@ -59,8 +165,8 @@ pub struct RenderRequest {
     pub clip: Option<String>,
     /// Sample at this rate (default: the key times for a sheet, 25 for animations).
     pub fps: Option<f32>,
-    /// Keep the sampled frames `start..end` (0-based, `end` excluded; `None`: to the last).
-    pub frames: Option<(usize, Option<usize>)>,
+    /// Keep these of the sampled frames.
+    pub frames: Option<FrameRange>,
     /// A `HANDLES.json` whose targets are drawn as markers.
     pub handles: Option<PathBuf>,
     /// The picture file.
@@ -111,7 +217,8 @@ pub fn run(
     let cannot_sample =
         |e| PipelineError::step(format!("{}: cannot sample the clip", plan.label()), e);
     let frames =
-        rigport_render::frame_list(asset, clip, fps, request.frames).map_err(cannot_sample)?;
+        rigport_render::frame_list(asset, clip, fps, request.frames.map(|r| (r.start, r.end)))
+            .map_err(cannot_sample)?;
     if frames.is_empty() {
         let all = rigport_render::frame_list(asset, clip, fps, None).map_err(cannot_sample)?;
         return Err(PipelineError::Invalid(format!(

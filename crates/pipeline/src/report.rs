@@ -2,7 +2,14 @@
 
 use rigport_model::Warning;
 
-/// What a command did, for its caller to show. The CLI prints `log` to standard error and
+/// What a command did, for its caller to show.
+///
+/// ```
+/// let report = rigport_pipeline::Report::logged("wrote a.glb".into());
+/// assert_eq!(report.log, ["wrote a.glb"]);
+/// assert!(report.summary.is_none() && report.output.is_none());
+/// ```
+/// The CLI prints `log` to standard error and
 /// `summary` to standard output unless it is quiet, `notices` to standard error and
 /// `output` to standard output always.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -125,7 +125,7 @@ pub fn write_output(
     }
     let asset = fitted.as_ref().map_or(&asset, |f| &f.asset);
     if format.is_gltf() && opts.skinning == Some(SkinningMethod::Dqs) {
-        return Err(PipelineError::Invalid("glTF defines only linear blend skinning; `rigport bake --skinning dqs` bakes a DQS result into a glTF, and a .usda output can declare DQS".into()));
+        return Err(PipelineError::Invalid("glTF defines only linear blend skinning; `rigport bake` bakes a DQS result into a glTF's morph targets, and a .usda output can declare DQS".into()));
     }
     let building = if format.is_gltf() {
         "building glTF"

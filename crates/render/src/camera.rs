@@ -9,6 +9,7 @@ use rigport_model::glam::{Mat3, Vec3};
 
 /// Where the camera looks from (rigport's frame: +Y up, right-handed).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum View {
     /// From +Z looking towards -Z, +Y up, +X to the right.
     #[default]

@@ -101,7 +101,7 @@ pub enum ClothError {
         garment: String,
     },
     /// Nothing is pinned: the garment would fall off the body.
-    #[error("garment {garment:?} has no pinned vertex (mark some with --pin-vertices, --pin-below or --pin-above)")]
+    #[error("garment {garment:?} has no pinned vertex (pin some by vertex or by height)")]
     NoPins {
         /// The garment mesh.
         garment: String,
