@@ -11,8 +11,8 @@ use std::path::PathBuf;
 
 use rigport_export::{write_gltf, GltfOptions};
 
-#[path = "../src/sample.rs"]
-mod sample;
+#[path = "../src/test_assets.rs"]
+mod test_assets;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = PathBuf::from(
@@ -22,14 +22,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     std::fs::create_dir_all(&dir)?;
     let cases = [
-        ("rig", sample::rig(), 4),
-        ("rig_max2", sample::rig(), 2),
-        ("wide_max4", sample::wide_rig(), 4),
-        ("wide_max8", sample::wide_rig(), 8),
-        ("two_roots", sample::two_roots(), 4),
-        ("big_palette", sample::big_palette(), 4),
-        ("static_props", sample::static_props(), 4),
-        ("bones_only", sample::bones_only(), 4),
+        ("rig", test_assets::rig(), 4),
+        ("rig_max2", test_assets::rig(), 2),
+        ("wide_max4", test_assets::wide_rig(), 4),
+        ("wide_max8", test_assets::wide_rig(), 8),
+        ("two_roots", test_assets::two_roots(), 4),
+        ("big_palette", test_assets::big_palette(), 4),
+        ("static_props", test_assets::static_props(), 4),
+        ("bones_only", test_assets::bones_only(), 4),
     ];
     for (name, asset, max_influences) in cases {
         let opts = GltfOptions { max_influences };

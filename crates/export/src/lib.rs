@@ -44,7 +44,7 @@ mod usd;
 mod weights;
 
 #[cfg(test)]
-mod sample;
+mod test_assets;
 
 pub use atomic::{
     check_output, remove_temp_files, write_atomic, write_atomic_with, NotRegularFile,

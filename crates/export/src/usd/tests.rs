@@ -16,7 +16,7 @@ use super::anim::frame_rate;
 use super::sampler::Sampler;
 use super::*;
 use crate::labels::fallback_palette_index;
-use crate::{sample, Problem};
+use crate::{test_assets, Problem};
 
 fn usda(asset: &Asset, skinning: SkinningMethod) -> ExportedUsd {
     to_usda(
@@ -61,7 +61,7 @@ fn numbers(text: &str, decl: &str) -> Vec<f64> {
 
 #[test]
 fn rig_text_has_the_usdskel_layout() {
-    let asset = sample::rig();
+    let asset = test_assets::rig();
     let out = usda(&asset, SkinningMethod::Lbs);
     let text = &out.text;
     assert!(text
@@ -216,13 +216,13 @@ fn rig_text_has_the_usdskel_layout() {
 #[test]
 fn other_samples() {
     // Several roots in one Skeleton.
-    let text = usda(&sample::two_roots(), SkinningMethod::Lbs).text;
+    let text = usda(&test_assets::two_roots(), SkinningMethod::Lbs).text;
     assert!(text.contains(
         "uniform token[] joints = [\"left\", \"left/left_end\", \"right\", \"right/right_end\"]"
     ));
     assert!(text.contains("timeCodesPerSecond = 24\n"));
     // Tracks holding the rest value leave their joint to restTransforms.
-    let mut asset = sample::two_roots();
+    let mut asset = test_assets::two_roots();
     asset.clips[0].tracks.push(Track {
         target: TrackTarget::Translation(JointIndex(0)),
         interpolation: Interpolation::Linear,
@@ -246,7 +246,7 @@ fn other_samples() {
     assert!(text.contains("uniform token[] joints = [\"left\", \"right\"]\n"));
 
     // No clips, but a default morph weight: a `rest` animation carries it.
-    let text = usda(&sample::wide_rig(), SkinningMethod::Lbs).text;
+    let text = usda(&test_assets::wide_rig(), SkinningMethod::Lbs).text;
     assert!(text.contains("rel skel:animationSource = </wide/Animations/rest>"));
     assert!(!text.contains("variantSet"));
     assert!(
@@ -254,7 +254,7 @@ fn other_samples() {
         "1-8 distinct influences, no limit"
     );
     // Unskinned meshes only: an empty Skeleton drives the blend shapes; the grid is plain.
-    let text = usda(&sample::static_props(), SkinningMethod::Lbs).text;
+    let text = usda(&test_assets::static_props(), SkinningMethod::Lbs).text;
     assert!(text.contains("uniform token[] joints = []\n"));
     let grid = block(&text, "def Mesh \"grid\"");
     assert!(grid.starts_with("def Mesh \"grid\"\n"), "no SkelBindingAPI");
@@ -263,10 +263,10 @@ fn other_samples() {
     assert!(hat.contains("uniform token[] skel:blendShapes = [\"squash\"]"));
     assert!(!hat.contains("jointIndices"));
     // Big palettes are no problem for int indices.
-    let text = usda(&sample::big_palette(), SkinningMethod::Lbs).text;
+    let text = usda(&test_assets::big_palette(), SkinningMethod::Lbs).text;
     assert!(text.contains("elementSize = 2\n"));
     // Bones only: no animation, no time metadata.
-    let text = usda(&sample::bones_only(), SkinningMethod::Lbs).text;
+    let text = usda(&test_assets::bones_only(), SkinningMethod::Lbs).text;
     assert!(!text.contains("timeCodesPerSecond"));
     assert!(
         text.contains("metersPerUnit = 1\n"),
@@ -276,7 +276,11 @@ fn other_samples() {
 
 #[test]
 fn output_is_deterministic() {
-    for asset in [sample::rig(), sample::two_roots(), sample::wide_rig()] {
+    for asset in [
+        test_assets::rig(),
+        test_assets::two_roots(),
+        test_assets::wide_rig(),
+    ] {
         let a = usda(&asset, SkinningMethod::Dqs);
         let b = usda(&asset.clone(), SkinningMethod::Dqs);
         assert_eq!(a, b);
@@ -326,7 +330,7 @@ fn joint_names_become_unique_identifiers() {
 
 #[test]
 fn invalid_assets_are_rejected_and_usd_only_limits_lifted() {
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     asset.meshes[1].triangles.push([0, 1, 99]);
     let Err(ExportError::Invalid { problems }) = to_usda(&asset, &UsdOptions::default()) else {
         panic!("expected Invalid");
@@ -339,7 +343,7 @@ fn invalid_assets_are_rejected_and_usd_only_limits_lifted() {
             count: 24
         }))
     );
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     asset.skins.push(asset.skins[0].clone());
     let Err(ExportError::Invalid { problems }) = to_usda(&asset, &UsdOptions::default()) else {
         panic!("expected Invalid");
@@ -353,7 +357,7 @@ fn invalid_assets_are_rejected_and_usd_only_limits_lifted() {
         }]
     );
     // An empty mesh is a valid USD Mesh (glTF needs an accessor element).
-    let mut asset = sample::bones_only();
+    let mut asset = test_assets::bones_only();
     asset.meshes.push(Mesh {
         name: "empty".into(),
         ..Default::default()
@@ -389,7 +393,7 @@ fn frame_rates() {
     assert_eq!(frame_rate(&[0.0, 0.0123, 0.5]), None);
     assert_eq!(frame_rate(&[0.25]), None);
     // An irregular first clip gets millisecond time codes.
-    let mut asset = sample::two_roots();
+    let mut asset = test_assets::two_roots();
     asset.clips[0].tracks[0].times = vec![0.0, 0.0123];
     let text = usda(&asset, SkinningMethod::Lbs).text;
     assert!(text.contains("timeCodesPerSecond = 1000\n"));
@@ -404,7 +408,7 @@ fn frame_rates() {
 fn bind_pose_mismatches_use_geom_bind_or_a_second_skeleton() {
     // Two skinned copies of the body on the same chain: the second bound 2 units to the
     // left (its inverse binds carry the offset), the third with an unrelated bind pose.
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     let mut moved = asset.skins[0].clone();
     moved.mesh = MeshIndex(2);
     let offset = Mat4::from_translation(Vec3::new(2.0, 0.0, 0.0));
@@ -436,7 +440,7 @@ fn bind_pose_mismatches_use_geom_bind_or_a_second_skeleton() {
 
 #[test]
 fn dropped_tracks_are_reported() {
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     let clip = &mut asset.clips[0];
     clip.tracks.push(clip.tracks[0].clone());
     clip.tracks.push(Track {
@@ -465,7 +469,7 @@ fn dropped_tracks_are_reported() {
 #[test]
 fn prepare_and_write() {
     let dir = tempfile::tempdir().unwrap();
-    let asset = sample::two_roots();
+    let asset = test_assets::two_roots();
     let err = prepare_usd(&asset, &dir.path().join("x.glb"), &UsdOptions::default()).unwrap_err();
     assert!(matches!(err, ExportError::UnsupportedExtension { .. }));
     let path = dir.path().join("out.USDA");
@@ -498,7 +502,7 @@ fn prepare_and_write() {
 #[test]
 fn a_long_text_is_streamed_to_its_file() {
     let dir = tempfile::tempdir().unwrap();
-    let asset = sample::two_roots();
+    let asset = test_assets::two_roots();
     assert!(!asset.clips.is_empty(), "the sample has a clip to stream");
     let expected = to_usda(&asset, &UsdOptions::default()).unwrap().text;
     let names = |dir: &Path| -> Vec<String> {
@@ -589,13 +593,17 @@ fn every_sample_passes_usd_validation() {
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().unwrap();
     let cases = [
-        ("rig", sample::rig(), SkinningMethod::Lbs),
-        ("rig_dqs", sample::rig(), SkinningMethod::Dqs),
-        ("wide", sample::wide_rig(), SkinningMethod::Dqs),
-        ("two_roots", sample::two_roots(), SkinningMethod::Lbs),
-        ("big_palette", sample::big_palette(), SkinningMethod::Lbs),
-        ("props", sample::static_props(), SkinningMethod::Lbs),
-        ("bones", sample::bones_only(), SkinningMethod::Lbs),
+        ("rig", test_assets::rig(), SkinningMethod::Lbs),
+        ("rig_dqs", test_assets::rig(), SkinningMethod::Dqs),
+        ("wide", test_assets::wide_rig(), SkinningMethod::Dqs),
+        ("two_roots", test_assets::two_roots(), SkinningMethod::Lbs),
+        (
+            "big_palette",
+            test_assets::big_palette(),
+            SkinningMethod::Lbs,
+        ),
+        ("props", test_assets::static_props(), SkinningMethod::Lbs),
+        ("bones", test_assets::bones_only(), SkinningMethod::Lbs),
     ];
     for (name, asset, skinning) in cases {
         let path = dir.path().join(format!("{name}.usda"));
@@ -627,7 +635,7 @@ fn every_sample_passes_usd_validation() {
 fn checker_rejects_broken_bindings() {
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let good = usda(&sample::two_roots(), SkinningMethod::Lbs).text;
+    let good = usda(&test_assets::two_roots(), SkinningMethod::Lbs).text;
     let body = block(&good, "def Mesh \"body\"");
     let cases: [(&str, String, &str); 4] = [
         (
@@ -914,7 +922,7 @@ fn dump(asset: &Asset, clip: Option<&Clip>, times: Option<&[f32]>) -> Vec<u8> {
 /// The rig with a seam: the hat's corners shared by three faces become one source vertex
 /// each (8 source vertices for 24 points), so the dump lists fewer points than the Mesh.
 fn rig_with_seams() -> Asset {
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     let hat = &mut asset.meshes[1];
     let mut firsts: Vec<Vec3> = Vec::new();
     hat.source_vertex = hat
@@ -966,12 +974,17 @@ fn usd_evaluation_matches_the_reference() {
         // A LINEAR clip matches between frames too.
         (
             "two_roots",
-            sample::two_roots(),
+            test_assets::two_roots(),
             Some(0),
             Some(vec![0.0, 0.1, 0.5, 0.77, 1.0]),
         ),
-        ("wide_rest", sample::wide_rig(), None, None),
-        ("props", sample::static_props(), Some(0), Some(frames(0.5))),
+        ("wide_rest", test_assets::wide_rig(), None, None),
+        (
+            "props",
+            test_assets::static_props(),
+            Some(0),
+            Some(frames(0.5)),
+        ),
     ];
     for (name, asset, clip, times) in cases {
         let usd = dir.path().join(format!("{name}.usda"));
@@ -1008,7 +1021,7 @@ fn usd_evaluation_matches_the_reference() {
     }
 
     // The comparison can fail: a dump of another clip is far off.
-    let asset = sample::rig();
+    let asset = test_assets::rig();
     let usd = dir.path().join("mismatch.usda");
     prepare_usd(&asset, &usd, &UsdOptions::default())
         .unwrap()
@@ -1060,7 +1073,7 @@ fn usd_evaluation_matches_the_reference() {
 #[test]
 fn reference_helpers_are_sane() {
     // The reference's rigid attachment and skinning agree with the model's rules.
-    let mut asset = sample::two_roots();
+    let mut asset = test_assets::two_roots();
     asset.meshes[0].morph_weights.clear();
     let (model, points) = reference(&asset, None, 0.0);
     assert_eq!(model.len(), 4);
@@ -1087,7 +1100,7 @@ fn a_rate_of_37_5_with_uneven_keys_is_found_exactly() {
 
 #[test]
 fn each_clip_variant_has_its_own_time_range() {
-    let mut asset = sample::two_roots();
+    let mut asset = test_assets::two_roots();
     let mut long = asset.clips[0].clone();
     long.name = "long".into();
     for t in &mut long.tracks {
@@ -1117,7 +1130,7 @@ fn each_clip_variant_has_its_own_time_range() {
 #[test]
 fn the_scene_frame_is_written_as_authored_or_converted() {
     use rigport_model::{SceneFrame, UpAxis};
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     let place = DMat4::from_scale_rotation_translation(
         DVec3::splat(100.0),
         DQuat::from_rotation_z(0.5),
@@ -1159,7 +1172,7 @@ fn the_scene_frame_is_written_as_authored_or_converted() {
         "{xform:?}"
     );
     // An identity frame authors no transform.
-    assert!(!usda(&sample::rig(), SkinningMethod::Lbs)
+    assert!(!usda(&test_assets::rig(), SkinningMethod::Lbs)
         .text
         .contains("xformOp"));
 }

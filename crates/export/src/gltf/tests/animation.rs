@@ -7,11 +7,11 @@ use gltf::animation::util::ReadOutputs;
 use rigport_model::{Interpolation, JointIndex, MeshIndex, Track, TrackTarget};
 
 use super::*;
-use crate::sample;
+use crate::test_assets;
 
 #[test]
 fn tracks_gltf_cannot_hold_are_dropped_with_warnings() {
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     let clip = &mut asset.clips[0];
     let morph_on_hat = Track {
         target: TrackTarget::MorphWeights(MeshIndex(1)),
@@ -118,7 +118,7 @@ fn read_channels(glb: &[u8], animation: usize) -> Vec<ReadChannel> {
 fn constant_tracks_are_dropped_at_rest_and_reduced_to_two_keys_elsewhere() {
     use gltf::animation::{Interpolation as I, Property as P};
     use rigport_model::glam::Quat;
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     let rest_rot = asset.skeleton.joints()[1].rest_local.rotation;
     let t5 = keys(5, 0.25);
     let track = |target, interpolation, times: &[f32], values: Vec<f32>| Track {
@@ -210,7 +210,7 @@ fn constant_tracks_are_dropped_at_rest_and_reduced_to_two_keys_elsewhere() {
     let out = glb(&asset, 4);
     assert_eq!(
         out.warnings,
-        glb(&sample::rig(), 4).warnings,
+        glb(&test_assets::rig(), 4).warnings,
         "dropping constant tracks is lossless: no new warning"
     );
     let channels = read_channels(&out.glb, 0);
@@ -254,7 +254,7 @@ fn constant_tracks_are_dropped_at_rest_and_reduced_to_two_keys_elsewhere() {
 fn an_animation_keeps_its_clip_duration_when_tracks_are_dropped() {
     use gltf::animation::{Interpolation as I, Property as P};
     use rigport_model::glam::Quat;
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     let rest_rot = asset.skeleton.joints()[1].rest_local.rotation.to_array();
     let at_rest = |target, times: Vec<f32>, value: &[f32]| Track {
         target,

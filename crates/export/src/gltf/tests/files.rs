@@ -9,7 +9,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use super::*;
-use crate::sample;
+use crate::test_assets;
 
 fn dir_names(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -23,7 +23,7 @@ fn dir_names(dir: &Path) -> Vec<String> {
 #[test]
 fn write_gltf_is_atomic_and_leaves_nothing_on_error() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let asset = sample::rig();
+    let asset = test_assets::rig();
     let opts = GltfOptions::default();
 
     let mut bad = asset.clone();
@@ -114,7 +114,7 @@ fn percent_encoding_keeps_safe_characters() {
 
 #[test]
 fn an_asset_without_binary_data_has_no_buffer() {
-    let asset = sample::bones_only();
+    let asset = test_assets::bones_only();
     let split = to_gltf(&asset, &GltfOptions::default(), "x.bin").expect("export");
     assert!(split.bin.is_empty());
     let json: Value = serde_json::from_slice(&split.json).expect("json");
@@ -142,7 +142,7 @@ fn symlinked_gltf_is_refused_and_a_bin_directory_too() {
     std::fs::write(dir.path().join("model.gltf"), b"old").expect("write");
     let link = dir.path().join("link.gltf");
     std::os::unix::fs::symlink("model.gltf", &link).expect("symlink");
-    let err = write_gltf(&sample::rig(), &link, &GltfOptions::default()).unwrap_err();
+    let err = write_gltf(&test_assets::rig(), &link, &GltfOptions::default()).unwrap_err();
     assert!(matches!(err, ExportError::Io { .. }), "{err:?}");
     assert_eq!(dir_names(dir.path()), ["link.gltf", "model.gltf"]);
     assert_eq!(
@@ -152,7 +152,7 @@ fn symlinked_gltf_is_refused_and_a_bin_directory_too() {
     // A directory where the .bin goes is refused before anything is written.
     std::fs::create_dir(dir.path().join("x.bin")).expect("mkdir");
     let err = write_gltf(
-        &sample::rig(),
+        &test_assets::rig(),
         &dir.path().join("x.gltf"),
         &GltfOptions::default(),
     )

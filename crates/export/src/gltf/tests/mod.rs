@@ -15,7 +15,7 @@ use rigport_model::{
 use serde_json::Value;
 
 use super::*;
-use crate::sample;
+use crate::test_assets;
 use crate::Problem;
 
 mod animation;
@@ -75,7 +75,7 @@ fn expected_row(row: &[Influence], max: usize) -> BTreeMap<u16, f32> {
 
 #[test]
 fn glb_round_trips_through_the_gltf_crate() {
-    let asset = sample::rig();
+    let asset = test_assets::rig();
     let out = glb(&asset, 4);
     let (doc, buffers) = import(&out.glb);
     let data = |b: gltf::Buffer| Some(&*buffers[b.index()]);
@@ -418,7 +418,7 @@ fn check_channel<'a>(
 
 #[test]
 fn gltf_split_matches_glb() {
-    let asset = sample::rig();
+    let asset = test_assets::rig();
     let glb_out = glb(&asset, 4);
     let split = to_gltf(&asset, &GltfOptions::default(), "rig%20data.bin").expect("export");
     assert_eq!(glb_out.warnings, split.warnings);
@@ -441,12 +441,12 @@ fn gltf_split_matches_glb() {
 #[test]
 fn exports_are_deterministic() {
     for asset in [
-        sample::rig(),
-        sample::wide_rig(),
-        sample::two_roots(),
-        sample::big_palette(),
-        sample::static_props(),
-        sample::bones_only(),
+        test_assets::rig(),
+        test_assets::wide_rig(),
+        test_assets::two_roots(),
+        test_assets::big_palette(),
+        test_assets::static_props(),
+        test_assets::bones_only(),
     ] {
         let a = glb(&asset, 8);
         let b = glb(&asset.clone(), 8);
@@ -460,10 +460,10 @@ fn exports_are_deterministic() {
 #[test]
 fn buffer_layout_follows_the_rules() {
     for asset in [
-        sample::rig(),
-        sample::big_palette(),
-        sample::wide_rig(),
-        sample::static_props(),
+        test_assets::rig(),
+        test_assets::big_palette(),
+        test_assets::wide_rig(),
+        test_assets::static_props(),
     ] {
         let out = glb(&asset, 8);
         let json = glb_json(&out.glb);
@@ -524,7 +524,7 @@ fn buffer_layout_follows_the_rules() {
 
 #[test]
 fn invalid_assets_and_options_are_rejected() {
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     asset.meshes[0].triangles[5] = [0, 1, 999];
     asset.skins[0].inv_bind.pop();
     asset.meshes[1].morph_weights = vec![1.0];
@@ -560,7 +560,7 @@ fn invalid_assets_and_options_are_rejected() {
         "{err}"
     );
 
-    let mut asset = sample::rig();
+    let mut asset = test_assets::rig();
     asset.skins[0].joints[1] = JointIndex(2);
     asset.clips[0].tracks[1].values[4..8].copy_from_slice(&[0.0; 4]);
     asset.meshes[0].morph_targets[0].normal_deltas = Some(vec![Vec3::ZERO; 3]);
@@ -589,7 +589,7 @@ fn invalid_assets_and_options_are_rejected() {
         ]
     );
 
-    let mut empty = sample::rig();
+    let mut empty = test_assets::rig();
     empty.meshes[1].triangles.clear();
     empty.skins[0].joints.clear();
     empty.skins[0].inv_bind.clear();
@@ -611,7 +611,7 @@ fn invalid_assets_and_options_are_rejected() {
     );
 
     for max_influences in [0, 9] {
-        let err = to_glb(&sample::rig(), &GltfOptions { max_influences }).unwrap_err();
+        let err = to_glb(&test_assets::rig(), &GltfOptions { max_influences }).unwrap_err();
         assert!(
             matches!(err, ExportError::MaxInfluences { max_influences: m } if m == max_influences)
         );
@@ -672,7 +672,11 @@ fn assert_khronos_valid(glb: &[u8]) {
 
 #[test]
 fn exported_samples_still_validate() {
-    for asset in [sample::rig(), sample::two_roots(), sample::static_props()] {
+    for asset in [
+        test_assets::rig(),
+        test_assets::two_roots(),
+        test_assets::static_props(),
+    ] {
         assert_khronos_valid(&glb(&asset, 4).glb);
     }
 }

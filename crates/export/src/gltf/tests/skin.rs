@@ -10,11 +10,11 @@ use rigport_model::glam::Mat4;
 use rigport_model::{Influence, Warning};
 
 use super::*;
-use crate::sample;
+use crate::test_assets;
 
 #[test]
 fn eight_influences_use_a_second_set_and_four_report_drops() {
-    let asset = sample::wide_rig();
+    let asset = test_assets::wide_rig();
     let skin = &asset.skins[0];
     let rows: Vec<&[Influence]> = skin.influences.rows().collect();
 
@@ -111,7 +111,7 @@ fn eight_influences_use_a_second_set_and_four_report_drops() {
 
 #[test]
 fn disjoint_palette_gets_an_extra_root() {
-    let out = glb(&sample::two_roots(), 4);
+    let out = glb(&test_assets::two_roots(), 4);
     let (doc, _) = import(&out.glb);
     let root = doc.nodes().nth(4).expect("extra root");
     assert_eq!(root.name(), Some("rigport_root"));
@@ -125,7 +125,7 @@ fn disjoint_palette_gets_an_extra_root() {
     let skin = doc.skins().next().expect("skin");
     assert_eq!(skin.skeleton().map(|n| n.index()), Some(4));
     // A palette under one root needs none, and its skeleton is the nearest common ancestor.
-    let json = glb_json(&glb(&sample::wide_rig(), 4).glb);
+    let json = glb_json(&glb(&test_assets::wide_rig(), 4).glb);
     assert_eq!(json["skins"][0]["skeleton"], 0);
     assert!(json["nodes"]
         .as_array()
@@ -136,7 +136,7 @@ fn disjoint_palette_gets_an_extra_root() {
 
 #[test]
 fn large_palettes_use_unsigned_short_joints() {
-    let asset = sample::big_palette();
+    let asset = test_assets::big_palette();
     let out = glb(&asset, 4);
     let (doc, buffers) = import(&out.glb);
     let data = |b: gltf::Buffer| Some(&*buffers[b.index()]);
@@ -166,7 +166,7 @@ fn large_palettes_use_unsigned_short_joints() {
     );
     assert_eq!(joints[1], [298, 7, 0, 0]);
     // The small rig's palette fits in bytes.
-    let (doc, _) = import(&glb(&sample::rig(), 4).glb);
+    let (doc, _) = import(&glb(&test_assets::rig(), 4).glb);
     let prim = doc
         .meshes()
         .next()
@@ -184,7 +184,7 @@ fn large_palettes_use_unsigned_short_joints() {
 
 #[test]
 fn unskinned_meshes_sit_at_the_root_and_large_ones_use_u32_indices() {
-    let asset = sample::static_props();
+    let asset = test_assets::static_props();
     let out = glb(&asset, 4);
     assert!(out.warnings.is_empty(), "{:?}", out.warnings);
     let (doc, buffers) = import(&out.glb);
