@@ -13,7 +13,8 @@
 #  9. module circles         tools/module_cycles.py (no file of a crate imports one that
 #                            imports it back); tools/one_concept.py (each concept the model
 #                            defines -- skinning method, up axis, influence fit, output
-#                            format, the clip lookup -- is defined once)
+#                            format, the clip lookup -- is defined once; libraries name no
+#                            flag); cargo doc --workspace --no-deps with warnings denied
 # 10. fuzz (short)           fuzz/run.sh --dev --seconds RIGPORT_FUZZ_SECONDS (default 5) per
 #                            target, when cargo-fuzz and a nightly toolchain are installed
 #                            (skipped otherwise, or when cargo fuzz itself cannot build, with
@@ -294,6 +295,15 @@ if python3 tools/module_cycles.py; then
   record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
 else
   record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "files that import each other (listed above)"
+fi
+
+CURRENT_STEP="rustdoc (cargo doc --no-deps, warnings denied)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+if RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked "${PROFILE_ARGS[@]}"; then
+  record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
+else
+  record "$CURRENT_STEP" FAIL "$((SECONDS - t0))" "broken or private doc links (listed above)"
 fi
 
 CURRENT_STEP="one concept, one type (tools/one_concept.py)"

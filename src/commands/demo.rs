@@ -18,7 +18,7 @@ pub struct DemoArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4))]
     pub detail: u32,
     /// The shared corpus folder: one rig of each family in it is rendered to
-    /// DIR/corpus/<family>.png (default: `../shared/corpus` relative to the current
+    /// `DIR/corpus/<family>.png` (default: `../shared/corpus` relative to the current
     /// directory; skipped with a note when absent).
     #[arg(long, value_name = "CORPUS_DIR", conflicts_with = "no_corpus")]
     pub corpus: Option<PathBuf>,

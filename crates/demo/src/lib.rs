@@ -16,7 +16,7 @@
 //! [`character()`] builds, from no input files, what a Pinocchio run would leave on disk for a
 //! human figure: a joint tree (`skeleton.out`), a closed triangle mesh (the OBJ) and one dense
 //! weight row per vertex with one column per **bone** (`attachment.out`). Turning it into an
-//! [`Asset`](rigport_model::Asset) is the Pinocchio importer's job, exactly as for files.
+//! [`Asset`] is the Pinocchio importer's job, exactly as for files.
 //!
 //! # How it is made
 //! Files: `skeleton` (the joint table), `sdf` (distance primitives), `body` (the parts and

@@ -9,7 +9,7 @@ use super::{IkError, IkMethod, Lambda};
 use rigport_eval::sample::SampleError;
 use rigport_eval::EvalError;
 
-/// How [`solve_clip`] solves.
+/// How [`solve_clip`](crate::clip::solve_clip) solves.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClipSolveOptions {
     /// The solver.
@@ -21,7 +21,7 @@ pub struct ClipSolveOptions {
     pub tolerance: Option<f32>,
     /// Iterations per frame.
     pub max_iterations: u32,
-    /// Sub-step distance ([`IkSettings::substep`]).
+    /// Sub-step distance ([`IkSettings::substep`](crate::IkSettings::substep)).
     pub substep: Option<f32>,
     /// Whether roots above the handles may translate.
     pub free_root: bool,
@@ -211,7 +211,7 @@ pub(crate) fn lerp_keys(times: &[f32], values: &[Vec3], t: f32) -> Vec3 {
     values[k].lerp(values[k + 1], u)
 }
 
-/// The model-space targets of a handle set over time, as [`solve_clip`] solves for them
+/// The model-space targets of a handle set over time, as [`solve_clip`](crate::clip::solve_clip) solves for them
 /// (`rigport render --handles` draws them as markers).
 #[derive(Clone, Debug, PartialEq)]
 pub struct HandleTargets {

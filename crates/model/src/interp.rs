@@ -8,7 +8,7 @@
 //! - LINEAR lerps components (`a + (b − a)·u`) and slerps rotations along the shortest arc.
 //! - CUBICSPLINE is the cubic Hermite spline with tangents scaled by the key interval;
 //!   rotations are normalized afterwards.
-//! - Rotations come out unit length ([`unit`]).
+//! - Rotations come out unit length ([`unit()`]).
 //!
 //! The arithmetic is written out in one order for both precisions, the order glam's SSE2
 //! quaternions use on x86-64 (a dot product is `(x·x' + z·z') + (y·y' + w·w')`), so the

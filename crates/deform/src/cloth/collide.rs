@@ -93,9 +93,9 @@ const RADIUS_QUANTILE: f32 = 0.25;
 ///
 /// Each skinned vertex belongs to its highest-weight joint and to the nearest of that
 /// joint's child segments; each triangle to the bones of its vertices. At
-/// [`AXIS_SAMPLES`] points along the bone the distance to the nearest of its triangles is
+/// `AXIS_SAMPLES` points along the bone the distance to the nearest of its triangles is
 /// the radius of the largest ball there inside the skin; the capsule's radius is the
-/// [`RADIUS_QUANTILE`] of those. (The distance to the nearest *vertex* would overshoot
+/// `RADIUS_QUANTILE` of those. (The distance to the nearest *vertex* would overshoot
 /// flat sides: a box arm's corners are 1.41 times farther than its faces.) Bones shorter
 /// than 1e-6 of `scale`, or with fewer than 3 triangles, get no capsule. Skips mesh
 /// `skip`. Output is sorted by (joint, child).

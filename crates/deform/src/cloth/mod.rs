@@ -8,7 +8,7 @@
 //!   (in parallel: frames are independent, so the order cannot matter), binds each pinned
 //!   vertex at rest (the bind pose) to the nearest point of the skinned body surface
 //!   ([`attach::SurfacePoint`], a triangle and barycentric weights) and steps the
-//!   [XPBD](solver) solver serially: substeps per frame, stretch and bending constraints,
+//!   XPBD solver (`solver`) serially: substeps per frame, stretch and bending constraints,
 //!   gravity along the scene's down axis, damping, pins moved to their bound points
 //!   (interpolated linearly between frames) and capsule collisions
 //!   ([`collide::fit_capsules`]) with a thickness as the last step of every substep.

@@ -14,7 +14,7 @@
 //! 2. **Rest-pose alignment.** Per mapped joint, the rotation relative to the source's
 //!    rest pose is taken in world (model) space, `D = R_s(t) R_s,rest⁻¹`, and applied to
 //!    the target's rest world rotation after a swing `A` that turns the target's rest bone
-//!    onto the source's ([`align::swings`]): `R_t(t) = Q D Q⁻¹ A R_t,rest`. So a T-pose
+//!    onto the source's (`align::swings`): `R_t(t) = Q D Q⁻¹ A R_t,rest`. So a T-pose
 //!    source drives an A-pose target (its arms follow the source's world directions), and
 //!    rest orientations that differ per joint (ASF, CSCI 520, glTF) or are the identity
 //!    (Pinocchio) do not matter. Then each such bone is turned by the shortest arc onto

@@ -24,7 +24,7 @@ pub struct LimbError {
     pub mean_error: f32,
 }
 
-/// What [`retarget`] found and did.
+/// What [`retarget`](super::retarget()) found and did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RetargetReport {
     /// How the map was made.

@@ -109,6 +109,24 @@
 //! (SkelAnimations to clips), `root_motion.rs` (animated transforms above the skeleton)
 //! and `implicit.rs` (implicit surfaces as polygons); `crate_tests.rs` checks the import
 //! of binary and packaged layers against their text.
+//!
+//! [`Warning::Incomplete`]: rigport_model::Warning::Incomplete
+//! [`Joint`]: rigport_model::Joint
+//! [`Warning::Repaired`]: rigport_model::Warning::Repaired
+//! [`Joint::rest_local`]: rigport_model::Joint::rest_local
+//! [`SkinBinding::inv_bind`]: rigport_model::SkinBinding::inv_bind
+//! [`Mesh`]: rigport_model::Mesh
+//! [`SkinBinding`]: rigport_model::SkinBinding
+//! [`Clip`]: rigport_model::Clip
+//! [`Asset::frame`]: rigport_model::Asset::frame
+//! [`Asset::meters_per_unit`]: rigport_model::Asset::meters_per_unit
+//! [`SceneFrame::model_to_scene`]: rigport_model::SceneFrame::model_to_scene
+//! [`SceneFrame::up_axis`]: rigport_model::SceneFrame::up_axis
+//! [`Warning::Note`]: rigport_model::Warning::Note
+//! [`Mesh::source_vertex`]: rigport_model::Mesh::source_vertex
+//! [`SkinBinding::method`]: rigport_model::SkinBinding::method
+//! [`Mesh::polygons`]: rigport_model::Mesh::polygons
+//! [`Asset::validate`]: rigport_model::Asset::validate
 
 mod anim;
 mod assemble;
@@ -148,7 +166,7 @@ use crate::{read_file, ImportError, Imported, Problem};
 /// # Errors
 /// The file cannot be read or is not UTF-8; a syntax error (at its `file:line:column`);
 /// invalid UsdSkel data (naming the prim path); the resulting asset fails
-/// [`Asset::validate`].
+/// [`Asset::validate`](rigport_model::Asset::validate).
 pub fn import(path: &Path) -> Result<Imported, ImportError> {
     let bytes = read_file(path)?;
     import_slice(&bytes, path)

@@ -37,13 +37,13 @@
 //! # Limits
 //! No input can make the reader loop, recurse without bound or allocate without bound:
 //! prim nesting is limited like the text parser's, nested values to
-//! [`MAX_VALUE_DEPTH`](layout::MAX_VALUE_DEPTH), and all decoded elements together to
-//! [`element_budget`](layout::element_budget) of the file size.
+//! `layout::MAX_VALUE_DEPTH`, and all decoded elements together to
+//! `layout::element_budget` of the file size.
 //!
 //! # Modules
-//! The dependencies go one way: [`layout`] reads the container (header, table of
-//! contents, structural sections) with checked primitive reads and uses only [`coding`];
-//! [`value`] decodes value representations with those reads; this module uses both to
+//! The dependencies go one way: `layout` reads the container (header, table of
+//! contents, structural sections) with checked primitive reads and uses only `coding`;
+//! `value` decodes value representations with those reads; this module uses both to
 //! walk the specs into a [`Layer`].
 
 mod coding;
