@@ -137,7 +137,7 @@ pub fn write(path: &Path, records: &[Record]) -> std::io::Result<()> {
         text.push_str(&to_line(r));
         text.push('\n');
     }
-    rigport_export::write_atomic(path, text.as_bytes())
+    rigport_atomic::write_atomic(path, text.as_bytes())
 }
 
 /// Why reports cannot be merged.

@@ -159,7 +159,7 @@ pub fn write_sidecar(path: &Path, sidecar: &Sidecar) -> std::io::Result<()> {
     }
     let mut text = serde_json::to_string(sidecar).map_err(std::io::Error::other)?;
     text.push('\n');
-    rigport_export::write_atomic(path, text.as_bytes())
+    rigport_atomic::write_atomic(path, text.as_bytes())
 }
 
 #[cfg(test)]

@@ -34,7 +34,6 @@
 //! ```
 #![warn(missing_docs)]
 
-mod atomic;
 mod error;
 pub mod estimate;
 mod gltf;
@@ -46,13 +45,13 @@ mod weights;
 #[cfg(test)]
 mod test_assets;
 
-pub use atomic::{
-    check_output, remove_temp_files, write_atomic, write_atomic_with, NotRegularFile,
-};
 pub use error::{ExportError, Problem};
 pub use gltf::{
     prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, ImageFile,
     PreparedGltf,
+};
+pub use rigport_atomic::{
+    check_output, remove_temp_files, write_atomic, write_atomic_with, NotRegularFile,
 };
 pub use usd::{prepare_usd, to_usda, ExportedUsd, PreparedUsd, UsdOptions};
 pub use weights::gltf_influences;

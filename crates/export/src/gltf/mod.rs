@@ -49,8 +49,8 @@ use gltf_json as json;
 use json::validation::USize64;
 use rigport_model::{Asset, Warning};
 
-use crate::atomic::TempFile;
 use crate::ExportError;
+use rigport_atomic::TempFile;
 
 /// Options for the glTF exporters.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -346,7 +346,7 @@ impl PreparedGltf {
                 images,
             } => {
                 check_not_symlink(path)?;
-                let target = crate::atomic::check_output(path).map_err(io_err(path))?;
+                let target = rigport_atomic::check_output(path).map_err(io_err(path))?;
                 // Images first (each atomically), so the new `.gltf` never names a missing
                 // image; a failure later leaves them in place.
                 for (image_path, bytes) in images {
@@ -355,7 +355,7 @@ impl PreparedGltf {
                 let bin_target = if bin.is_empty() {
                     None
                 } else {
-                    Some(crate::atomic::check_output(bin_path).map_err(io_err(bin_path))?)
+                    Some(rigport_atomic::check_output(bin_path).map_err(io_err(bin_path))?)
                 };
                 let json_tmp = TempFile::create_beside(&target, json).map_err(io_err(path))?;
                 let Some(bin_target) = bin_target else {

@@ -148,8 +148,8 @@ use std::path::{Path, PathBuf};
 use rigport_model::{Asset, OutputFormat, SkinningMethod, UpAxis, Warning};
 
 use self::text::{Finished, Usda};
-use crate::atomic::TempFile;
 use crate::ExportError;
+use rigport_atomic::TempFile;
 
 pub(crate) use self::text::SPILL_BYTES;
 
@@ -323,7 +323,7 @@ fn prepare_usd_spilling_at(
     let doc = match encoding {
         // Where a long text goes: the file a link at `path` leads to. A path that cannot
         // be written is reported when the text would be staged, else by `write`.
-        OutputFormat::Usda => match crate::atomic::check_output(path) {
+        OutputFormat::Usda => match rigport_atomic::check_output(path) {
             Ok(target) => Usda::spilling_to(&target, spill_at),
             Err(_) => Usda::default(),
         },

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DMat4;
 
-use crate::atomic::TempFile;
+use rigport_atomic::TempFile;
 
 /// Spaces per indentation level (what `usdcat` writes).
 const INDENT: &str = "    ";
@@ -61,7 +61,7 @@ pub(crate) enum Finished {
 
 impl Usda {
     /// A document that moves its text to a temporary file beside `target` (the output;
-    /// links already followed, see [`crate::atomic::check_output`]) once it holds more than
+    /// links already followed, see [`rigport_atomic::check_output`]) once it holds more than
     /// `at` bytes ([`SPILL_BYTES`]).
     pub(crate) fn spilling_to(target: &Path, at: usize) -> Self {
         Self {

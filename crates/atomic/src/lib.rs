@@ -24,6 +24,7 @@
 //! For tests of that cleanup, the environment variable `RIGPORT_TEST_RENAME_DELAY_MS`
 //! makes every rename wait that many milliseconds (at most 60 s) once its temporary file is
 //! written, so that a test can interrupt a write while the file exists.
+#![warn(missing_docs)]
 
 use std::ffi::OsString;
 use std::fs::{self, File, OpenOptions};
@@ -63,7 +64,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
 ///
 /// let dir = tempfile::tempdir()?;
 /// let path = dir.path().join("out.txt");
-/// rigport_export::write_atomic_with(&path, |file| file.write_all(b"streamed"))?;
+/// rigport_atomic::write_atomic_with(&path, |file| file.write_all(b"streamed"))?;
 /// assert_eq!(std::fs::read(&path)?, b"streamed");
 /// # Ok::<(), std::io::Error>(())
 /// ```
@@ -274,7 +275,7 @@ fn test_rename_delay() {
 
 /// A temporary file that is deleted on drop unless [`TempFile::persist`] renamed it.
 #[derive(Debug)]
-pub(crate) struct TempFile {
+pub struct TempFile {
     path: PathBuf,
     armed: bool,
 }
@@ -288,7 +289,7 @@ impl TempFile {
     /// # Errors
     /// I/O errors; [`io::ErrorKind::InvalidInput`] when `target` has no file name;
     /// [`io::ErrorKind::Interrupted`] after [`remove_temp_files`].
-    pub(crate) fn create_beside(target: &Path, bytes: &[u8]) -> io::Result<Self> {
+    pub fn create_beside(target: &Path, bytes: &[u8]) -> io::Result<Self> {
         Self::create_beside_with(target, |file| file.write_all(bytes))
     }
 
@@ -297,7 +298,7 @@ impl TempFile {
     /// # Errors
     /// I/O errors, `write`'s among them; [`io::ErrorKind::InvalidInput`] when `target` has
     /// no file name; [`io::ErrorKind::Interrupted`] after [`remove_temp_files`].
-    pub(crate) fn create_beside_with(
+    pub fn create_beside_with(
         target: &Path,
         write: impl FnOnce(&mut File) -> io::Result<()>,
     ) -> io::Result<Self> {
@@ -313,7 +314,7 @@ impl TempFile {
     ///
     /// # Errors
     /// As [`TempFile::create_beside`].
-    pub(crate) fn create_beside_open(target: &Path) -> io::Result<(Self, fs::File)> {
+    pub fn create_beside_open(target: &Path) -> io::Result<(Self, fs::File)> {
         Self::fresh(target, |path| {
             OpenOptions::new().write(true).create_new(true).open(path)
         })
@@ -322,7 +323,7 @@ impl TempFile {
     /// A second name (a hard link) for the existing file `target`, so that it can be put
     /// back after `target` is replaced; `None` when there is no such file or the file
     /// system cannot link (best effort).
-    pub(crate) fn backup_of(target: &Path) -> Option<Self> {
+    pub fn backup_of(target: &Path) -> Option<Self> {
         if !fs::symlink_metadata(target).is_ok_and(|m| m.is_file()) {
             return None;
         }
@@ -376,7 +377,7 @@ impl TempFile {
     ///
     /// # Errors
     /// The rename's I/O error; the temporary file is then removed.
-    pub(crate) fn persist(mut self, target: &Path) -> io::Result<()> {
+    pub fn persist(mut self, target: &Path) -> io::Result<()> {
         test_rename_delay();
         fs::rename(&self.path, target)?;
         self.armed = false;
