@@ -34,18 +34,19 @@
 //! ```
 #![warn(missing_docs)]
 
+mod checks;
 mod error;
 pub mod estimate;
 mod gltf;
 mod labels;
 pub mod npz;
 mod usd;
-mod weights;
 
 #[cfg(test)]
 mod test_assets;
 
 pub use error::{ExportError, Problem};
+pub use gltf::weights::gltf_influences;
 pub use gltf::{
     prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, ImageFile,
     PreparedGltf,
@@ -54,4 +55,3 @@ pub use rigport_atomic::{
     check_output, remove_temp_files, write_atomic, write_atomic_with, NotRegularFile,
 };
 pub use usd::{prepare_usd, to_usda, ExportedUsd, PreparedUsd, UsdOptions};
-pub use weights::gltf_influences;

@@ -9,25 +9,19 @@ use json::buffer::Target;
 use json::mesh::{Mode, Semantic};
 use json::validation::Checked;
 use json::Index;
-use rigport_model::{
-    Asset, AssetError, Interpolation, Mesh, Skeleton, SkinBinding, TrackTarget, Warning,
-};
+use rigport_model::{Asset, Mesh, Skeleton, SkinBinding, Warning};
 
 use super::animation;
 use super::buffer::{Bounds, Builder};
 use super::material::{self, ImagePlacement};
-use super::{quat_length, unit_quat};
+use super::unit_quat;
+use super::weights::{self, SET_SLOTS};
 use crate::labels::{fallback_palette_index, mesh_label};
-use crate::weights::{self, SET_SLOTS};
-use crate::{ExportError, GltfOptions, Problem};
+use crate::{ExportError, GltfOptions};
 
 /// Name of the node inserted above all skeleton roots when a skin's joints have no common
 /// ancestor (see [`build`]).
 pub(crate) const EXTRA_ROOT_NAME: &str = "rigport_root";
-
-/// A quaternion shorter than this has no meaningful direction (it is noise or a zeroed
-/// value) and is rejected rather than normalized.
-const MIN_QUAT_LENGTH: f64 = 1e-6;
 
 /// Largest deviation of an inverse bind matrix's last row from `(0, 0, 0, 1)` that is
 /// treated as rounding noise. Inverting an affine `f32` matrix leaves errors around 1e-7;
@@ -68,7 +62,7 @@ pub(crate) fn build(
             max_influences: opts.max_influences,
         });
     }
-    let problems = check(asset);
+    let problems = crate::checks::check(asset, &crate::checks::GLTF);
     if !problems.is_empty() {
         return Err(ExportError::Invalid { problems });
     }
@@ -541,137 +535,4 @@ fn write_skin(
         name: non_empty(&mesh.name),
         skeleton: skeleton_node.map(|n| Index::new(n as u32)),
     });
-}
-
-/// Whether a quaternion is too short (or not finite) to normalize meaningfully.
-fn degenerate(q: [f32; 4]) -> bool {
-    let length = quat_length(q);
-    !length.is_finite() || length < MIN_QUAT_LENGTH
-}
-
-/// Everything that makes an asset unexportable: [`Asset::validate`]'s problems, then the
-/// exporter's own checks (written to be safe on an asset that failed validation).
-pub(crate) fn check(asset: &Asset) -> Vec<Problem> {
-    let mut problems: Vec<Problem> = match asset.validate() {
-        Ok(()) => Vec::new(),
-        Err(errs) => errs.into_iter().map(Problem::Asset).collect(),
-    };
-    for (mi, mesh) in asset.meshes.iter().enumerate() {
-        let n = mesh.vertex_count();
-        if n == 0 || mesh.triangles.is_empty() {
-            problems.push(Problem::EmptyMesh {
-                mesh: mi,
-                vertices: n,
-                triangles: mesh.triangles.len(),
-            });
-        }
-        let non_finite = |what: String| Problem::Asset(AssetError::NonFinite { what });
-        if mesh
-            .normals
-            .as_ref()
-            .is_some_and(|v| v.iter().any(|x| !x.is_finite()))
-        {
-            problems.push(non_finite(format!("mesh {mi} normals")));
-        }
-        if mesh
-            .uvs
-            .iter()
-            .chain(&mesh.extra_uvs)
-            .any(|v| v.iter().any(|x| !x.is_finite()))
-        {
-            problems.push(non_finite(format!("mesh {mi} uvs")));
-        }
-        for (ti, target) in mesh.morph_targets.iter().enumerate() {
-            if let Some(d) = &target.normal_deltas {
-                if d.len() != n {
-                    problems.push(Problem::Asset(AssetError::AttributeLength {
-                        mesh: mi,
-                        attribute: "morph target normals",
-                        found: d.len(),
-                        expected: n,
-                    }));
-                }
-                if d.iter().any(|x| !x.is_finite()) {
-                    problems.push(non_finite(format!("mesh {mi} morph target {ti} normals")));
-                }
-            }
-        }
-        if !mesh.morph_weights.is_empty() && mesh.morph_weights.len() != mesh.morph_targets.len() {
-            problems.push(Problem::MorphWeightCount {
-                mesh: mi,
-                found: mesh.morph_weights.len(),
-                expected: mesh.morph_targets.len(),
-            });
-        }
-        if mesh.morph_weights.iter().any(|w| !w.is_finite()) {
-            problems.push(non_finite(format!("mesh {mi} default morph weights")));
-        }
-    }
-
-    let mut skin_of_mesh: BTreeMap<usize, usize> = BTreeMap::new();
-    for (si, skin) in asset.skins.iter().enumerate() {
-        if let Some(&first) = skin_of_mesh.get(&skin.mesh.get()) {
-            problems.push(Problem::SharedSkinMesh {
-                mesh: skin.mesh.get(),
-                first_skin: first,
-                second_skin: si,
-            });
-        } else {
-            skin_of_mesh.insert(skin.mesh.get(), si);
-        }
-        if skin.joints.is_empty() {
-            problems.push(Problem::EmptyPalette { skin: si });
-        }
-        if skin.joints.len() > 1 << 16 {
-            problems.push(Problem::PaletteTooLarge {
-                skin: si,
-                joints: skin.joints.len(),
-            });
-        }
-        let mut sorted = skin.joints.clone();
-        sorted.sort_unstable();
-        for w in sorted.windows(2) {
-            if w[0] == w[1] {
-                problems.push(Problem::DuplicatePaletteJoint {
-                    skin: si,
-                    joint: w[0],
-                });
-            }
-        }
-    }
-
-    for (index, joint) in asset.skeleton.joints().iter().enumerate() {
-        if degenerate(joint.rest_local.rotation.to_array()) {
-            problems.push(Problem::DegenerateRestRotation {
-                joint: index,
-                name: joint.name.clone(),
-            });
-        }
-    }
-
-    for clip in &asset.clips {
-        for (ti, track) in clip.tracks.iter().enumerate() {
-            if !matches!(track.target, TrackTarget::Rotation(_)) {
-                continue;
-            }
-            let (stride, offset) = match track.interpolation {
-                Interpolation::CubicSpline => (12, 4),
-                _ => (4, 0),
-            };
-            for key in 0..track.times.len() {
-                let start = key * stride + offset;
-                let Some(&[x, y, z, w]) = track.values.get(start..start + 4) else {
-                    break; // a value-count problem, already reported by validate()
-                };
-                if degenerate([x, y, z, w]) {
-                    problems.push(Problem::DegenerateRotationKey {
-                        clip: clip.name.clone(),
-                        track: ti,
-                        key,
-                    });
-                }
-            }
-        }
-    }
-    problems
 }

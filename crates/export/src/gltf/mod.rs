@@ -42,6 +42,7 @@ mod frame;
 pub(crate) mod material;
 #[cfg(test)]
 mod tests;
+pub(crate) mod weights;
 
 use std::path::{Path, PathBuf};
 
@@ -175,7 +176,7 @@ pub fn to_gltf(
     bin_uri: &str,
 ) -> Result<ExportedSplit, ExportError> {
     let stem = bin_uri.strip_suffix(".bin").unwrap_or(bin_uri);
-    let uris = material::image_file_names(stem, asset);
+    let uris = crate::labels::image_file_names(stem, asset);
     let placement = material::ImagePlacement::Uris(&uris);
     let mut built = document::build(asset, opts, &placement)?;
     if !built.bin.is_empty() {
@@ -191,7 +192,7 @@ pub fn to_gltf(
         .iter()
         .zip(uris)
         .enumerate()
-        .filter(|(k, _)| material::image_used(asset, *k))
+        .filter(|(k, _)| crate::labels::image_used(asset, *k))
         .map(|(_, (image, uri))| ImageFile {
             uri,
             bytes: image.bytes.clone(),
@@ -276,11 +277,11 @@ pub fn prepare_gltf(
                 .unwrap_or_default();
             let out = to_gltf(asset, opts, &percent_encode(&bin_name))?;
             let stem = bin_name.strip_suffix(".bin").unwrap_or(&bin_name);
-            let names = material::image_file_names(stem, asset);
+            let names = crate::labels::image_file_names(stem, asset);
             let images = names
                 .into_iter()
                 .enumerate()
-                .filter(|(k, _)| material::image_used(asset, *k))
+                .filter(|(k, _)| crate::labels::image_used(asset, *k))
                 .map(|(_, name)| path.with_file_name(name))
                 .zip(out.images.into_iter().map(|i| i.bytes))
                 .collect();

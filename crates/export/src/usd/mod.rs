@@ -129,7 +129,6 @@
 //! ```
 
 mod anim;
-mod checks;
 mod encode;
 mod material;
 mod mesh;
@@ -231,13 +230,13 @@ fn build_body(
     stem: &str,
     mut doc: Usda,
 ) -> Result<(Usda, Vec<crate::ImageFile>, Vec<Warning>), ExportError> {
-    let names = crate::gltf::material::image_file_names(stem, asset);
+    let names = crate::labels::image_file_names(stem, asset);
     let warnings = stage::build(asset, options, &names, &mut doc)?;
     let images = names
         .into_iter()
         .zip(&asset.images)
         .enumerate()
-        .filter(|(k, _)| crate::gltf::material::image_used(asset, *k))
+        .filter(|(k, _)| crate::labels::image_used(asset, *k))
         .map(|(_, (uri, image))| crate::ImageFile {
             uri,
             bytes: image.bytes.clone(),

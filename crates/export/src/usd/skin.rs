@@ -7,7 +7,7 @@ use rigport_model::conventions::WEIGHT_EPSILON;
 use rigport_model::{Asset, SkinBinding, Warning};
 
 use crate::labels::fallback_palette_index;
-use crate::weights::ROW_SUM_TOLERANCE;
+use crate::labels::ROW_SUM_TOLERANCE;
 
 /// How a mesh is bound to the skeleton.
 #[derive(Clone, Copy, Debug)]

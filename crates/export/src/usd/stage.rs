@@ -13,7 +13,6 @@ use glam::DMat4;
 use rigport_model::{Asset, Warning};
 
 use super::anim::{frame_rate, plan_clip, sample_times, write_animation, AnimPlan};
-use super::checks::check;
 use super::material::{material_prims, write_materials, MATERIALS};
 use super::mesh::{write_mesh, MeshContext, MeshPlan};
 use super::names::{Namespace, Renames};
@@ -21,6 +20,7 @@ use super::skeleton::{bind_poses, joint_tokens, transform_d, SKELETON};
 use super::skin::Binding;
 use super::text::{put, quoted, write_matrices, write_matrices_one, write_tokens, Usda};
 use super::UsdOptions;
+use crate::checks::{check, USD};
 use crate::{ExportError, Problem};
 
 /// Name of the Scope holding the SkelAnimation prims.
@@ -44,7 +44,7 @@ pub(crate) fn build(
     image_files: &[String],
     doc: &mut Usda,
 ) -> Result<Vec<Warning>, ExportError> {
-    let problems = check(asset);
+    let problems = check(asset, &USD);
     if !problems.is_empty() {
         return Err(ExportError::Invalid { problems });
     }

@@ -21,6 +21,8 @@
 use rigport_model::conventions::WEIGHT_EPSILON;
 use rigport_model::{Influence, Influences};
 
+use crate::labels::ROW_SUM_TOLERANCE;
+
 /// Slots per vertex: two glTF sets (`JOINTS_0`/`WEIGHTS_0`, `JOINTS_1`/`WEIGHTS_1`) of four.
 pub(crate) const MAX_SLOTS: usize = 8;
 
@@ -31,12 +33,6 @@ pub(crate) const SET_SLOTS: usize = 4;
 /// component at a time, so with two sets it reads `W0.x, W1.x, W0.y, W1.y, ...`
 /// (`InfluencesChecker.checkNext`). Slot `s` is set `s / 4`, component `s % 4`.
 const VALIDATOR_ORDER: [usize; MAX_SLOTS] = [0, 4, 1, 5, 2, 6, 3, 7];
-
-/// An input row whose weight sum differs from 1 by more than this is reported as
-/// renormalized. Summing up to a few dozen `f32` weights that were normalized in `f32`
-/// accumulates at most ~32 · 2⁻²⁴ ≈ 2e-6 of rounding error, so 1e-5 only flags rows whose
-/// source really did not sum to 1 (e.g. Pinocchio's 4-decimal rows).
-pub(crate) const ROW_SUM_TOLERANCE: f64 = 1e-5;
 
 /// How many steps each way around the residual-corrected weight [`fix_sum`] tries.
 const SEARCH_STEPS: i32 = 8;
