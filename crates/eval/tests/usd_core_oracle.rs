@@ -21,40 +21,14 @@ fn influences(rows: &[Vec<(usize, f64)>]) -> Influences {
     }))
 }
 
-/// A little-endian `f4`/`i4` `.npy` array (numpy's `lib/format.py`, version 1.0).
+/// A `<f4`/`<i4` `.npy` array ([`rigport_testkit::npy::read_npy`]) as `f32` values (the
+/// `f64` it reads them into holds each exactly).
 fn read_npy(path: &std::path::Path) -> (Vec<usize>, Vec<f32>) {
-    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert_eq!(&bytes[..6], b"\x93NUMPY", "{}", path.display());
-    let (len_at, len_size) = if bytes[6] == 1 { (8, 2) } else { (8, 4) };
-    let mut hl = [0u8; 4];
-    hl[..len_size].copy_from_slice(&bytes[len_at..len_at + len_size]);
-    let header_end = len_at + len_size + u32::from_le_bytes(hl) as usize;
-    let header = std::str::from_utf8(&bytes[len_at + len_size..header_end]).unwrap();
-    assert!(header.contains("'fortran_order': False"), "{header}");
-    let shape_txt = header
-        .split("'shape': (")
-        .nth(1)
-        .unwrap()
-        .split(')')
-        .next()
-        .unwrap();
-    let shape: Vec<usize> = shape_txt
-        .split(',')
-        .filter(|s| !s.trim().is_empty())
-        .map(|s| s.trim().parse().unwrap())
-        .collect();
-    let data = &bytes[header_end..];
-    let values = data.chunks_exact(4).map(|c| {
-        let b = [c[0], c[1], c[2], c[3]];
-        if header.contains("'<f4'") {
-            f32::from_le_bytes(b)
-        } else if header.contains("'<i4'") {
-            i32::from_le_bytes(b) as f32
-        } else {
-            panic!("dtype in {header}")
-        }
-    });
-    (shape, values.collect())
+    let array = rigport_testkit::npy::read_npy(path);
+    (
+        array.shape,
+        array.numbers.iter().map(|&v| v as f32).collect(),
+    )
 }
 
 /// Writes a `<f4` `.npy` array.
@@ -81,33 +55,21 @@ fn write_npy(path: &std::path::Path, shape: &[usize], data: &[f32]) {
 /// 1e-5 of the bounding-box diagonal (`check_skinning.py`'s default tolerance).
 #[test]
 fn pixar_bake_skinning_baselines() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let case = root.join(
-        "../shared/corpus/6_usd/openusd_usdskel__PixarAnimationStudios/testUsdSkelBakeSkinning",
-    );
-    let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty());
-    if !case.is_dir() {
-        assert!(
-            !ci,
-            "corpus case {} is absent and CI is set",
-            case.display()
-        );
-        eprintln!("SKIPPED: corpus case {} is absent", case.display());
+    let root = rigport_testkit::repo();
+    // The one corpus rule (rigport-testkit): skip when absent, fail in CI.
+    let Some(case) = rigport_testkit::corpus(
+        "6_usd/openusd_usdskel__PixarAnimationStudios/testUsdSkelBakeSkinning",
+    ) else {
         return;
-    }
+    };
     let python = std::env::var_os("RIGPORT_PYTHON")
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| root.join("tools/.venv/bin/python"));
-    if !python.exists() {
-        assert!(
-            !ci,
-            "no Python with usd-core at {} and CI is set",
-            python.display()
-        );
-        eprintln!(
-            "SKIPPED: no Python with usd-core at {} (run tools/setup.sh)",
-            python.display()
-        );
+    let what = format!(
+        "Python with usd-core at {} (run tools/setup.sh)",
+        python.display()
+    );
+    if rigport_testkit::require(&what, python.exists().then_some(())).is_none() {
         return;
     }
     let checker = root.join("tools/check_skinning.py");

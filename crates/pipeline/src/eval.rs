@@ -20,7 +20,7 @@ use rigport_model::SkinningMethod;
 
 use crate::dump::{eval_dump_to, DumpOptions};
 use crate::load::Input;
-use crate::outputs::{check_outputs, extension};
+use crate::outputs::{check_not_read, extension};
 use crate::progress::Progress;
 use crate::{PipelineError, Report};
 
@@ -57,9 +57,8 @@ pub fn run(
             output.display()
         )));
     }
-    let mut read = input.read_files();
-    read.extend(options.pose.iter().cloned());
-    check_outputs(&[output], &read)?;
+    let extra: Vec<&std::path::Path> = options.pose.iter().map(|p| p.as_path()).collect();
+    check_not_read(input, output, &extra)?;
     let (plan, imported) = input.load_single(progress, "reading input")?;
     progress.warnings(&imported.warnings)?;
     let asset = &imported.asset;

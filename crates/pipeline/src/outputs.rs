@@ -127,9 +127,23 @@ pub(crate) fn check_request(
     output: &std::path::Path,
     extra: &[&std::path::Path],
 ) -> Result<rigport_model::OutputFormat, PipelineError> {
+    let format = format_of(output)?;
+    check_not_read(input, output, extra)?;
+    Ok(format)
+}
+
+/// Checks that `output` is none of the files read (`input`'s and `extra`) nor a special
+/// file ([`check_outputs`]), for commands whose output is not an asset (eval's `.npz`,
+/// render's pictures).
+///
+/// # Errors
+/// As [`check_outputs`].
+pub(crate) fn check_not_read(
+    input: &crate::load::Input,
+    output: &std::path::Path,
+    extra: &[&std::path::Path],
+) -> Result<(), PipelineError> {
     let mut read = input.read_files();
     read.extend(extra.iter().map(|p| p.to_path_buf()));
-    let format = format_of(output)?;
-    check_outputs(&[output], &read)?;
-    Ok(format)
+    check_outputs(&[output], &read)
 }

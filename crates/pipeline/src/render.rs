@@ -30,7 +30,7 @@ use rigport_model::SkinningMethod;
 use rigport_render::{Markers, RenderOptions};
 
 use crate::load::Input;
-use crate::outputs::{check_outputs, extension};
+use crate::outputs::{check_not_read, extension};
 use crate::progress::{step, Progress};
 use crate::{PipelineError, Report};
 
@@ -185,9 +185,8 @@ pub fn run(
 ) -> Result<Report, PipelineError> {
     let output = &request.output;
     let format = PictureFormat::of_path(output)?;
-    let mut read = input.read_files();
-    read.extend(request.handles.iter().cloned());
-    check_outputs(&[output], &read)?;
+    let extra: Vec<&std::path::Path> = request.handles.iter().map(|p| p.as_path()).collect();
+    check_not_read(input, output, &extra)?;
     let (plan, imported) = input.load_single(progress, "reading input")?;
     progress.warnings(&imported.warnings)?;
     let asset = &imported.asset;
