@@ -13,7 +13,11 @@ Checked in the production Rust code of `crates/*/src` and `src/` (test files and
 - the text "clip named" in a string literal anywhere but the one clip lookup
   (`crates/model/src/asset.rs`: `find_clip`, `Asset::clip`, `NoSuchClip`);
 - a command-line flag (`--` and a name) in a string literal of a library crate: the
-  libraries name no flag; the CLI (`src/`) words their errors with its flags.
+  libraries name no flag; the CLI (`src/`) words their errors with its flags;
+- a public item of `crates/pipeline` (a `pub` fn, method, struct, enum, trait, const, type
+  or static) whose doc comment holds no example (a ``` block): the crate is the API that the
+  CLI, batch and the Python bindings call, and each item shows how (its doctests run in the
+  test command).
 """
 import re
 import sys
@@ -37,6 +41,9 @@ CONCEPTS = {
     ),
 }
 CLIP_LOOKUP = "crates/model/src/asset.rs"
+# The crate each of whose public items carries a doc example.
+EXAMPLES_CRATE = "crates/pipeline/src/"
+PUBLIC_ITEM = re.compile(r"^\s*pub (?:unsafe )?(fn|struct|enum|trait|const|type|static)\s+(\w+)")
 
 ENUM = re.compile(r"\benum\s+(\w+)\s*(?:<[^>]*>)?\s*\{")
 VARIANT = re.compile(r"^\s*(?:#\[[^\]]*\]\s*)*([A-Z]\w*)\s*([({]?)")
@@ -44,11 +51,15 @@ STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
 FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
 
 
+def without_tests(text: str) -> str:
+    """`text` without an inline `#[cfg(test)] mod tests { ... }`."""
+    m = re.search(r"#\[cfg\(test\)\]\s*(?:pub(?:\([^)]*\))?\s+)?mod\s+\w+\s*\{", text)
+    return text[: m.start()] if m else text
+
+
 def production_text(text: str) -> str:
     """`text` without comments and without an inline `#[cfg(test)] mod tests { ... }`."""
-    m = re.search(r"#\[cfg\(test\)\]\s*(?:pub(?:\([^)]*\))?\s+)?mod\s+\w+\s*\{", text)
-    if m:
-        text = text[: m.start()]
+    text = without_tests(text)
     return "\n".join(line.split("//", 1)[0] if not is_in_string(line) else line for line in text.split("\n"))
 
 
@@ -115,19 +126,37 @@ def check(files) -> list[str]:
                     problems.append(
                         f"{rel}:{line}: \"clip named\" outside the one clip lookup ({CLIP_LOOKUP}); use Asset::clip / find_clip"
                     )
+        if rel.startswith(EXAMPLES_CRATE):
+            problems.extend(f"{rel}:{line}: {what}" for line, what in items_without_example(without_tests(text)))
     return problems
+
+
+def items_without_example(code: str):
+    """(line, "pub fn name has no doc example") for each public item whose doc has no ```."""
+    lines = code.split("\n")
+    for i, text in enumerate(lines):
+        m = PUBLIC_ITEM.match(text)
+        if not m:
+            continue
+        j, doc = i - 1, []
+        while j >= 0 and lines[j].strip().startswith(("///", "#[")):
+            doc.append(lines[j])
+            j -= 1
+        if not any("```" in d for d in doc):
+            yield i + 1, f"pub {m.group(1)} {m.group(2)} has no doc example"
 
 
 def self_test() -> None:
     bad = [
         ("src/cli.rs", "pub enum Skinning {\n    /// doc\n    Lbs,\n    Dqs,\n}\n"),
         ("crates/render/src/lib.rs", "enum Axis { Y, Z }"),
-        ("crates/pipeline/src/x.rs", "pub enum Fit { Truncate, Refit }"),
+        ("crates/eval/src/x.rs", "pub enum Fit { Truncate, Refit }"),
         ("crates/export/src/e.rs", "pub(crate) enum Encoding { Usda, Usdc, Usdz }"),
         ("crates/x/src/y.rs", 'fn f() { let m = format!("no clip named {n:?}"); }'),
         ("crates/pipeline/src/z.rs", 'const HINT: &str = "raise it with --max-memory";'),
+        ("crates/pipeline/src/w.rs", "/// Does it.\n#[must_use]\npub fn run() {}\n"),
     ]
-    assert len(check(bad)) == 6, check(bad)
+    assert len(check(bad)) == 7, check(bad)
     good = [
         ("crates/model/src/skin.rs", "pub enum SkinningMethod { Lbs, Dqs }"),
         ("crates/render/src/lib.rs", "pub enum View { Front, Side }"),
@@ -137,6 +166,7 @@ def self_test() -> None:
         ("crates/model/src/asset.rs", '#[error("no clip named {name:?}")]'),
         ("src/exit.rs", 'const HINT: &str = "raise it with --max-memory";'),
         ("crates/x/src/y.rs", 'let a = "x -- y"; let b = "a--b";'),
+        ("crates/pipeline/src/w.rs", "/// Does it.\n///\n/// ```\n/// run();\n/// ```\npub fn run() {}\npub(crate) fn f() {}\n"),
     ]
     assert check(good) == [], check(good)
     print("one_concept self-test: ok")
@@ -152,7 +182,7 @@ def main() -> int:
     if problems:
         print(f"one_concept: {len(problems)} problem(s)", file=sys.stderr)
         return 1
-    print("one_concept: each concept is defined once; the libraries name no flag")
+    print("one_concept: each concept is defined once; the libraries name no flag; every public item of the pipeline crate has an example")
     return 0
 
 

@@ -1,18 +1,6 @@
 //! `rigport animate`: keyframe a rig from a JSON file of poses (`KEYS.json`).
 //!
-//! ```
-//! use rigport_pipeline::{animate, load::Input, progress::Silent, write::Output};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let keys = dir.path().join("hop.keys.json");
-//! std::fs::write(&keys, r#"{"keys": [{"time": 0, "pose": {}}, {"time": 1, "pose": {}}]}"#)?;
-//! let out = dir.path().join("hop.glb");
-//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! let options = animate::AnimateOptions { keys, output: Output::new(&out) };
-//! animate(&input, &options, &Silent)?;
-//! assert_eq!(&std::fs::read(&out)?[..4], b"glTF");
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::animate()`] is the same function.
 
 use std::path::PathBuf;
 
@@ -21,10 +9,29 @@ use rigport_model::Warning;
 use crate::load::Input;
 use crate::outputs::check_request;
 use crate::progress::Progress;
-use crate::write::{write_output, Output};
+use crate::write::{Output, write_output};
 use crate::{PipelineError, Report};
 
 /// What `animate` keys and writes.
+///
+/// ```
+/// use rigport_pipeline::animate::AnimateOptions;
+/// use rigport_pipeline::inspect::InspectOptions;
+/// use rigport_pipeline::{animate, inspect, load::Input, progress::Silent, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// // The keys file's stem names the clip, which comes before the rig's own clip.
+/// let keys = dir.path().join("hop.json");
+/// std::fs::write(&keys, r#"{"keys": [{"time": 0, "pose": {}}, {"time": 0.5, "pose": {}}]}"#)?;
+/// let out = dir.path().join("hop.glb");
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// animate(&input, &AnimateOptions { keys, output: Output::new(&out) }, &Silent)?;
+/// let listing = inspect(&Input::new(vec![out]), &InspectOptions { json: true }, &Silent)?;
+/// let json: serde_json::Value = serde_json::from_str(listing.output.as_deref().unwrap_or(""))?;
+/// assert_eq!(json[0]["clips"][0]["name"], "hop");
+/// assert_eq!(json[0]["clips"][1]["name"], "end_sites");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug, Default)]
 pub struct AnimateOptions {
     /// The `KEYS.json` file; its stem names the clip unless the file does.
@@ -34,6 +41,20 @@ pub struct AnimateOptions {
 }
 
 /// Reads `input`, bakes the keys into a clip placed first, and writes the rig.
+///
+/// ```
+/// use rigport_pipeline::{animate, load::Input, progress::Silent, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let keys = dir.path().join("hop.keys.json");
+/// std::fs::write(&keys, r#"{"keys": [{"time": 0, "pose": {}}, {"time": 1, "pose": {}}]}"#)?;
+/// let out = dir.path().join("hop.glb");
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let options = animate::AnimateOptions { keys, output: Output::new(&out) };
+/// animate(&input, &options, &Silent)?;
+/// assert_eq!(&std::fs::read(&out)?[..4], b"glTF");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// The keys file's errors (with their JSON path); as the import and [`write_output`].

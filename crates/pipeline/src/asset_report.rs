@@ -8,7 +8,7 @@ use serde::Serialize;
 /// What is in a rig (`rigport inspect`): its joints, meshes, skins and clips, as text
 /// ([`AssetReport::write_text`]) or JSON (serde).
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct AssetReport {
+pub(crate) struct AssetReport {
     /// Where the rig came from (its main file).
     pub source: String,
     /// The asset's name.
@@ -29,7 +29,7 @@ pub struct AssetReport {
 
 /// One joint.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct JointReport {
+pub(crate) struct JointReport {
     /// Its index in the skeleton.
     pub index: usize,
     /// Its name.
@@ -44,7 +44,7 @@ pub struct JointReport {
 
 /// One mesh.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct MeshReport {
+pub(crate) struct MeshReport {
     /// Its name.
     pub name: String,
     /// Vertices (after splitting by normal and UV).
@@ -71,7 +71,7 @@ pub struct MeshReport {
 
 /// A mesh's skin.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct SkinReport {
+pub(crate) struct SkinReport {
     /// Joints in its palette.
     pub palette_joints: usize,
     /// The most influences on one vertex.
@@ -82,7 +82,7 @@ pub struct SkinReport {
 
 /// One clip.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ClipReport {
+pub(crate) struct ClipReport {
     /// Its name.
     pub name: String,
     /// Its duration, seconds.
@@ -97,19 +97,7 @@ pub struct ClipReport {
 
 impl AssetReport {
     /// The report of `asset`, read from `source`, with its import `warnings`.
-    ///
-    /// ```
-    /// use rigport_model::{Asset, Joint, Skeleton, Transform};
-    ///
-    /// let root = Joint { name: "hips".into(), parent: None, rest_local: Transform::IDENTITY };
-    /// let asset = Asset { skeleton: Skeleton::new(vec![root]).expect("one root"), ..Asset::default() };
-    /// let report = rigport_pipeline::asset_report::AssetReport::new("hips.bvh".into(), &asset, Vec::new());
-    /// let mut text = Vec::new();
-    /// report.write_text(&mut text)?;
-    /// assert!(String::from_utf8_lossy(&text).contains("joints: 1\n       0 hips (root)"));
-    /// # Ok::<(), std::io::Error>(())
-    /// ```
-    pub fn new(source: String, asset: &Asset, warnings: Vec<String>) -> AssetReport {
+    pub(crate) fn new(source: String, asset: &Asset, warnings: Vec<String>) -> AssetReport {
         let skel = &asset.skeleton;
         let joints = skel
             .joints()
@@ -201,7 +189,7 @@ impl AssetReport {
     ///
     /// # Errors
     /// Writing to `out` fails.
-    pub fn write_text(&self, out: &mut impl Write) -> std::io::Result<()> {
+    pub(crate) fn write_text(&self, out: &mut impl Write) -> std::io::Result<()> {
         let r = self;
         writeln!(out, "{} ({})", r.name, r.source)?;
         if let Some(m) = r.meters_per_unit {
@@ -269,5 +257,29 @@ impl AssetReport {
             )?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rigport_model::{Asset, Joint, Skeleton, Transform};
+
+    use super::AssetReport;
+
+    #[test]
+    fn lists_the_joints_as_text() {
+        let root = Joint {
+            name: "hips".into(),
+            parent: None,
+            rest_local: Transform::IDENTITY,
+        };
+        let asset = Asset {
+            skeleton: Skeleton::new(vec![root]).expect("one root"),
+            ..Asset::default()
+        };
+        let report = AssetReport::new("hips.bvh".into(), &asset, Vec::new());
+        let mut text = Vec::new();
+        report.write_text(&mut text).expect("in memory");
+        assert!(String::from_utf8_lossy(&text).contains("joints: 1\n       0 hips (root)"));
     }
 }

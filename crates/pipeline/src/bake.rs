@@ -1,37 +1,39 @@
 //! `rigport bake`: a dual quaternion skinning result baked into an ordinary (LBS) glTF as
 //! per-frame corrective morph targets in bind space (`rigport_deform::bake::asset`).
 //!
-//! ```
-//! use rigport_model::SkinningMethod;
-//! use rigport_pipeline::bake::BakeOptions;
-//! use rigport_pipeline::{bake, load::Input, progress::Silent};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
-//! let options = BakeOptions {
-//!     skinning: Some(SkinningMethod::Dqs),
-//!     clip: Some("bend".into()),
-//!     fps: None,
-//!     threshold: None,
-//!     correctives: None,
-//!     max_influences: 4,
-//!     output: dir.path().join("bend_dqs.glb"),
-//! };
-//! let report = bake(&input, &options, &Silent)?;
-//! assert!(report.log.last().is_some_and(|l| l.starts_with("file size: ")));
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::bake()`] is the same function.
 
-use rigport_deform::bake::asset::{bake_dqs, DqsBakeOptions};
+use rigport_deform::bake::asset::{DqsBakeOptions, bake_dqs};
 use rigport_model::{InfluencesFit, SkinningMethod, Warning};
 
 use crate::load::Input;
 use crate::outputs::check_request;
-use crate::progress::{step, Progress};
-use crate::write::{write_output, Output, WriteOptions};
+use crate::progress::{Progress, step};
+use crate::write::{Output, WriteOptions, write_output};
 use crate::{PipelineError, Report};
 
 /// What `bake` bakes, and where it writes.
+///
+/// ```
+/// use rigport_model::SkinningMethod;
+/// use rigport_pipeline::bake::BakeOptions;
+/// use rigport_pipeline::{bake, load::Input, progress::Silent};
+///
+/// // A bake writes glTF; a USD stage declares DQS itself, so a .usda is a usage error.
+/// let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
+/// let options = BakeOptions {
+///     skinning: Some(SkinningMethod::Dqs),
+///     clip: None,
+///     fps: Some(30.0),
+///     threshold: None,
+///     correctives: Some(2),
+///     max_influences: 4,
+///     output: "bend_dqs.usda".into(),
+/// };
+/// let err = bake(&input, &options, &Silent).unwrap_err();
+/// assert!(err.is_usage(), "{err}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct BakeOptions {
     /// The skinning to bake (`None`: the first skin's own); LBS writes the plain file.
@@ -53,6 +55,27 @@ pub struct BakeOptions {
 
 /// Reads `input`, bakes one clip's DQS result into corrective morph targets, and writes an
 /// LBS glTF that every viewer plays as DQS.
+///
+/// ```
+/// use rigport_model::SkinningMethod;
+/// use rigport_pipeline::bake::BakeOptions;
+/// use rigport_pipeline::{bake, load::Input, progress::Silent};
+///
+/// let dir = tempfile::tempdir()?;
+/// let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
+/// let options = BakeOptions {
+///     skinning: Some(SkinningMethod::Dqs),
+///     clip: Some("bend".into()),
+///     fps: None,
+///     threshold: None,
+///     correctives: None,
+///     max_influences: 4,
+///     output: dir.path().join("bend_dqs.glb"),
+/// };
+/// let report = bake(&input, &options, &Silent)?;
+/// assert!(report.log.last().is_some_and(|l| l.starts_with("file size: ")));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// An output that is not glTF (a usage error); as the import, the bake and

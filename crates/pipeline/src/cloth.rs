@@ -1,23 +1,7 @@
 //! `rigport cloth`: a garment simulated on the animated body and baked into the output
 //! (the work is `rigport_deform::cloth::asset`).
 //!
-//! ```
-//! use rigport_pipeline::cloth::ClothRequest;
-//! use rigport_pipeline::{cloth, load::Input, progress::Silent};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let out = dir.path().join("dressed.glb");
-//! let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
-//! // The garment must be a mesh of the input or an .obj file.
-//! let request = ClothRequest {
-//!     garment: "Skirt".into(),
-//!     output: out.clone(),
-//!     ..ClothRequest::default()
-//! };
-//! assert!(cloth(&input, &request, &Silent).is_err());
-//! assert!(!out.exists());
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::cloth()`] is the same function.
 
 use std::path::PathBuf;
 
@@ -28,10 +12,28 @@ use rigport_model::Warning;
 use crate::load::Input;
 use crate::outputs::check_request;
 use crate::progress::Progress;
-use crate::write::{write_output, Output, WriteOptions};
+use crate::write::{Output, WriteOptions, write_output};
 use crate::{PipelineError, Report};
 
 /// What `cloth` simulates, and where it writes.
+///
+/// ```
+/// use rigport_pipeline::cloth::ClothRequest;
+/// use rigport_pipeline::{cloth, load::Input, progress::Silent};
+///
+/// // The output is checked before any work: it must not be one of the inputs.
+/// let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
+/// let request = ClothRequest {
+///     garment: "Cape".into(),
+///     seconds: Some(2.0),
+///     substeps: Some(8),
+///     output: "../../fixtures/gltf/skin_basic.glb".into(),
+///     ..ClothRequest::default()
+/// };
+/// let err = cloth(&input, &request, &Silent).unwrap_err();
+/// assert!(err.is_usage(), "{err}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug, Default)]
 pub struct ClothRequest {
     /// The garment: the name of an unskinned mesh of the input, or an `.obj` file.
@@ -56,6 +58,24 @@ pub struct ClothRequest {
 
 /// Reads `input`, simulates the garment on one clip, and writes the rig with the garment
 /// baked in (glTF: morph targets; USD: time-sampled points).
+///
+/// ```
+/// use rigport_pipeline::cloth::ClothRequest;
+/// use rigport_pipeline::{cloth, load::Input, progress::Silent};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("dressed.glb");
+/// let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
+/// // The garment must be a mesh of the input or an .obj file.
+/// let request = ClothRequest {
+///     garment: "Skirt".into(),
+///     output: out.clone(),
+///     ..ClothRequest::default()
+/// };
+/// assert!(cloth(&input, &request, &Silent).is_err());
+/// assert!(!out.exists());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// A garment that cannot be read or found; a failed simulation; as the import and

@@ -3,31 +3,20 @@
 //! (`rigport_demo::skirt`, morph targets), its pictures, the example keys and
 //! handles files, and one picture per corpus family.
 //!
-//! [`prepare`] builds everything that is checked before writing (warnings included), and
-//! [`PreparedDemo::write`] writes it:
-//!
-//! ```no_run
-//! use rigport_pipeline::demo;
-//!
-//! let dir = std::path::Path::new("rigport-demo");
-//! let prepared = demo::prepare(1, dir, &|step| eprintln!("{step}"))?;
-//! assert!(prepared.warnings().is_empty());
-//! let written = prepared.write(None, &|_| {})?;
-//! assert!(written.glb.is_file() && written.usd.is_file());
-//! # Ok::<(), rigport_pipeline::PipelineError>(())
-//! ```
+//! [`run`] builds everything that is checked before writing (warnings included), gives
+//! the warnings to its caller, and writes it all.
 
 use std::path::{Path, PathBuf};
 
-use rigport_demo::{clips, corpus, pictures, Demo};
+use rigport_demo::{Demo, clips, corpus, pictures};
 use rigport_export::{GltfOptions, PreparedGltf, PreparedUsd, UsdOptions};
 use rigport_model::{Asset, Warning};
 
-use crate::outputs::write_file;
 use crate::PipelineError;
+use crate::outputs::write_file;
 
 /// The demo built in memory, ready to be written.
-pub struct PreparedDemo {
+pub(crate) struct PreparedDemo {
     demo: Demo,
     out: PathBuf,
     gltf: PreparedGltf,
@@ -41,7 +30,7 @@ pub struct PreparedDemo {
 }
 
 /// What [`PreparedDemo::write`] wrote.
-pub struct WrittenDemo {
+pub(crate) struct WrittenDemo {
     /// The demo (its character and clips).
     pub demo: Demo,
     /// The example files: `wave.keys.json`, `reach.handles.json`, `twist.keys.json`.
@@ -72,7 +61,7 @@ pub struct WrittenDemo {
 ///
 /// # Errors
 /// `out` cannot be created or written; a demo or export failure (a rigport bug).
-pub fn prepare(
+pub(crate) fn prepare(
     detail: u32,
     out: &Path,
     progress: &dyn Fn(&str),
@@ -138,7 +127,7 @@ fn example_files(out: &Path) -> [PathBuf; 3] {
 
 impl PreparedDemo {
     /// Every warning so far (the IK solve's, the writers', the bake's).
-    pub fn warnings(&self) -> &[Warning] {
+    pub(crate) fn warnings(&self) -> &[Warning] {
         &self.warnings
     }
 
@@ -148,7 +137,7 @@ impl PreparedDemo {
     ///
     /// # Errors
     /// A file cannot be written; a picture fails to render (a rigport bug).
-    pub fn write(
+    pub(crate) fn write(
         self,
         corpus: Option<&Path>,
         progress: &dyn Fn(&str),
@@ -249,6 +238,20 @@ fn corpus_pictures(corpus: &Path, out: &Path) -> Result<(Vec<String>, Vec<String
 }
 
 /// What `rigport demo` builds, and where.
+///
+/// ```
+/// use rigport_pipeline::demo::DemoOptions;
+/// use rigport_pipeline::{demo, progress::Silent};
+///
+/// // The output must be a folder: a file in its place fails, and is left as it was.
+/// let dir = tempfile::tempdir()?;
+/// let file = dir.path().join("taken");
+/// std::fs::write(&file, "not a folder")?;
+/// let options = DemoOptions { detail: 1, output: file.clone(), corpus: None };
+/// assert!(demo(&options, &Silent).is_err());
+/// assert_eq!(std::fs::read_to_string(&file)?, "not a folder");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct DemoOptions {
     /// The character's detail (surface-nets cells per unit; 1 is the default).
@@ -263,8 +266,21 @@ pub struct DemoOptions {
 /// but the example files is written), and writes every file and picture. The summary
 /// describes the character, its clips and each file written.
 ///
+/// ```
+/// use rigport_pipeline::demo::DemoOptions;
+/// use rigport_pipeline::{demo, progress::Silent};
+///
+/// let dir = tempfile::tempdir()?;
+/// let options = DemoOptions { detail: 1, output: dir.path().join("rigport-demo"), corpus: None };
+/// let report = demo(&options, &Silent)?;
+/// assert!(report.summary.as_deref().is_some_and(|s| s.starts_with("rigport demo")));
+/// assert!(dir.path().join("rigport-demo/demo.glb").is_file());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
 /// # Errors
-/// As [`prepare`] and [`PreparedDemo::write`]; refused warnings.
+/// A demo that cannot be built or written (an output that is not a folder); refused
+/// warnings.
 pub fn run(
     options: &DemoOptions,
     progress: &dyn crate::progress::Progress,

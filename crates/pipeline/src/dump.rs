@@ -1,25 +1,6 @@
 //! `rigport eval`'s pipeline: a rig posed (rest or a `POSE.json`) or a clip sampled, each
 //! frame skinned, and the result as an `.npz` dump (`rigport_export::npz::EvalDump`):
-//! written to a file in memory bounded whatever the clip's length ([`eval_dump_to`]), or
-//! as bytes ([`eval_dump`]).
-//!
-//! ```
-//! use rigport_pipeline::{dump, load, MemoryBudget};
-//!
-//! let plan = load::Source::Bvh("../../fixtures/bvh/end_sites.bvh".into());
-//! let asset = load::load(&plan, true, &MemoryBudget::UNLIMITED)?.asset;
-//! let opts = dump::DumpOptions { fps: Some(10.0), ..dump::DumpOptions::default() };
-//! let out = dump::eval_dump(&asset, &plan.label(), &opts, "out.npz", &MemoryBudget::UNLIMITED)?;
-//! assert_eq!(&out.bytes[..2], b"PK");
-//! assert!(out.clip.is_some());
-//!
-//! let dir = tempfile::tempdir()?;
-//! let path = dir.path().join("out.npz");
-//! let info = dump::eval_dump_to(&asset, &plan.label(), &opts, &path, &MemoryBudget::UNLIMITED)?;
-//! assert_eq!(std::fs::read(&path)?, out.bytes);
-//! assert_eq!(info.clip, out.clip);
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! written to a file in memory bounded whatever the clip's length ([`eval_dump_to`]).
 
 use std::io::{BufWriter, Write as _};
 use std::path::Path;
@@ -34,7 +15,7 @@ use crate::PipelineError;
 
 /// What to evaluate.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct DumpOptions<'a> {
+pub(crate) struct DumpOptions<'a> {
     /// A `POSE.json` to evaluate instead of a clip.
     pub pose: Option<&'a Path>,
     /// The clip to sample (default: the first; none: the rest pose).
@@ -47,29 +28,11 @@ pub struct DumpOptions<'a> {
     pub skinning: Option<SkinningMethod>,
 }
 
-/// An evaluated dump.
-#[derive(Clone, Debug)]
-pub struct Dump {
-    /// The `.npz` bytes.
-    pub bytes: Vec<u8>,
-    /// The clip sampled, `None` for a single pose.
-    pub clip: Option<String>,
-}
-
 /// A dump written to its file.
 #[derive(Clone, Debug)]
-pub struct DumpInfo {
+pub(crate) struct DumpInfo {
     /// The clip sampled, `None` for a single pose.
     pub clip: Option<String>,
-}
-
-/// Where the per-frame arrays wait until the `.npz` is written.
-#[derive(Clone, Copy, Debug)]
-enum Hold<'a> {
-    /// In memory, for [`eval_dump`]'s bytes.
-    Memory,
-    /// Beyond [`SPILL_LIMIT`] bytes per array, in unnamed temporary files in this folder.
-    Spill(&'a Path),
 }
 
 /// Bytes of one frame's arrays: positions (f32 x 3 per vertex) and two 4x4 f32 matrices
@@ -78,15 +41,6 @@ fn frame_bytes(vertices: usize, joints: usize) -> u64 {
     (vertices as u64)
         .saturating_mul(12)
         .saturating_add((joints as u64).saturating_mul(128))
-}
-
-/// Estimated peak bytes of a dump of `frames` frames held in memory: the arrays as values
-/// and again as the `.npz` bytes (measured: a 676 MB dump at a 1.59 GB peak).
-fn dump_memory(frames: usize, vertices: usize, joints: usize) -> u64 {
-    (frames as u64)
-        .saturating_mul(frame_bytes(vertices, joints))
-        .saturating_mul(5)
-        / 2
 }
 
 /// Estimated peak bytes of a dump of `frames` frames streamed to its file: each per-frame
@@ -109,36 +63,19 @@ fn streamed_memory(frames: usize, vertices: usize, joints: usize) -> u64 {
         .saturating_add(2 << 20)
 }
 
-/// Evaluates `asset` as `opts` asks and builds the dump in memory; `label` names the asset
-/// in messages and `output` the file in the memory check.
-///
-/// # Errors
-/// Nothing to skin, an unknown clip, a frame rate that is not positive, a pose file's
-/// errors, over `budget`, or a clip that does not fit the skeleton.
-pub fn eval_dump(
-    asset: &Asset,
-    label: &str,
-    opts: &DumpOptions<'_>,
-    output: impl AsRef<Path>,
-    budget: &MemoryBudget,
-) -> Result<Dump, PipelineError> {
-    let output = output.as_ref();
-    let (npz, clip) = evaluate(asset, label, opts, output, budget, Hold::Memory)?;
-    let bytes = npz.finish().map_err(|e| PipelineError::output(output, e))?;
-    Ok(Dump { bytes, clip })
-}
-
 /// Evaluates `asset` as `opts` asks and writes the dump to `output` atomically
 /// (`rigport_export::write_atomic_with`); `label` names the asset in messages. Memory
 /// stays bounded whatever the clip's length: the per-frame arrays beyond
 /// [`SPILL_LIMIT`] bytes each wait in unnamed temporary files in `output`'s folder, and
-/// the `.npz` is streamed from them. The bytes are those of [`eval_dump`].
+/// the `.npz` is streamed from them.
 ///
 /// # Errors
-/// Those of [`eval_dump`]; [`PipelineError::Output`] when `output` is not a regular file
+/// Nothing to skin, an unknown clip, a frame rate that is not positive, a pose file's
+/// errors, over `budget`, or a clip that does not fit the skeleton;
+/// [`PipelineError::Output`] when `output` is not a regular file
 /// (or absent), or a temporary file or the output cannot be written (nothing is left
 /// behind then).
-pub fn eval_dump_to(
+pub(crate) fn eval_dump_to(
     asset: &Asset,
     label: &str,
     opts: &DumpOptions<'_>,
@@ -154,7 +91,7 @@ pub fn eval_dump_to(
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
     };
-    let (npz, clip) = evaluate(asset, label, opts, output, budget, Hold::Spill(dir))?;
+    let (npz, clip) = evaluate(asset, label, opts, output, budget, dir)?;
     rigport_export::write_atomic_with(output, |file| {
         npz.write_to(BufWriter::with_capacity(1 << 20, file))?
             .flush()
@@ -170,7 +107,7 @@ fn evaluate(
     opts: &DumpOptions<'_>,
     output: &Path,
     budget: &MemoryBudget,
-    hold: Hold<'_>,
+    spill_dir: &Path,
 ) -> Result<(NpzWriter, Option<String>), PipelineError> {
     let mut limited = None;
     if let Some(max) = opts.max_influences {
@@ -197,9 +134,9 @@ fn evaluate(
     };
     let rig = Rig::new(asset).map_err(|e| PipelineError::step("the rig cannot be evaluated", e))?;
     let mut dump = EvalDump::new(asset, |m| rig.skin_of_mesh(m), method_name);
-    if let Hold::Spill(dir) = hold {
-        dump = dump.spill_into(dir);
-    }
+    // Beyond [`SPILL_LIMIT`] bytes per array, the frames wait in unnamed temporary files
+    // in `spill_dir`.
+    dump = dump.spill_into(spill_dir);
     let spill_err = |e| PipelineError::output(output, e);
     let mut posed = RigOutput::default();
     let clip = match opts.pose {
@@ -240,10 +177,7 @@ fn evaluate(
             };
             let vertices: usize = asset.meshes.iter().map(|m| m.positions.len()).sum();
             let joints = asset.skeleton.len();
-            let needed = match hold {
-                Hold::Memory => dump_memory(times.len(), vertices, joints),
-                Hold::Spill(_) => streamed_memory(times.len(), vertices, joints),
-            };
+            let needed = streamed_memory(times.len(), vertices, joints);
             budget.check(
                 format_args!(
                     "{}: {} frames of {vertices} vertices and {joints} joints",

@@ -8,6 +8,18 @@ use crate::progress;
 
 /// Why a pipeline step failed. [`PipelineError::is_usage`] and [`PipelineError::is_output`]
 /// tell the CLI's exit codes apart (usage 2, output 3, else input 1).
+///
+/// ```
+/// use rigport_pipeline::{convert, convert::ConvertOptions, load::Input, progress::Silent};
+/// use rigport_pipeline::{write::Output, PipelineError};
+///
+/// let input = Input::new(vec!["../../fixtures/bvh/missing.bvh".into()]);
+/// let options = ConvertOptions { output: Output::new("walk.glb") };
+/// match convert(&input, &options, &Silent) {
+///     Err(PipelineError::Import(e)) => assert!(e.to_string().contains("missing.bvh"), "{e}"),
+///     other => panic!("expected an import error, got {other:?}"),
+/// }
+/// ```
 #[derive(Debug, thiserror::Error)]
 pub enum PipelineError {
     /// The request cannot be carried out as given (an output extension rigport does not
@@ -73,13 +85,17 @@ pub enum PipelineError {
 
 impl PipelineError {
     /// Whether this is a usage error (the CLI exits 2).
+    ///
+    /// ```
+    /// use rigport_pipeline::{convert, convert::ConvertOptions, load::Input, progress::Silent};
+    ///
+    /// // rigport writes .usda, .usdc and .usdz, not the ambiguous .usd.
+    /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+    /// let options = ConvertOptions { output: rigport_pipeline::write::Output::new("walk.usd") };
+    /// assert!(convert(&input, &options, &Silent).unwrap_err().is_usage());
+    /// ```
     pub fn is_usage(&self) -> bool {
         matches!(self, Self::Usage(_))
-    }
-
-    /// Whether the caller refused the warnings (the CLI exits 4).
-    pub fn is_denied(&self) -> bool {
-        matches!(self, Self::Denied(_))
     }
 
     /// A job's own error, shown as it is.
@@ -88,6 +104,16 @@ impl PipelineError {
     }
 
     /// Whether an output failed (the CLI exits 3).
+    ///
+    /// ```
+    /// use rigport_pipeline::{convert, convert::ConvertOptions, load::Input, progress::Silent};
+    ///
+    /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+    /// let out = tempfile::tempdir()?.path().join("gone/walk.glb");
+    /// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(out) };
+    /// assert!(convert(&input, &options, &Silent).unwrap_err().is_output());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn is_output(&self) -> bool {
         matches!(self, Self::Output { .. })
     }
@@ -116,6 +142,19 @@ impl PipelineError {
 }
 
 /// An error with its causes, `: `-separated (as the CLI prints errors).
+///
+/// ```
+/// use rigport_pipeline::{chain, convert, convert::ConvertOptions, load::Input, progress::Silent};
+///
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let out = tempfile::tempdir()?.path().join("gone/walk.glb");
+/// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(&out) };
+/// let err = convert(&input, &options, &Silent).unwrap_err();
+/// // The error names the output; its cause says why.
+/// let text = chain(&err);
+/// assert!(text.starts_with(&format!("cannot write {}: ", out.display())), "{text}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn chain(err: &(dyn StdError + 'static)) -> String {
     let mut text = err.to_string();
     let mut source = err.source();

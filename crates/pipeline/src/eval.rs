@@ -1,30 +1,38 @@
 //! `rigport eval`: pose or sample a rig, skin it, and dump the result as an `.npz`
-//! streamed to its file ([`crate::dump`]).
+//! streamed to its file.
 //!
-//! ```
-//! use rigport_pipeline::eval::EvalOptions;
-//! use rigport_pipeline::{eval, load::Input, progress::Silent};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let out = dir.path().join("walk.npz");
-//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! let report = eval(&input, &EvalOptions { output: out.clone(), ..EvalOptions::default() }, &Silent)?;
-//! assert!(report.log[0].starts_with("wrote "));
-//! assert_eq!(&std::fs::read(&out)?[..2], b"PK");
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::eval()`] is the same function.
 
 use std::path::PathBuf;
 
 use rigport_model::SkinningMethod;
 
-use crate::dump::{eval_dump_to, DumpOptions};
+use crate::dump::{DumpOptions, eval_dump_to};
 use crate::load::Input;
 use crate::outputs::{check_not_read, extension};
 use crate::progress::Progress;
 use crate::{PipelineError, Report};
 
 /// What `eval` evaluates, and where it writes.
+///
+/// ```
+/// use rigport_pipeline::eval::EvalOptions;
+/// use rigport_pipeline::{eval, load::Input, progress::Silent};
+///
+/// let dir = tempfile::tempdir()?;
+/// // One pose from a POSE.json instead of a clip (`{}`: every joint at rest).
+/// let pose = dir.path().join("rest.json");
+/// std::fs::write(&pose, "{}")?;
+/// let options = EvalOptions {
+///     pose: Some(pose),
+///     output: dir.path().join("rest.npz"),
+///     ..EvalOptions::default()
+/// };
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let report = eval(&input, &options, &Silent)?;
+/// assert!(report.log[0].ends_with("(9 joints, 1 meshes)"), "{}", report.log[0]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug, Default)]
 pub struct EvalOptions {
     /// A `POSE.json` to evaluate instead of a clip.
@@ -43,8 +51,22 @@ pub struct EvalOptions {
 
 /// Reads `input`, reports its warnings, and writes the dump.
 ///
+/// ```
+/// use rigport_pipeline::eval::EvalOptions;
+/// use rigport_pipeline::{eval, load::Input, progress::Silent};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("walk.npz");
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let report = eval(&input, &EvalOptions { output: out.clone(), ..EvalOptions::default() }, &Silent)?;
+/// assert!(report.log[0].starts_with("wrote "));
+/// assert_eq!(&std::fs::read(&out)?[..2], b"PK");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
 /// # Errors
-/// An output that is not `.npz` (a usage error); as the import and [`eval_dump_to`].
+/// An output that is not `.npz` (a usage error); as the import; nothing to skin, an
+/// unknown clip, a bad pose file, over the budget; an unwritable output.
 pub fn run(
     input: &Input,
     options: &EvalOptions,

@@ -1,42 +1,42 @@
 //! `rigport footlock`: hold mocap feet still during their ground contacts.
 //!
-//! ```
-//! use rigport_ik::footlock::FootlockOptions;
-//! use rigport_pipeline::footlock::FootlockRequest;
-//! use rigport_pipeline::{footlock, load::Input, progress::Silent, write::Output};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let out = dir.path().join("clean.glb");
-//! // A skeleton whose joint names say nothing about feet: they must be named.
-//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! let request = FootlockRequest {
-//!     clip: None,
-//!     feet: Vec::new(),
-//!     options: FootlockOptions::default(),
-//!     json: false,
-//!     output: Output::new(&out),
-//! };
-//! let err = footlock(&input, &request, &Silent).unwrap_err();
-//! assert!(err.to_string().contains("cannot find the feet"), "{err}");
-//! assert!(!out.exists());
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::footlock()`] is the same function.
 
-use rigport_ik::footlock::{footlock, resolve_feet, up_in_model, FootlockOptions};
+use rigport_ik::footlock::{FootlockOptions, footlock, resolve_feet, up_in_model};
 use serde_json::json;
 
 use crate::load::Input;
 use crate::outputs::check_request;
-use crate::progress::{step, Progress};
-use crate::write::{write_output, Output};
+use crate::progress::{Progress, step};
+use crate::write::{Output, write_output};
 use crate::{PipelineError, Report};
 
 /// What `footlock` cleans, and where it writes.
+///
+/// ```
+/// use rigport_ik::footlock::FootlockOptions;
+/// use rigport_pipeline::footlock::FootlockRequest;
+/// use rigport_pipeline::{footlock, load::Input, progress::Silent, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let request = FootlockRequest {
+///     clip: Some("run".into()),
+///     feet: vec!["Hand,Hand_end".into()],
+///     options: FootlockOptions::default(),
+///     json: true,
+///     output: Output::new(dir.path().join("clean.glb")),
+/// };
+/// let err = footlock(&input, &request, &Silent).unwrap_err();
+/// let text = rigport_pipeline::chain(&err);
+/// assert!(text.contains("no clip named \"run\""), "{text}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct FootlockRequest {
     /// The clip (the first when `None`).
     pub clip: Option<String>,
-    /// The feet as `ANKLE[:TOE]` joint names (found by name when empty).
+    /// The feet as `ANKLE[,TOE]` joint names (found by name when empty).
     pub feet: Vec<String>,
     /// Contact thresholds, blending and stretch.
     pub options: FootlockOptions,
@@ -48,6 +48,28 @@ pub struct FootlockRequest {
 
 /// Reads `input`, finds the feet and their contacts in one clip, pins them, and writes the
 /// rig; the contacts and slides come back as a table or as JSON.
+///
+/// ```
+/// use rigport_ik::footlock::FootlockOptions;
+/// use rigport_pipeline::footlock::FootlockRequest;
+/// use rigport_pipeline::{footlock, load::Input, progress::Silent, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("clean.glb");
+/// // A skeleton whose joint names say nothing about feet: they must be named.
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let request = FootlockRequest {
+///     clip: None,
+///     feet: Vec::new(),
+///     options: FootlockOptions::default(),
+///     json: false,
+///     output: Output::new(&out),
+/// };
+/// let err = footlock(&input, &request, &Silent).unwrap_err();
+/// assert!(err.to_string().contains("cannot find the feet"), "{err}");
+/// assert!(!out.exists());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// Invalid options; no such clip, or none; feet not found; as the import and

@@ -1,42 +1,44 @@
 //! `rigport ik`: IK handles over time (`HANDLES.json`), solved per frame and baked into a
 //! clip placed first.
 //!
-//! ```
-//! use rigport_ik::clip::ClipSolveOptions;
-//! use rigport_pipeline::ik::IkOptions;
-//! use rigport_pipeline::{ik, load::Input, progress::Silent, write::Output};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let handles = dir.path().join("reach.handles.json");
-//! std::fs::write(&handles, r#"{"fps": 10, "handles": [{"joint": "bone_2", "relative": true,
-//!     "keys": [{"time": 0, "position": [0, 0, 0]}, {"time": 1, "position": [0.1, -0.1, 0]}]}]}"#)?;
-//! let f = "../../fixtures/pinocchio/branch";
-//! let input = Input::new(vec![format!("{f}.obj").into(), format!("{f}_skeleton.out").into(),
-//!     format!("{f}_attachment.out").into()]);
-//! let options = IkOptions {
-//!     handles,
-//!     solve: ClipSolveOptions::default(),
-//!     json: true,
-//!     output: Output::new(dir.path().join("reach.glb")),
-//! };
-//! let report = ik(&input, &options, &Silent)?;
-//! let json: serde_json::Value = serde_json::from_str(report.output.as_deref().unwrap_or(""))?;
-//! assert_eq!(json["frames"], 11);
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::ik()`] is the same function.
 
 use std::path::PathBuf;
 
-use rigport_ik::clip::{solve_clip_on, ClipSolveOptions};
+use rigport_ik::clip::{ClipSolveOptions, solve_clip_on};
 use serde::Serialize;
 
 use crate::load::Input;
 use crate::outputs::check_request;
-use crate::progress::{step, Progress};
-use crate::write::{write_output, Output};
+use crate::progress::{Progress, step};
+use crate::write::{Output, write_output};
 use crate::{PipelineError, Report};
 
 /// What `ik` solves, and where it writes.
+///
+/// ```
+/// use rigport_ik::clip::ClipSolveOptions;
+/// use rigport_pipeline::ik::IkOptions;
+/// use rigport_pipeline::{ik, load::Input, progress::Silent, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let handles = dir.path().join("nod.json");
+/// std::fs::write(&handles, r#"{"fps": 4, "handles": [{"joint": "bone_2", "relative": true,
+///     "keys": [{"time": 0, "position": [0, 0, 0]}, {"time": 0.5, "position": [0, -0.05, 0]}]}]}"#)?;
+/// let f = "../../fixtures/pinocchio/branch";
+/// let input = Input::new(vec![format!("{f}.obj").into(), format!("{f}_skeleton.out").into(),
+///     format!("{f}_attachment.out").into()]);
+/// // Without `json`, the residuals come back as a table, one row per handle.
+/// let options = IkOptions {
+///     handles,
+///     solve: ClipSolveOptions::default(),
+///     json: false,
+///     output: Output::new(dir.path().join("nod.glb")),
+/// };
+/// let report = ik(&input, &options, &Silent)?;
+/// assert!(report.summary.as_deref().is_some_and(|t| t.contains("bone_2")));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct IkOptions {
     /// The `HANDLES.json` file; its stem names the clip.
@@ -76,6 +78,30 @@ struct Summary {
 
 /// Reads `input` and the handles, solves them into a clip placed first, and writes the
 /// rig; the residuals come back as a table or as JSON.
+///
+/// ```
+/// use rigport_ik::clip::ClipSolveOptions;
+/// use rigport_pipeline::ik::IkOptions;
+/// use rigport_pipeline::{ik, load::Input, progress::Silent, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let handles = dir.path().join("reach.handles.json");
+/// std::fs::write(&handles, r#"{"fps": 10, "handles": [{"joint": "bone_2", "relative": true,
+///     "keys": [{"time": 0, "position": [0, 0, 0]}, {"time": 1, "position": [0.1, -0.1, 0]}]}]}"#)?;
+/// let f = "../../fixtures/pinocchio/branch";
+/// let input = Input::new(vec![format!("{f}.obj").into(), format!("{f}_skeleton.out").into(),
+///     format!("{f}_attachment.out").into()]);
+/// let options = IkOptions {
+///     handles,
+///     solve: ClipSolveOptions::default(),
+///     json: true,
+///     output: Output::new(dir.path().join("reach.glb")),
+/// };
+/// let report = ik(&input, &options, &Silent)?;
+/// let json: serde_json::Value = serde_json::from_str(report.output.as_deref().unwrap_or(""))?;
+/// assert_eq!(json["frames"], 11);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// The handles file's errors (with their JSON path); a failed solve; as the import and

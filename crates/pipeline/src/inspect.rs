@@ -1,22 +1,23 @@
-//! `rigport inspect`: what is in each rig, as text or JSON ([`AssetReport`]).
+//! `rigport inspect`: what is in each rig, as text or JSON.
 //!
-//! ```
-//! use rigport_pipeline::inspect::InspectOptions;
-//! use rigport_pipeline::{inspect, load::Input, progress::Silent};
-//!
-//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! let report = inspect(&input, &InspectOptions { json: true }, &Silent)?;
-//! let json: serde_json::Value = serde_json::from_str(report.output.as_deref().unwrap_or(""))?;
-//! assert!(json[0]["joints"].is_array());
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::inspect()`] is the same function.
 
 use crate::asset_report::AssetReport;
 use crate::load::Input;
-use crate::progress::{step, Progress};
+use crate::progress::{Progress, step};
 use crate::{PipelineError, Report};
 
 /// How `inspect` lists.
+///
+/// ```
+/// use rigport_pipeline::inspect::InspectOptions;
+/// use rigport_pipeline::{inspect, load::Input, progress::Silent};
+///
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let report = inspect(&input, &InspectOptions { json: false }, &Silent)?;
+/// assert!(report.output.as_deref().is_some_and(|t| t.contains("joints: 9")));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Copy, Debug, Default)]
 pub struct InspectOptions {
     /// JSON instead of text.
@@ -25,6 +26,17 @@ pub struct InspectOptions {
 
 /// Reads every asset of `input` and lists what is in it; each asset's warnings are part of
 /// its listing, and all of them are in [`Report::warnings`].
+///
+/// ```
+/// use rigport_pipeline::inspect::InspectOptions;
+/// use rigport_pipeline::{inspect, load::Input, progress::Silent};
+///
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let report = inspect(&input, &InspectOptions { json: true }, &Silent)?;
+/// let json: serde_json::Value = serde_json::from_str(report.output.as_deref().unwrap_or(""))?;
+/// assert!(json[0]["joints"].is_array());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// As the imports.

@@ -11,7 +11,11 @@ use crate::PipelineError;
 ///
 /// # Errors
 /// The file's errors (`rigport_import::json::keys::read`), or a clip that cannot be baked.
-pub fn load(path: &Path, skeleton: &Skeleton, default_name: &str) -> Result<Clip, PipelineError> {
+pub(crate) fn load(
+    path: &Path,
+    skeleton: &Skeleton,
+    default_name: &str,
+) -> Result<Clip, PipelineError> {
     let keys = rigport_import::json::keys::read(path, skeleton)?;
     rigport_anim::keyed::clip(skeleton, &keys, default_name)
         .map_err(|e| PipelineError::step(format!("{}: cannot bake", path.display()), e))

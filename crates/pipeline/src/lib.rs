@@ -12,41 +12,39 @@
 //!
 //! The steps they share:
 //! - [`load`]: [`load::Input`] (the files as named, the bone-mesh setting, the memory
-//!   budget); resolve inputs into assets the way the CLI does, import one under the budget,
-//!   and give a skeleton-only asset a bone mesh;
-//! - [`outputs`]: the output format by extension, and the checks made before any work (an
-//!   output must not be an input, a special file or a `.gltf` link);
+//!   budget); inputs are resolved into assets the way the CLI does, imported under the
+//!   budget, and a skeleton-only asset gets a bone mesh;
 //! - [`mod@write`]: [`write::Output`] and [`write::write_output`]: key reduction, the
 //!   memory check, the influence fit (`truncate` or `refit`) and the writer chosen by the
 //!   output's extension;
-//! - [`memory`]: this process's memory budget and the import check;
-//! - [`dump`]: a rig posed or sampled, skinned and written as an `.npz` dump;
-//! - [`asset_report`]: what `inspect` lists.
+//! - [`memory`]: this process's memory budget;
+//! - private to the crate: the output checks made before any work (an output must not be
+//!   an input, a special file or a `.gltf` link), the `.npz` dump `eval` writes, and what
+//!   `inspect` lists.
 //!
-//! A whole `convert`, from a BVH file to a `.usda`:
+//! A motion converted to a USD package, then listed:
 //!
 //! ```
-//! use rigport_pipeline::{load, write, MemoryBudget};
+//! use rigport_pipeline::{convert::ConvertOptions, inspect::InspectOptions};
+//! use rigport_pipeline::{convert, inspect, load::Input, progress::Silent, write::Output};
 //!
 //! let dir = tempfile::tempdir()?;
-//! let out = dir.path().join("walk.usda");
-//! let inputs = load::Inputs::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! let plan = load::single_plan(&inputs)?;
-//! let imported = load::load(&plan, true, &MemoryBudget::UNLIMITED)?;
-//! let format = rigport_pipeline::outputs::format_of(&out)?;
-//! let prepared = write::prepare(&imported.asset, &out, format, &write::WriteOptions::default())?;
-//! prepared.write()?;
-//! assert!(std::fs::read_to_string(&out)?.starts_with("#usda 1.0"));
+//! let usdz = dir.path().join("walk.usdz");
+//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+//! convert(&input, &ConvertOptions { output: Output::new(&usdz) }, &Silent)?;
+//! let listing = inspect(&Input::new(vec![usdz]), &InspectOptions { json: true }, &Silent)?;
+//! let json: serde_json::Value = serde_json::from_str(listing.output.as_deref().unwrap_or(""))?;
+//! assert_eq!(json[0]["joints"].as_array().map(Vec::len), Some(9));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 pub mod animate;
-pub mod asset_report;
+mod asset_report;
 pub mod bake;
 pub mod cloth;
 pub mod convert;
 pub mod demo;
-pub mod dump;
+mod dump;
 mod error;
 pub mod eval;
 pub mod footlock;
@@ -55,7 +53,7 @@ pub mod inspect;
 mod keys;
 pub mod load;
 pub mod memory;
-pub mod outputs;
+mod outputs;
 pub mod progress;
 pub mod render;
 mod report;
@@ -79,5 +77,5 @@ pub use retarget::run as retarget;
 pub use retime::run as retime;
 pub use sequence::run as sequence;
 
-pub use error::{chain, PipelineError};
+pub use error::{PipelineError, chain};
 pub use rigport_model::budget::{MemoryBudget, OverBudget};

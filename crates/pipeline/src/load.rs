@@ -1,29 +1,35 @@
-//! Inputs to assets, as the CLI opens them: [`plan`] resolves paths into one
-//! [`Source`] per asset (`rigport_import::detect`), [`load`] imports one under the memory
-//! budget and gives a skeleton-only asset a bone mesh so viewers show its motion.
-//!
-//! ```
-//! use rigport_pipeline::{load, MemoryBudget};
-//!
-//! let inputs = load::Inputs::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! let plan = load::single_plan(&inputs)?;
-//! let imported = load::load(&plan, true, &MemoryBudget::UNLIMITED)?;
-//! assert_eq!(imported.asset.meshes.len(), 1, "a bone mesh was added");
-//! assert!(imported.warnings.iter().any(|w| w.to_string().contains("bone mesh")));
-//! # Ok::<(), rigport_pipeline::PipelineError>(())
-//! ```
+//! Inputs to assets, as the CLI opens them: [`Input`] names the files, `plan` resolves
+//! them into one [`Source`] per asset (`rigport_import::detect`), and `load` imports one
+//! under the memory budget and gives a skeleton-only asset a bone mesh so viewers show its
+//! motion.
 
 use std::path::PathBuf;
 
-pub use rigport_import::detect::{Inputs, Source};
 use rigport_import::Imported;
+pub use rigport_import::detect::{Inputs, Source};
 use rigport_model::{MemoryBudget, Warning};
 
-use crate::progress::Progress;
 use crate::PipelineError;
+use crate::progress::Progress;
 
 /// What a command reads: the input files as named, whether a skeleton-only rig gets a
 /// bone mesh, and the memory budget imports and writes are checked against.
+///
+/// ```
+/// use rigport_pipeline::inspect::InspectOptions;
+/// use rigport_pipeline::{inspect, load::Input, progress::Silent, MemoryBudget};
+///
+/// // A BVH is a skeleton only: by default it gets a bone mesh, here it does not.
+/// let input = Input {
+///     bone_mesh: false,
+///     budget: MemoryBudget { limit: 1 << 30, origin: "this example" },
+///     ..Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()])
+/// };
+/// let report = inspect(&input, &InspectOptions { json: true }, &Silent)?;
+/// let json: serde_json::Value = serde_json::from_str(report.output.as_deref().unwrap_or(""))?;
+/// assert_eq!(json[0]["meshes"].as_array().map(Vec::len), Some(0));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Input {
     /// The files, as the command line names them.
@@ -36,6 +42,12 @@ pub struct Input {
 
 impl Input {
     /// `paths`, with a bone mesh for skeleton-only rigs and no memory limit.
+    ///
+    /// ```
+    /// let input = rigport_pipeline::load::Input::new(vec!["walk.bvh".into()]);
+    /// assert!(input.bone_mesh);
+    /// assert_eq!(input.budget, rigport_pipeline::MemoryBudget::UNLIMITED);
+    /// ```
     pub fn new(paths: Vec<PathBuf>) -> Self {
         Self {
             files: Inputs::new(paths),
@@ -48,7 +60,7 @@ impl Input {
     ///
     /// # Errors
     /// As [`plan`].
-    pub fn plans(&self) -> Result<Vec<Source>, PipelineError> {
+    pub(crate) fn plans(&self) -> Result<Vec<Source>, PipelineError> {
         plan(&self.files)
     }
 
@@ -56,7 +68,7 @@ impl Input {
     ///
     /// # Errors
     /// As [`load`].
-    pub fn load(&self, plan: &Source) -> Result<Imported, PipelineError> {
+    pub(crate) fn load(&self, plan: &Source) -> Result<Imported, PipelineError> {
         load(plan, self.bone_mesh, &self.budget)
     }
 
@@ -64,7 +76,7 @@ impl Input {
     ///
     /// # Errors
     /// As [`single_plan`] and [`load`].
-    pub fn load_single(
+    pub(crate) fn load_single(
         &self,
         progress: &dyn Progress,
         step: &str,
@@ -77,7 +89,7 @@ impl Input {
     }
 
     /// The files these inputs read ([`input_files`]).
-    pub fn read_files(&self) -> Vec<PathBuf> {
+    pub(crate) fn read_files(&self) -> Vec<PathBuf> {
         input_files(&self.files)
     }
 }
@@ -86,7 +98,7 @@ impl Input {
 ///
 /// # Errors
 /// The inputs do not group into assets.
-pub fn plan(inputs: &Inputs) -> Result<Vec<Source>, PipelineError> {
+pub(crate) fn plan(inputs: &Inputs) -> Result<Vec<Source>, PipelineError> {
     Ok(rigport_import::detect::plan(inputs)?)
 }
 
@@ -94,7 +106,7 @@ pub fn plan(inputs: &Inputs) -> Result<Vec<Source>, PipelineError> {
 ///
 /// # Errors
 /// As [`plan`], or more or fewer than one asset.
-pub fn single_plan(inputs: &Inputs) -> Result<Source, PipelineError> {
+pub(crate) fn single_plan(inputs: &Inputs) -> Result<Source, PipelineError> {
     let mut plans = plan(inputs)?;
     if plans.len() != 1 {
         return Err(PipelineError::Invalid(format!(
@@ -110,7 +122,7 @@ pub fn single_plan(inputs: &Inputs) -> Result<Source, PipelineError> {
 ///
 /// # Errors
 /// Over the memory budget; as the importer.
-pub fn load(
+pub(crate) fn load(
     plan: &Source,
     bone_mesh: bool,
     budget: &MemoryBudget,
@@ -129,7 +141,7 @@ pub fn load(
 /// The files an input specification reads: those of its resolved plans (a folder stands
 /// for the files picked from it), or the paths as given when they do not resolve (the
 /// command then reports why).
-pub fn input_files(inputs: &Inputs) -> Vec<PathBuf> {
+pub(crate) fn input_files(inputs: &Inputs) -> Vec<PathBuf> {
     let Ok(plans) = plan(inputs) else {
         let mut files = inputs.paths.clone();
         files.extend(inputs.mesh.iter().cloned());

@@ -1,18 +1,6 @@
 //! The memory budget of a process and the check made before an import
 //! (the other estimates live in the libraries beside the code that allocates; see
 //! `rigport_model::budget`).
-//!
-//! ```
-//! use rigport_pipeline::memory;
-//!
-//! let given = memory::process_budget(Some(1 << 30), "the limit given");
-//! assert_eq!((given.limit, given.origin), (1 << 30, "the limit given"));
-//! let default = memory::process_budget(None, "the limit given");
-//! assert!(default.limit > 0);
-//! let plan = rigport_import::detect::Source::Bvh("../../fixtures/bvh/end_sites.bvh".into());
-//! assert!(memory::check_import(&plan, &given).is_ok());
-//! assert!(memory::check_import(&plan, &rigport_pipeline::MemoryBudget { limit: 10, origin: "test" }).is_err());
-//! ```
 
 use rigport_import::detect::Source;
 use rigport_model::budget::{self, MemoryBudget, OverBudget};
@@ -25,6 +13,15 @@ const IMPORT_FACTOR: u64 = 5;
 /// default: 3/4 of the memory this process may use (the smallest of `MemTotal`, the memory
 /// limit of its cgroup or any cgroup above it, v1 or v2, and an address-space limit), or
 /// 8 GB when unknown.
+///
+/// ```
+/// use rigport_pipeline::memory;
+///
+/// let given = memory::process_budget(Some(1 << 30), "the limit given");
+/// assert_eq!((given.limit, given.origin), (1 << 30, "the limit given"));
+/// let default = memory::process_budget(None, "the limit given");
+/// assert!(default.limit > 0 && default.origin.starts_with("default"));
+/// ```
 pub fn process_budget(given: Option<u64>, given_by: &'static str) -> MemoryBudget {
     match given {
         Some(limit) => MemoryBudget {
@@ -42,6 +39,10 @@ pub fn process_budget(given: Option<u64>, given_by: &'static str) -> MemoryBudge
 }
 
 /// The budget when nothing is known: 8 GB.
+///
+/// ```
+/// assert_eq!(rigport_pipeline::memory::DEFAULT.limit, 8_000_000_000);
+/// ```
 pub const DEFAULT: MemoryBudget = MemoryBudget {
     limit: 8_000_000_000,
     origin: "default",
@@ -134,7 +135,7 @@ fn address_space_limit() -> Option<u64> {
 ///
 /// # Errors
 /// An [`OverBudget`] naming the input and its size.
-pub fn check_import(plan: &Source, budget: &MemoryBudget) -> Result<(), OverBudget> {
+pub(crate) fn check_import(plan: &Source, budget: &MemoryBudget) -> Result<(), OverBudget> {
     let bytes: u64 = plan
         .files()
         .iter()
@@ -155,6 +156,18 @@ pub fn check_import(plan: &Source, budget: &MemoryBudget) -> Result<(), OverBudg
 mod tests {
     use super::*;
     use std::collections::HashMap;
+
+    #[test]
+    fn an_import_is_checked_against_the_budget() {
+        let plan = Source::Bvh("../../fixtures/bvh/end_sites.bvh".into());
+        let roomy = process_budget(Some(1 << 30), "the limit given");
+        assert!(check_import(&plan, &roomy).is_ok());
+        let tight = MemoryBudget {
+            limit: 10,
+            origin: "test",
+        };
+        assert!(check_import(&plan, &tight).is_err());
+    }
 
     fn limit(files: &[(&str, &str)]) -> Option<u64> {
         let files: HashMap<String, String> = files

@@ -1,40 +1,26 @@
 //! Outputs: the format an output path asks for, and the checks made before any work, so a
 //! special file, a `.gltf` link or an input given as output fail at once, not after a long
 //! computation.
-//!
-//! ```
-//! use std::path::Path;
-//! use rigport_model::OutputFormat;
-//! use rigport_pipeline::outputs::{check_outputs, format_of};
-//!
-//! assert_eq!(format_of(Path::new("a.GLB"))?, OutputFormat::Glb);
-//! assert_eq!(format_of(Path::new("a.usdz"))?, OutputFormat::Usdz);
-//! assert!(format_of(Path::new("a.usd")).is_err_and(|e| e.is_usage()));
-//! let input = Path::new("../../fixtures/bvh/end_sites.bvh");
-//! let err = check_outputs(&[input], &[input.to_path_buf()]).unwrap_err();
-//! assert!(err.to_string().contains("this output is one of the inputs"));
-//! # Ok::<(), rigport_pipeline::PipelineError>(())
-//! ```
 
 use std::path::{Path, PathBuf};
 
 use rigport_export::ExportError;
 use rigport_model::OutputFormat;
 
-use crate::error::Message;
 use crate::PipelineError;
+use crate::error::Message;
 
 /// The format an output path asks for, by its extension ([`OutputFormat::of_path`]).
 ///
 /// # Errors
 /// An extension rigport does not write, or `.usd` (a usage error naming the path).
-pub fn format_of(path: &Path) -> Result<OutputFormat, PipelineError> {
+pub(crate) fn format_of(path: &Path) -> Result<OutputFormat, PipelineError> {
     OutputFormat::of_path(path)
         .map_err(|e| PipelineError::Usage(format!("{}: {e}", path.display())))
 }
 
 /// The lower-case extension of `path` ("" when none).
-pub fn extension(path: &Path) -> String {
+pub(crate) fn extension(path: &Path) -> String {
     path.extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
@@ -49,7 +35,7 @@ pub fn extension(path: &Path) -> String {
 ///
 /// # Errors
 /// As above.
-pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<(), PipelineError> {
+pub(crate) fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<(), PipelineError> {
     for &output in outputs {
         let mut files = vec![output.to_path_buf()];
         rigport_export::check_output(output).map_err(|e| PipelineError::output(output, e))?;
@@ -101,7 +87,7 @@ fn same_file(a: &Path, b: &Path) -> bool {
 
 /// An export's write failure as an output error that names the file once (the file that
 /// failed: `path` or one written beside it).
-pub fn write_failure(err: ExportError, path: &Path) -> PipelineError {
+pub(crate) fn write_failure(err: ExportError, path: &Path) -> PipelineError {
     match err {
         ExportError::Io { path, source } => PipelineError::output(&path, source),
         other => PipelineError::output(path, other),
@@ -112,7 +98,7 @@ pub fn write_failure(err: ExportError, path: &Path) -> PipelineError {
 ///
 /// # Errors
 /// The file cannot be written.
-pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
+pub(crate) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
     rigport_export::write_atomic(path, bytes).map_err(|e| PipelineError::output(path, e))
 }
 
@@ -146,4 +132,22 @@ pub(crate) fn check_not_read(
     let mut read = input.read_files();
     read.extend(extra.iter().map(|p| p.to_path_buf()));
     check_outputs(&[output], &read)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_by_extension_and_an_input_is_no_output() {
+        assert_eq!(format_of(Path::new("a.GLB")).ok(), Some(OutputFormat::Glb));
+        assert_eq!(
+            format_of(Path::new("a.usdz")).ok(),
+            Some(OutputFormat::Usdz)
+        );
+        assert!(format_of(Path::new("a.usd")).is_err_and(|e| e.is_usage()));
+        let input = Path::new("../../fixtures/bvh/end_sites.bvh");
+        let err = check_outputs(&[input], &[input.to_path_buf()]).unwrap_err();
+        assert!(err.to_string().contains("this output is one of the inputs"));
+    }
 }

@@ -2,26 +2,7 @@
 //! animation), drawn on the CPU by `rigport-render`, optionally with IK handle targets as
 //! markers.
 //!
-//! ```
-//! use rigport_pipeline::render::RenderRequest;
-//! use rigport_pipeline::{load::Input, progress::Silent, render};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let out = dir.path().join("walk.png");
-//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! let request = RenderRequest {
-//!     options: rigport_render::RenderOptions { width: 64, height: 64, ..Default::default() },
-//!     skinning: None,
-//!     clip: None,
-//!     fps: None,
-//!     frames: None,
-//!     handles: None,
-//!     output: out.clone(),
-//! };
-//! render(&input, &request, &Silent)?;
-//! assert_eq!(&std::fs::read(&out)?[1..4], b"PNG");
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::render()`] is the same function.
 
 use std::path::{Path, PathBuf};
 
@@ -31,15 +12,15 @@ use rigport_render::{Markers, RenderOptions};
 
 use crate::load::Input;
 use crate::outputs::{check_not_read, extension};
-use crate::progress::{step, Progress};
+use crate::progress::{Progress, step};
 use crate::{PipelineError, Report};
 
 /// The GIF and APNG frame rate when none is given.
-pub const DEFAULT_ANIMATION_FPS: f32 = 25.0;
+pub(crate) const DEFAULT_ANIMATION_FPS: f32 = 25.0;
 
 /// The kind of picture, by the output's extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PictureFormat {
+pub(crate) enum PictureFormat {
     /// `.png`: a contact sheet of up to [`rigport_render::SHEET_FRAMES`] frames.
     Png,
     /// `.gif`: a looping animation.
@@ -53,7 +34,7 @@ impl PictureFormat {
     ///
     /// # Errors
     /// Any other extension (a usage error).
-    pub fn of_path(path: &Path) -> Result<Self, PipelineError> {
+    pub(crate) fn of_path(path: &Path) -> Result<Self, PipelineError> {
         Ok(match extension(path).as_str() {
             "png" => Self::Png,
             "gif" => Self::Gif,
@@ -62,7 +43,7 @@ impl PictureFormat {
                 return Err(PipelineError::Usage(format!(
                     "{}: unknown picture format; expected .png (contact sheet), .gif or .apng (animation)",
                     path.display()
-                )))
+                )));
             }
         })
     }
@@ -154,6 +135,28 @@ pub fn skinning_methods(s: &str) -> Result<&'static [SkinningMethod], String> {
 }
 
 /// What `render` draws, and where it writes.
+///
+/// ```
+/// use rigport_pipeline::render::RenderRequest;
+/// use rigport_pipeline::{load::Input, progress::Silent, render};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("walk.gif");
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// // An animation (the extension chooses GIF) at 20 frames per second.
+/// let request = RenderRequest {
+///     options: rigport_render::RenderOptions { width: 48, height: 48, ..Default::default() },
+///     skinning: None,
+///     clip: Some("end_sites".into()),
+///     fps: Some(20.0),
+///     frames: None,
+///     handles: None,
+///     output: out.clone(),
+/// };
+/// render(&input, &request, &Silent)?;
+/// assert_eq!(&std::fs::read(&out)?[..6], b"GIF89a");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct RenderRequest {
     /// Size, view, camera, overlays; `skinning` is replaced by the asset's own method
@@ -174,6 +177,27 @@ pub struct RenderRequest {
 }
 
 /// Reads `input`, samples the clip and draws the pictures into `request.output`.
+///
+/// ```
+/// use rigport_pipeline::render::RenderRequest;
+/// use rigport_pipeline::{load::Input, progress::Silent, render};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("walk.png");
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let request = RenderRequest {
+///     options: rigport_render::RenderOptions { width: 64, height: 64, ..Default::default() },
+///     skinning: None,
+///     clip: None,
+///     fps: None,
+///     frames: None,
+///     handles: None,
+///     output: out.clone(),
+/// };
+/// render(&input, &request, &Silent)?;
+/// assert_eq!(&std::fs::read(&out)?[1..4], b"PNG");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// An unknown picture format (a usage error); a bad handles file; no such clip; a frame

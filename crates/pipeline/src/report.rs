@@ -5,9 +5,18 @@ use rigport_model::Warning;
 /// What a command did, for its caller to show.
 ///
 /// ```
-/// let report = rigport_pipeline::Report::logged("wrote a.glb".into());
-/// assert_eq!(report.log, ["wrote a.glb"]);
-/// assert!(report.summary.is_none() && report.output.is_none());
+/// use rigport_pipeline::{convert, convert::ConvertOptions, inspect, inspect::InspectOptions};
+/// use rigport_pipeline::{load::Input, progress::Silent, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// // `convert` says what it wrote; `inspect`'s listing is its product.
+/// let options = ConvertOptions { output: Output::new(dir.path().join("walk.glb")) };
+/// let converted = convert(&input, &options, &Silent)?;
+/// assert!(converted.log[0].starts_with("wrote ") && converted.output.is_none());
+/// let listed = inspect(&input, &InspectOptions { json: false }, &Silent)?;
+/// assert!(listed.log.is_empty() && listed.output.is_some());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 /// The CLI prints `log` to standard error and
 /// `summary` to standard output unless it is quiet, `notices` to standard error and
@@ -30,7 +39,7 @@ pub struct Report {
 
 impl Report {
     /// A report of one log line.
-    pub fn logged(line: String) -> Self {
+    pub(crate) fn logged(line: String) -> Self {
         Self {
             log: vec![line],
             ..Self::default()

@@ -2,35 +2,43 @@
 //! joint map (a `MAP.json` file or the built-in maps chosen by name), with the report as
 //! JSON.
 //!
-//! ```
-//! use rigport_pipeline::{load, retarget, MemoryBudget};
-//!
-//! let open = |path: &str| -> Result<_, rigport_pipeline::PipelineError> {
-//!     let plan = load::single_plan(&load::Inputs::new(vec![path.into()]))?;
-//!     Ok(load::load(&plan, true, &MemoryBudget::UNLIMITED)?.asset)
-//! };
-//! let walk = open("../../fixtures/bvh/end_sites.bvh")?;
-//! let rig = walk.clone();
-//! let done = retarget::onto(&walk, rig, None, None, &Default::default())?;
-//! assert_eq!(done.asset.clips.len(), 1);
-//! assert!(retarget::report_json(&done)["frames"].as_u64().is_some());
-//! # Ok::<(), rigport_pipeline::PipelineError>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::retarget()`] is the same function.
 
 use std::path::Path;
 
 use rigport_ik::footlock::up_in_model;
 use rigport_ik::retarget::RetargetReport;
-use rigport_ik::retarget::{auto_map, retarget, JointMap, RetargetInput, RetargetOptions};
+use rigport_ik::retarget::{JointMap, RetargetInput, RetargetOptions, auto_map, retarget};
 use rigport_model::{Asset, Warning};
-use serde_json::{json, Value};
+use serde_json::{Value, json};
 
 use crate::load::Input;
-use crate::progress::{step, Progress};
-use crate::write::{write_output, Output};
+use crate::progress::{Progress, step};
+use crate::write::{Output, write_output};
 use crate::{PipelineError, Report};
 
 /// What `retarget` puts onto which rig, and where it writes.
+///
+/// ```
+/// use rigport_pipeline::retarget::RetargetRequest;
+/// use rigport_pipeline::{load::Input, progress::Silent, retarget, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let bvh = "../../fixtures/bvh/end_sites.bvh";
+/// // A joint map file that does not exist fails before anything is written.
+/// let out = dir.path().join("onto.glb");
+/// let request = RetargetRequest {
+///     onto: Input::new(vec![bvh.into()]),
+///     clip: None,
+///     map: Some(dir.path().join("missing_map.json")),
+///     options: Default::default(),
+///     json: false,
+///     output: Output::new(&out),
+/// };
+/// assert!(retarget(&Input::new(vec![bvh.into()]), &request, &Silent).is_err());
+/// assert!(!out.exists());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct RetargetRequest {
     /// The rig the motion goes onto (read like any input).
@@ -50,8 +58,29 @@ pub struct RetargetRequest {
 /// Reads the motion (`input`) and the rig (`request.onto`), puts the clip onto the rig,
 /// and writes the rig with it; the report comes back as a summary or as JSON.
 ///
+/// ```
+/// use rigport_pipeline::retarget::RetargetRequest;
+/// use rigport_pipeline::{load::Input, progress::Silent, retarget, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let bvh = "../../fixtures/bvh/end_sites.bvh";
+/// let request = RetargetRequest {
+///     onto: Input::new(vec![bvh.into()]),
+///     clip: None,
+///     map: None,
+///     options: Default::default(),
+///     json: true,
+///     output: Output::new(dir.path().join("onto.glb")),
+/// };
+/// let report = retarget(&Input::new(vec![bvh.into()]), &request, &Silent)?;
+/// let json: serde_json::Value = serde_json::from_str(report.output.as_deref().unwrap_or(""))?;
+/// assert!(json["frames"].as_u64().is_some());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
 /// # Errors
-/// As [`onto`], the imports and [`write_output`].
+/// No such clip, a bad map file (with its JSON path), no joints in common, or a failed
+/// solve; as the imports and [`write_output`].
 pub fn run(
     input: &Input,
     request: &RetargetRequest,
@@ -91,7 +120,7 @@ pub fn run(
 }
 
 /// A retargeted rig.
-pub struct Done {
+pub(crate) struct Done {
     /// The target rig with the retargeted clip as its only clip.
     pub asset: Asset,
     /// The source clip's name.
@@ -108,7 +137,7 @@ pub struct Done {
 /// # Errors
 /// No such clip, a bad map file (with its JSON path), no joints in common, or a failed
 /// solve ([`PipelineError::Invalid`], [`PipelineError::Json`], [`PipelineError::Step`]).
-pub fn onto(
+pub(crate) fn onto(
     source: &Asset,
     mut target: Asset,
     clip: Option<&str>,
@@ -153,7 +182,7 @@ pub fn onto(
 }
 
 /// The report of `done` as JSON (`rigport retarget --json`).
-pub fn report_json(done: &Done) -> Value {
+pub(crate) fn report_json(done: &Done) -> Value {
     let r = &done.report;
     let limbs: Vec<_> = (r.limbs.iter())
         .map(|l| {

@@ -1,34 +1,28 @@
 //! `rigport retime`: resample, speed up, warp, reverse or trim a clip.
 //!
-//! ```
-//! use rigport_anim::retime::Retime;
-//! use rigport_pipeline::retime::{Change, RetimeOptions};
-//! use rigport_pipeline::{load::Input, progress::Silent, retime, write::Output};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let out = dir.path().join("slow.glb");
-//! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! let options = RetimeOptions {
-//!     clip: None,
-//!     change: Change::Retime(Retime::Speed(0.5)),
-//!     output: Output::new(&out),
-//! };
-//! let report = retime(&input, &options, &Silent)?;
-//! assert!(report.log[0].starts_with("wrote "));
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::retime()`] is the same function.
 
-use rigport_anim::retime::{retime, Retime};
+use rigport_anim::retime::{Retime, retime};
 use rigport_anim::sequence::trim;
 use rigport_model::{Clip, Warning};
 
 use crate::load::Input;
 use crate::outputs::check_request;
 use crate::progress::Progress;
-use crate::write::{write_output, Output};
+use crate::write::{Output, write_output};
 use crate::{PipelineError, Report};
 
 /// How the clip's timing changes.
+///
+/// ```
+/// use rigport_anim::retime::Retime;
+/// use rigport_pipeline::retime::Change;
+///
+/// // Half speed: the clip lasts twice as long.
+/// let slower = Change::Retime(Retime::Speed(0.5));
+/// let start = Change::Trim { start: 0.0, end: 1.0 };
+/// assert_ne!(slower, start);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub enum Change {
     /// Resampled, sped up, warped or reversed ([`Retime`]).
@@ -43,6 +37,22 @@ pub enum Change {
 }
 
 /// What `retime` changes and writes.
+///
+/// ```
+/// use rigport_pipeline::retime::{Change, RetimeOptions};
+/// use rigport_pipeline::{load::Input, progress::Silent, retime, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let options = RetimeOptions {
+///     clip: Some("end_sites".into()),
+///     change: Change::Trim { start: 0.0, end: 0.05 },
+///     output: Output::new(dir.path().join("start.glb")),
+/// };
+/// let report = retime(&input, &options, &Silent)?;
+/// assert!(report.log[0].contains("0.050 s"), "{}", report.log[0]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct RetimeOptions {
     /// The clip (the first when `None`).
@@ -58,6 +68,24 @@ fn keys_of(clip: &Clip) -> usize {
 }
 
 /// Reads `input`, changes the timing of one clip, and writes the rig.
+///
+/// ```
+/// use rigport_anim::retime::Retime;
+/// use rigport_pipeline::retime::{Change, RetimeOptions};
+/// use rigport_pipeline::{load::Input, progress::Silent, retime, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("slow.glb");
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let options = RetimeOptions {
+///     clip: None,
+///     change: Change::Retime(Retime::Speed(0.5)),
+///     output: Output::new(&out),
+/// };
+/// let report = retime(&input, &options, &Silent)?;
+/// assert!(report.log[0].starts_with("wrote "));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// No such clip, or none; a change the clip cannot take; as the import and

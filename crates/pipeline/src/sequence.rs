@@ -1,29 +1,36 @@
 //! `rigport sequence`: clips one after another, crossfaded, optionally looping.
 //!
-//! ```
-//! use rigport_pipeline::sequence::SequenceOptions;
-//! use rigport_pipeline::{load::Input, progress::Silent, sequence, write::Output};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let out = dir.path().join("twice.glb");
-//! let bvh = "../../fixtures/bvh/end_sites.bvh";
-//! let input = Input::new(vec![bvh.into(), bvh.into()]);
-//! let options = SequenceOptions { crossfade: 1, fps: None, looping: false, output: Output::new(&out) };
-//! let report = sequence(&input, &options, &Silent)?;
-//! assert!(report.log[0].contains("1 clips"));
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! [`run`] is the whole pipeline; [`crate::sequence()`] is the same function.
 
 use rigport_anim::sequence::{concatenate, make_loop};
 use rigport_model::{Clip, Skeleton, Track, TrackTarget, Warning};
 
 use crate::load::Input;
 use crate::outputs::check_request;
-use crate::progress::{step, Progress};
-use crate::write::{write_output, Output};
+use crate::progress::{Progress, step};
+use crate::write::{Output, write_output};
 use crate::{PipelineError, Report};
 
 /// How `sequence` joins the clips, and what it writes.
+///
+/// ```
+/// use rigport_pipeline::sequence::SequenceOptions;
+/// use rigport_pipeline::{load::Input, progress::Silent, sequence, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let bvh = "../../fixtures/bvh/end_sites.bvh";
+/// let input = Input::new(vec![bvh.into(), bvh.into()]);
+/// // Resampled at 30 fps, and the end blends back into the start.
+/// let options = SequenceOptions {
+///     crossfade: 0,
+///     fps: Some(30.0),
+///     looping: true,
+///     output: Output::new(dir.path().join("loop.glb")),
+/// };
+/// let report = sequence(&input, &options, &Silent)?;
+/// assert!(report.log[0].starts_with("wrote "));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug, Default)]
 pub struct SequenceOptions {
     /// Frames of crossfade between consecutive clips.
@@ -71,6 +78,20 @@ fn remap(clip: &Clip, from: &Skeleton, to: &Skeleton) -> (Clip, usize) {
 
 /// Reads every input, puts their clips one after another on the first input's skeleton
 /// (by joint name), and writes the first rig with the sequence as its only clip.
+///
+/// ```
+/// use rigport_pipeline::sequence::SequenceOptions;
+/// use rigport_pipeline::{load::Input, progress::Silent, sequence, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("twice.glb");
+/// let bvh = "../../fixtures/bvh/end_sites.bvh";
+/// let input = Input::new(vec![bvh.into(), bvh.into()]);
+/// let options = SequenceOptions { crossfade: 1, fps: None, looping: false, output: Output::new(&out) };
+/// let report = sequence(&input, &options, &Silent)?;
+/// assert!(report.log[0].contains("1 clips"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// An input without clips; clips that cannot be joined; as the imports and

@@ -1,29 +1,6 @@
 //! Writing an asset: key reduction, the memory check, the influence fit and the writer the
-//! output's extension names. Warnings come back before anything is written
-//! ([`Prepared::warnings`]), so a caller can refuse to write.
-//!
-//! ```
-//! use std::num::NonZeroUsize;
-//! use rigport_model::{InfluencesFit, OutputFormat};
-//! use rigport_pipeline::write::{self, WriteOptions};
-//! use rigport_pipeline::{load, MemoryBudget};
-//!
-//! let dir = tempfile::tempdir()?;
-//! let out = dir.path().join("rig.glb");
-//! let plan = load::Source::Bvh("../../fixtures/bvh/end_sites.bvh".into());
-//! let mut asset = load::load(&plan, true, &MemoryBudget::UNLIMITED)?.asset;
-//! let mut warnings = Vec::new();
-//! write::reduce_clips(&mut asset, 1e-4, &mut warnings)?;
-//! write::check_memory(&asset, &out, OutputFormat::Glb, &MemoryBudget::UNLIMITED)?;
-//! let opts = WriteOptions { max_influences: Some(2), influences_fit: InfluencesFit::Refit, ..WriteOptions::default() };
-//! // The bone mesh has one influence per vertex: nothing to fit.
-//! assert!(write::fit_influences(&asset, &opts, OutputFormat::Glb)?.is_none());
-//! let prepared = write::prepare(&asset, &out, OutputFormat::Glb, &opts)?;
-//! warnings.extend(prepared.warnings().iter().cloned());
-//! prepared.write()?;
-//! assert_eq!(&std::fs::read(&out)?[..4], b"glTF");
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+//! output's extension names ([`write_output`]). The warnings go to the caller before
+//! anything is written, so a caller can refuse to write.
 
 use std::num::NonZeroUsize;
 use std::path::{Path, PathBuf};
@@ -34,11 +11,28 @@ use rigport_model::{
     Asset, InfluencesFit, MemoryBudget, OutputFormat, OverBudget, SkinningMethod, UpAxis, Warning,
 };
 
-use crate::outputs::write_failure;
-use crate::progress::{step, Progress};
 use crate::PipelineError;
+use crate::outputs::write_failure;
+use crate::progress::{Progress, step};
 
 /// How an asset is written.
+///
+/// ```
+/// use rigport_model::SkinningMethod;
+/// use rigport_pipeline::write::{Output, WriteOptions};
+/// use rigport_pipeline::{convert, convert::ConvertOptions, load::Input, progress::Silent};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("bend.usda");
+/// // The stage declares dual quaternion skinning for every skin.
+/// let options = WriteOptions { skinning: Some(SkinningMethod::Dqs), ..WriteOptions::default() };
+/// let output = Output { options, ..Output::new(&out) };
+/// let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
+/// convert(&input, &ConvertOptions { output }, &Silent)?;
+/// let text = std::fs::read_to_string(&out)?;
+/// assert!(text.contains(r#"primvars:skel:skinningMethod = "dualQuaternion""#));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct WriteOptions {
     /// Influences kept per vertex (glTF: 4 when `None`; USD: all when `None`).
@@ -57,18 +51,37 @@ pub struct WriteOptions {
 }
 
 /// Where and how a command writes its asset.
+///
+/// ```
+/// use rigport_pipeline::write::Output;
+/// use rigport_pipeline::{convert, convert::ConvertOptions, load::Input, progress::Silent};
+///
+/// let dir = tempfile::tempdir()?;
+/// // Keys that a 1 mm tolerance can drop are dropped before writing.
+/// let output = Output { reduce_tolerance: Some(0.001), ..Output::new(dir.path().join("walk.glb")) };
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let report = convert(&input, &ConvertOptions { output }, &Silent)?;
+/// assert!(report.log[0].starts_with("wrote "));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Output {
     /// The file; its extension names the format ([`OutputFormat::of_path`]).
     pub path: PathBuf,
     /// How the writer fits influences and labels the stage.
     pub options: WriteOptions,
-    /// Reduce every clip's keys within this world-space distance first ([`reduce_clips`]).
+    /// Reduce every clip's keys within this world-space distance first.
     pub reduce_tolerance: Option<f32>,
 }
 
 impl Output {
     /// `path` with the default options and no key reduction.
+    ///
+    /// ```
+    /// let output = rigport_pipeline::write::Output::new("walk.glb");
+    /// assert_eq!(output.reduce_tolerance, None);
+    /// assert_eq!(output.options, Default::default());
+    /// ```
     pub fn new(path: impl Into<PathBuf>) -> Self {
         Self {
             path: path.into(),
@@ -77,6 +90,16 @@ impl Output {
     }
 
     /// The format the path's extension names.
+    ///
+    /// ```
+    /// use rigport_model::OutputFormat;
+    /// use rigport_pipeline::write::Output;
+    ///
+    /// assert_eq!(Output::new("walk.USDZ").format()?, OutputFormat::Usdz);
+    /// assert!(Output::new("walk.usd").format().unwrap_err().is_usage());
+    /// assert!(Output::new("walk.fbx").format().unwrap_err().is_usage());
+    /// # Ok::<(), rigport_pipeline::PipelineError>(())
+    /// ```
     ///
     /// # Errors
     /// An extension rigport does not write (a usage error).
@@ -90,6 +113,21 @@ impl Output {
 /// and earlier steps) given to `progress` together with the writer's before anything is
 /// written, so a caller that refuses them gets no file. Returns the line that says what
 /// was written.
+///
+/// ```
+/// use rigport_pipeline::write::{write_output, Output};
+/// use rigport_pipeline::{progress::Silent, MemoryBudget};
+///
+/// let dir = tempfile::tempdir()?;
+/// let out = dir.path().join("walk.usdz");
+/// // An asset from anywhere (here rigport's BVH importer), with the warnings it came with.
+/// let imported = rigport_import::bvh::import("../../fixtures/bvh/end_sites.bvh".as_ref())?;
+/// let line = write_output(imported.asset, imported.warnings, &Output::new(&out),
+///     &MemoryBudget::UNLIMITED, &Silent)?;
+/// assert!(line.starts_with("wrote "), "{line}");
+/// assert_eq!(&std::fs::read(&out)?[..2], b"PK");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// Over the budget; a refit or export that fails; refused warnings; an unwritable output.
@@ -172,7 +210,7 @@ fn written_line(path: &Path, asset: &Asset) -> String {
 ///
 /// # Errors
 /// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
-pub fn reduce_clips(
+pub(crate) fn reduce_clips(
     asset: &mut Asset,
     tolerance: f32,
     warnings: &mut Vec<Warning>,
@@ -196,7 +234,7 @@ pub fn reduce_clips(
 ///
 /// # Errors
 /// An [`OverBudget`] saying what would be written.
-pub fn check_memory(
+pub(crate) fn check_memory(
     asset: &Asset,
     path: &Path,
     format: OutputFormat,
@@ -225,7 +263,7 @@ pub fn check_memory(
 
 /// An asset with its influences fitted to the writer's limit.
 #[derive(Clone, Debug)]
-pub struct Fitted {
+pub(crate) struct Fitted {
     /// The asset, at most the limit of influences per vertex.
     pub asset: Asset,
     /// With [`InfluencesFit::Refit`]: each skin's deviations, truncation against refit.
@@ -238,7 +276,7 @@ pub struct Fitted {
 ///
 /// # Errors
 /// A limit of 0, or a refit whose clips or skins do not fit the skeleton.
-pub fn fit_influences(
+pub(crate) fn fit_influences(
     asset: &Asset,
     opts: &WriteOptions,
     format: OutputFormat,
@@ -279,7 +317,7 @@ pub fn fit_influences(
 
 /// With more than 4 influences kept for glTF, the note that most viewers read only the
 /// first set: `None` when no vertex of `asset` carries more than 4 weights.
-pub fn four_influence_note(asset: &Asset) -> Option<String> {
+pub(crate) fn four_influence_note(asset: &Asset) -> Option<String> {
     let eps = rigport_model::conventions::WEIGHT_EPSILON;
     let over = (asset.skins.iter().flat_map(|s| s.influences.rows()))
         .filter(|r| r.iter().filter(|i| i.weight > eps).count() > 4)
@@ -289,7 +327,7 @@ pub fn four_influence_note(asset: &Asset) -> Option<String> {
 
 /// One line per refitted skin: its deviation from all weights, truncation against refit,
 /// relative to the mesh's bounding-box diagonal.
-pub fn describe_refit(report: &AssetRefit, k: usize) -> Vec<String> {
+pub(crate) fn describe_refit(report: &AssetRefit, k: usize) -> Vec<String> {
     let poses = match report.pose_set {
         PoseSet::Clips => "the clips' frames",
         PoseSet::RangeOfMotion => "a range of motion",
@@ -305,7 +343,7 @@ pub fn describe_refit(report: &AssetRefit, k: usize) -> Vec<String> {
 }
 
 /// A file built in memory, ready to be written.
-pub struct Prepared {
+pub(crate) struct Prepared {
     file: PreparedFile,
     path: PathBuf,
 }
@@ -318,7 +356,7 @@ enum PreparedFile {
 
 impl Prepared {
     /// The writer's warnings (lossy or repairing steps), before anything is written.
-    pub fn warnings(&self) -> &[Warning] {
+    pub(crate) fn warnings(&self) -> &[Warning] {
         match &self.file {
             PreparedFile::Gltf(p) => p.warnings(),
             PreparedFile::Usd(p) => p.warnings(),
@@ -329,7 +367,7 @@ impl Prepared {
     ///
     /// # Errors
     /// An output error naming the file that failed.
-    pub fn write(self) -> Result<(), PipelineError> {
+    pub(crate) fn write(self) -> Result<(), PipelineError> {
         match self.file {
             PreparedFile::Gltf(p) => p.write(),
             PreparedFile::Usd(p) => p.write(),
@@ -343,7 +381,7 @@ impl Prepared {
 ///
 /// # Errors
 /// The asset cannot be exported (the message names it).
-pub fn prepare(
+pub(crate) fn prepare(
     asset: &Asset,
     path: &Path,
     format: OutputFormat,
