@@ -473,3 +473,42 @@ fn handles_fixture_on_its_corpus_rig_marks_the_targets() {
     );
     assert!(!Picture::read(&out).pixels_of(MARKER).is_empty());
 }
+
+/// The demo's skirt is baked into morph targets (`rigport cloth`); render plays them, as
+/// every viewer does. Two frames of the wave, side by side on one sheet (one camera): the
+/// wave moves only the arms, so the band where the skirt hangs differs only because the
+/// skirt moves (a rigid skirt left it identical).
+#[test]
+fn render_shows_the_baked_skirt_moving() {
+    let dir = tempfile::tempdir().unwrap();
+    let demo = dir.path().join("demo");
+    rigport_ok(&["demo", "-q", "--no-corpus", "-o", s(&demo)]);
+    let png = dir.path().join("skirt.png");
+    rigport_ok(&[
+        "render",
+        s(&demo.join("skirt.glb")),
+        "--clip",
+        "wave",
+        "--fps",
+        "1",
+        "--frames",
+        "0..2",
+        "--size",
+        "128x128",
+        "--no-skeleton",
+        "-o",
+        s(&png),
+    ]);
+    let sheet = Picture::read(&png);
+    assert_eq!((sheet.width, sheet.height), (256, 128), "two panels");
+    let pixel = |x: usize, y: usize| &sheet.rgba[(y * sheet.width + x) * 4..][..4];
+    // The skirt's band: from the hips (55% of the height) to above the knees (80%).
+    let changed = (70..102)
+        .flat_map(|y| (0..128).map(move |x| (x, y)))
+        .filter(|&(x, y)| pixel(x, y) != pixel(x + 128, y))
+        .count();
+    assert!(
+        changed > 100,
+        "only {changed} pixels of the skirt band change"
+    );
+}

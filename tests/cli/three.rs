@@ -58,6 +58,47 @@ fn relative_max_deviation(a: &NpyArray, b: &[f64]) -> f64 {
     max / diag
 }
 
+/// `ours` (frames x vertices x 3, rigport's mesh order) with its meshes in three's scene
+/// order: each of three's meshes is paired with rigport's mesh of the same vertex count
+/// (`rigport inspect`), which the demo's files make unique.
+fn in_three_order(glb: &Path, report: &serde_json::Value, ours: &NpyArray) -> Vec<f64> {
+    let out = common::rigport(&["inspect", "--json", glb.to_str().unwrap()]);
+    assert!(out.status.success(), "inspect {}", glb.display());
+    let listing: serde_json::Value = serde_json::from_slice(&out.stdout).expect("inspect JSON");
+    let counts: Vec<usize> = listing[0]["meshes"]
+        .as_array()
+        .expect("meshes")
+        .iter()
+        .map(|m| m["vertices"].as_u64().expect("vertex count") as usize)
+        .collect();
+    let starts: Vec<usize> = counts
+        .iter()
+        .scan(0, |start, &n| {
+            let s = *start;
+            *start += n;
+            Some(s)
+        })
+        .collect();
+    let vertices = ours.shape[1];
+    let mut out = Vec::with_capacity(ours.numbers.len());
+    for frame in ours.numbers.chunks_exact(vertices * 3) {
+        for mesh in report["meshes"].as_array().expect("meshes") {
+            let n = mesh["vertex_count"].as_u64().expect("vertex_count") as usize;
+            let k = counts
+                .iter()
+                .position(|&c| c == n)
+                .expect("a mesh of that size");
+            out.extend_from_slice(&frame[starts[k] * 3..(starts[k] + n) * 3]);
+        }
+    }
+    out
+}
+
+/// `rigport eval` of every glb the demo writes equals what three.js plays, at every frame:
+/// the skinned character's three clips, the DQS twist baked into corrective morph targets
+/// (`twist_dqs.glb`: an LBS skin plus per-frame morph weights) and the simulated skirt
+/// (`skirt.glb`: morph targets). rigport applies morph targets before skinning, as glTF
+/// defines and three does.
 #[test]
 fn three_plays_the_demo_as_rigport_evaluates_it() {
     let dir = common::scratch();
@@ -68,32 +109,44 @@ fn three_plays_the_demo_as_rigport_evaluates_it() {
         "-o",
         dir.path().to_str().unwrap(),
     ]);
-    let glb = dir.path().join("demo.glb");
-    let Some((report, three)) = three_eval(&glb, &["--clip", "wave", "--fps", "10"]) else {
-        return;
-    };
-    assert_eq!(report["meshes"][0]["skinned"], true);
-    let npz = dir.path().join("wave.npz");
-    common::rigport_ok(&[
-        "eval",
-        glb.to_str().unwrap(),
-        "--clip",
-        "wave",
-        "--fps",
-        "10",
-        "--max-influences",
-        "4",
-        "--out",
-        npz.to_str().unwrap(),
-    ]);
-    let ours = &common::read_npz(&npz)["positions"];
-    assert_eq!(three.shape, ours.shape, "frames x vertices x 3");
-    let dev = relative_max_deviation(&three, &ours.numbers);
-    eprintln!("demo wave: three.js vs rigport eval: {dev:.2e} of the diagonal");
-    assert!(
-        dev <= 1e-5,
-        "three.js and rigport differ by {dev:e} of the diagonal"
-    );
+    for (file, clip) in [
+        ("demo.glb", "wave"),
+        ("demo.glb", "reach"),
+        ("demo.glb", "twist"),
+        ("twist_dqs.glb", "twist"),
+        ("skirt.glb", "wave"),
+    ] {
+        let glb = dir.path().join(file);
+        let Some((report, three)) = three_eval(&glb, &["--clip", clip, "--fps", "10"]) else {
+            return;
+        };
+        assert_eq!(report["meshes"][0]["skinned"], true, "{file}");
+        let npz = dir.path().join(format!("{clip}.npz"));
+        common::rigport_ok(&[
+            "eval",
+            glb.to_str().unwrap(),
+            "--clip",
+            clip,
+            "--fps",
+            "10",
+            "--max-influences",
+            "4",
+            "--out",
+            npz.to_str().unwrap(),
+        ]);
+        let ours = &common::read_npz(&npz)["positions"];
+        assert_eq!(
+            three.shape, ours.shape,
+            "{file} {clip}: frames x vertices x 3"
+        );
+        let ours = in_three_order(&glb, &report, ours);
+        let dev = relative_max_deviation(&three, &ours);
+        eprintln!("{file} {clip}: three.js vs rigport eval: {dev:.2e} of the diagonal");
+        assert!(
+            dev <= 1e-6,
+            "{file} {clip}: three.js and rigport differ by {dev:e} of the diagonal"
+        );
+    }
 }
 
 /// three.js plays rigport's glb as it plays the source glTF. (bevy's SimpleSkin.gltf is

@@ -1,5 +1,5 @@
-//! The rigport runtime evaluator: forward kinematics, poses, clip sampling, the `Rig`, and
-//! skinning (LBS and DQS).
+//! The rigport runtime evaluator: forward kinematics, poses, clip sampling, morph targets,
+//! the `Rig`, and skinning (LBS and DQS).
 //!
 //! This is the runtime core, as ozz-animation separates its runtime from its offline
 //! libraries: clip edits are in `rigport-anim`, IK, foot locking and retargeting in
@@ -14,6 +14,7 @@
 
 mod error;
 pub mod fk;
+pub mod morph;
 pub mod pose;
 pub mod rig;
 pub mod sample;
@@ -25,6 +26,7 @@ pub mod test_support;
 pub use dqs::{DqsJob, DqsPalette};
 pub use error::EvalError;
 pub use fk::LocalToModelJob;
+pub use morph::MorphWeights;
 pub use pose::Pose;
 pub use rig::{Rig, RigOutput};
 pub use skinning::dqs;

@@ -4,6 +4,7 @@ use glam::{Mat4, Vec3};
 use rigport_model::{Asset, JointIndex};
 
 use crate::dqs::DqsPalette;
+use crate::morph::{morph_positions, MorphWeights};
 use crate::skinning::{PackedInfluences, SkinFramesJob};
 use crate::{skinning_matrices, EvalError, LocalToModelJob, Pose};
 use rigport_model::SkinningMethod;
@@ -19,6 +20,8 @@ pub struct Rig<'a> {
     mesh_skin: Vec<Option<usize>>,
     /// Per skin binding: its influences, packed for the skinning loops.
     packed: Vec<PackedInfluences>,
+    /// Each mesh's default morph weights, for a pose evaluated without a clip's.
+    rest_weights: MorphWeights,
 }
 
 /// Buffers for one evaluated pose, owned by the caller and reused across poses.
@@ -33,6 +36,8 @@ pub struct RigOutput {
     /// Per skin binding: scratch for dual quaternion skinning, kept so that evaluating
     /// another pose reuses it.
     pub dqs_palettes: Vec<DqsPalette>,
+    /// Scratch: a mesh's morphed shape before it is skinned or placed.
+    morphed: Vec<Vec3>,
 }
 
 impl<'a> Rig<'a> {
@@ -88,6 +93,7 @@ impl<'a> Rig<'a> {
             parents,
             mesh_skin,
             packed,
+            rest_weights: MorphWeights::rest(asset),
         })
     }
 
@@ -110,15 +116,37 @@ impl<'a> Rig<'a> {
         self.evaluate_with(pose, SkinningMethod::Lbs, out)
     }
 
-    /// Evaluates `pose`: joint matrices, skinning matrices and the positions of every mesh
-    /// skinned with `method`. Unskinned meshes attached to a joint move rigidly with it.
-    /// `out`'s buffers are resized on first use and reused afterwards.
+    /// Evaluates `pose` with each mesh's default morph weights: [`Rig::evaluate_frame`]
+    /// with [`MorphWeights::rest`].
     ///
     /// # Errors
     /// If the pose has the wrong number of joints.
     pub fn evaluate_with(
         &self,
         pose: &Pose,
+        method: SkinningMethod,
+        out: &mut RigOutput,
+    ) -> Result<(), EvalError> {
+        self.evaluate_frame(pose, &self.rest_weights, method, out)
+    }
+
+    /// The morph weights [`Rig::evaluate_with`] uses: each mesh's defaults. Clone them and
+    /// [`MorphWeights::sample`] a clip into the copy to evaluate its frames.
+    pub fn rest_weights(&self) -> &MorphWeights {
+        &self.rest_weights
+    }
+
+    /// Evaluates one frame: joint matrices, skinning matrices and the positions of every
+    /// mesh, morphed by `weights` (glTF and UsdSkel apply morph targets before the skin),
+    /// then skinned with `method`. Unskinned meshes attached to a joint move rigidly with
+    /// it. `out`'s buffers are resized on first use and reused afterwards.
+    ///
+    /// # Errors
+    /// If the pose has the wrong number of joints.
+    pub fn evaluate_frame(
+        &self,
+        pose: &Pose,
+        weights: &MorphWeights,
         method: SkinningMethod,
         out: &mut RigOutput,
     ) -> Result<(), EvalError> {
@@ -149,11 +177,21 @@ impl<'a> Rig<'a> {
         for (mi, mesh) in asset.meshes.iter().enumerate() {
             let dst = &mut out.positions[mi];
             dst.resize(mesh.positions.len(), Vec3::ZERO);
+            let shape = if morph_positions(
+                &mesh.positions,
+                &mesh.morph_targets,
+                weights.mesh(mi),
+                &mut out.morphed,
+            ) {
+                out.morphed.as_slice()
+            } else {
+                mesh.positions.as_slice()
+            };
             if let Some(si) = self.mesh_skin[mi] {
                 SkinFramesJob {
                     method,
                     influences: &self.packed[si],
-                    rest_positions: &mesh.positions,
+                    rest_positions: shape,
                     frame_skin_matrices: &out.skin_matrices[si],
                     out_positions: dst,
                     palette: &mut out.dqs_palettes[si],
@@ -163,7 +201,7 @@ impl<'a> Rig<'a> {
                 let m = mesh
                     .attached_to
                     .map_or(Mat4::IDENTITY, |j| out.joint_model[j.get()]);
-                for (d, p) in dst.iter_mut().zip(&mesh.positions) {
+                for (d, p) in dst.iter_mut().zip(shape) {
                     *d = m.transform_point3(*p);
                 }
             }

@@ -188,6 +188,7 @@ fn evaluate(
             )?;
             let rest = Pose::rest(&asset.skeleton);
             let mut pose = rest.clone();
+            let mut weights = rig.rest_weights().clone();
             for &t in &times {
                 SampleJob {
                     clip: &compiled,
@@ -196,7 +197,8 @@ fn evaluate(
                     output: &mut pose.local,
                 }
                 .run()?;
-                rig.evaluate_with(&pose, method, &mut posed)?;
+                weights.sample(&compiled, t)?;
+                rig.evaluate_frame(&pose, &weights, method, &mut posed)?;
                 dump.push(t, &posed.joint_model, &posed.positions)
                     .map_err(spill_err)?;
             }

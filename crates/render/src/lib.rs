@@ -23,10 +23,10 @@ mod surface;
 
 use rayon::prelude::*;
 use rigport_eval::sample::{CompiledClip, SampleError, SampleJob};
-use rigport_eval::{EvalError, Pose, Rig, RigOutput};
+use rigport_eval::{EvalError, MorphWeights, Pose, Rig, RigOutput};
 use rigport_model::glam::{Mat4, Vec3};
 use rigport_model::SkinningMethod;
-use rigport_model::{Asset, Clip, NoSuchClip, TrackTarget};
+use rigport_model::{Asset, Clip, NoSuchClip};
 
 pub use camera::{Bounds, Camera, ClippedPolygon, Lens, Projection, View};
 pub use encode::{
@@ -282,13 +282,15 @@ struct Evaluator<'a> {
 }
 
 impl Evaluator<'_> {
+    /// Samples the clip's joints and morph weights at `time` and evaluates the frame.
     fn pose(
         &self,
         time: f32,
         method: SkinningMethod,
-        pose: &mut Pose,
+        frame: &mut (Pose, MorphWeights),
         out: &mut RigOutput,
     ) -> Result<(), RenderError> {
+        let (pose, weights) = frame;
         if let Some(clip) = self.clip {
             SampleJob {
                 clip,
@@ -297,45 +299,10 @@ impl Evaluator<'_> {
                 output: &mut pose.local,
             }
             .run()?;
+            weights.sample(clip, time)?;
         }
-        self.rig.evaluate_with(pose, method, out)?;
-        if let Some(clip) = self.clip {
-            self.morph_unskinned(clip, time, out);
-        }
+        self.rig.evaluate_frame(pose, weights, method, out)?;
         Ok(())
-    }
-
-    /// Unskinned meshes attached to no joint whose morph weights the clip animates (a
-    /// garment baked by `rigport cloth`): rest positions plus the weighted targets at
-    /// `time`. Skinned meshes keep their rest shape (morphing before skinning is not drawn).
-    fn morph_unskinned(&self, clip: &CompiledClip<'_>, time: f32, out: &mut RigOutput) {
-        let asset = self.rig.asset();
-        for track in clip.weight_tracks() {
-            let TrackTarget::MorphWeights(m) = track.target else {
-                continue;
-            };
-            let mi = m.get();
-            let Some(mesh) = asset.meshes.get(mi) else {
-                continue;
-            };
-            if self.rig.skin_of_mesh(mi).is_some() || mesh.attached_to.is_some() {
-                continue;
-            }
-            let mut weights = vec![0.0; track.components()];
-            if rigport_eval::sample::sample_weights(track, time, &mut weights).is_err() {
-                continue;
-            }
-            let Some(dst) = out.positions.get_mut(mi) else {
-                continue;
-            };
-            for (target, &w) in mesh.morph_targets.iter().zip(&weights) {
-                if w != 0.0 {
-                    for (p, d) in dst.iter_mut().zip(&target.position_deltas) {
-                        *p += *d * w;
-                    }
-                }
-            }
-        }
     }
 }
 
@@ -383,7 +350,13 @@ pub fn render_frames(
         methods => methods,
     };
     let rotation = options.view.model_to_view();
-    let init = || (rest.clone(), RigOutput::default(), Vec::new());
+    let init = || {
+        (
+            (rest.clone(), rig.rest_weights().clone()),
+            RigOutput::default(),
+            Vec::new(),
+        )
+    };
 
     // Pass 1: view-space bounds over every frame and method (exact min/max, so the result
     // does not depend on how rayon splits the work).
@@ -391,7 +364,7 @@ pub fn render_frames(
         .par_iter()
         .map_init(
             init,
-            |(pose, out, points), f| -> Result<Bounds, RenderError> {
+            |(frame, out, points), f| -> Result<Bounds, RenderError> {
                 let mut b = Bounds::default();
                 if let Some(markers) = markers {
                     points.clear();
@@ -401,7 +374,7 @@ pub fn render_frames(
                     }
                 }
                 for &method in methods {
-                    eval.pose(f.time, method, pose, out)?;
+                    eval.pose(f.time, method, frame, out)?;
                     for positions in &out.positions {
                         for &p in positions {
                             b.add(rotation * p);
@@ -423,14 +396,14 @@ pub fn render_frames(
         .par_iter()
         .map_init(
             init,
-            |(pose, out, points), f| -> Result<Framebuffer, RenderError> {
+            |(frame, out, points), f| -> Result<Framebuffer, RenderError> {
                 let mut picture = Framebuffer::color_only(w * methods.len() as u32, h, BACKGROUND);
                 points.clear();
                 if let Some(markers) = markers {
                     markers.markers_at(f.time, points);
                 }
                 for (k, &method) in methods.iter().enumerate() {
-                    eval.pose(f.time, method, pose, out)?;
+                    eval.pose(f.time, method, frame, out)?;
                     let mut panel = Framebuffer::new(w, h, BACKGROUND);
                     draw_meshes(&mut panel, asset, &out.positions, &camera, &surfaces);
                     if options.skeleton {
