@@ -15,6 +15,7 @@ mod cloth;
 mod common;
 mod csci520;
 mod demo;
+mod eval_plays;
 mod footlock;
 mod frame_limit;
 mod frames;

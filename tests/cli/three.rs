@@ -61,7 +61,7 @@ fn relative_max_deviation(a: &NpyArray, b: &[f64]) -> f64 {
 /// `ours` (frames x vertices x 3, rigport's mesh order) with its meshes in three's scene
 /// order: each of three's meshes is paired with rigport's mesh of the same vertex count
 /// (`rigport inspect`), which the demo's files make unique.
-fn in_three_order(glb: &Path, report: &serde_json::Value, ours: &NpyArray) -> Vec<f64> {
+pub fn in_three_order(glb: &Path, report: &serde_json::Value, ours: &NpyArray) -> Vec<f64> {
     let out = common::rigport(&["inspect", "--json", glb.to_str().unwrap()]);
     assert!(out.status.success(), "inspect {}", glb.display());
     let listing: serde_json::Value = serde_json::from_slice(&out.stdout).expect("inspect JSON");

@@ -1,6 +1,6 @@
 """UsdSkel's evaluation of a stage in +Y-up metres, for tests/cli/frames.rs.
 
-    python usd_world.py STAGE TOOLS_DIR SECONDS_JSON [--clip NAME]
+    python usd_world.py STAGE TOOLS_DIR SECONDS_JSON [--clip NAME] [--model-space]
 
 Prints JSON: {"tcps", "up", "mpu", "frames": [{"joints": [[x,y,z]...], "points": [[x,y,z]...]}]}
 Joints: the first Skeleton's joint world translations (ComputeJointWorldTransforms, every
@@ -9,6 +9,9 @@ xformOp above it applied); points: every Mesh under the default prim, skinned by
 Both are then multiplied by the stage's metersPerUnit and turned +Y up ((x, y, z) ->
 (x, z, -y) for a Z-up stage). SECONDS_JSON lists times in seconds (time code = seconds x
 timeCodesPerSecond, snapped as check_usd.py does); `null` means the default time.
+--model-space gives the points in the first Skeleton's space (rigport's model space: the
+world points times the inverse of the Skeleton's world transform at that time) in the
+stage's own units and axes, as `rigport eval` dumps them.
 """
 
 import json
@@ -45,7 +48,16 @@ def main() -> None:
         if skel_queries:
             w = np.asarray(skel_queries[0].ComputeJointWorldTransforms(UsdGeom.XformCache(time)))
             joints = fix(w[:, 3, :3]) if len(w) else []
-        points = fix(cu.mesh_points(stage, cache, skinning, time, np))
+        points = cu.mesh_points(stage, cache, skinning, time, np)
+        if "--model-space" in sys.argv:
+            to_model = np.identity(4)
+            if skel_queries:
+                world = UsdGeom.XformCache(time).GetLocalToWorldTransform(skel_queries[0].GetPrim())
+                to_model = np.linalg.inv(np.asarray(world))
+            p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+            points = (p @ to_model[:3, :3] + to_model[3, :3]).tolist()
+        else:
+            points = fix(points)
         frames.append({"joints": joints, "points": points})
     print(json.dumps({"tcps": tcps, "up": up, "mpu": mpu, "frames": frames}))
 

@@ -120,10 +120,13 @@ fn evaluate(
     let asset = limited.as_ref().unwrap_or(asset);
     if !asset.meshes.is_empty()
         && asset.skins.is_empty()
-        && asset.meshes.iter().all(|m| m.attached_to.is_none())
+        && asset
+            .meshes
+            .iter()
+            .all(|m| m.attached_to.is_none() && m.morph_targets.is_empty())
     {
         return Err(PipelineError::Invalid(format!(
-            "{label}: nothing to skin: the rig has no skin weights and no mesh attached to a joint"
+            "{label}: nothing to skin: the rig has no skin weights, no mesh attached to a joint and no morph targets"
         )));
     }
     let method = (opts.skinning)

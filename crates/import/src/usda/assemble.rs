@@ -5,6 +5,7 @@ use rigport_model::{Asset, MeshIndex, SceneFrame, Skeleton};
 
 use super::implicit::is_implicit;
 use super::importer::Importer;
+use super::points::SampledPoints;
 use super::root_motion::MovingMesh;
 use super::shapes::MeshShapes;
 use super::skin::has_skin_primvars;
@@ -115,6 +116,7 @@ impl<'l> Importer<'l, '_> {
         let mut meshes = Vec::new();
         let mut skins = Vec::new();
         let mut moving = Vec::new();
+        let mut sampled = Vec::new();
         for i in 0..self.stage.prims.len() {
             let Some(prim) = self.stage.prims.get(i) else {
                 continue;
@@ -144,7 +146,7 @@ impl<'l> Importer<'l, '_> {
                 (Some(_), _) => continue, // bound to another skeleton: warned above
                 (None, _) => None,
             };
-            if let Some((mut mesh, skin, channels, animated)) = self.mesh(i, skin_to)? {
+            if let Some((mut mesh, skin, channels, animated, samples)) = self.mesh(i, skin_to)? {
                 mesh.material = self.stage.prims.get(i).and_then(|p| looks.bound(p));
                 let index = MeshIndex(meshes.len() as u32);
                 if !channels.is_empty() {
@@ -152,6 +154,16 @@ impl<'l> Importer<'l, '_> {
                         mesh: index,
                         targets: mesh.morph_targets.len(),
                         channels,
+                    });
+                }
+                if let Some(seconds) = samples {
+                    sampled.push(SampledPoints {
+                        mesh: index,
+                        name: mesh.name.clone(),
+                        path: self.prim(i).path.clone(),
+                        first_target: mesh.morph_targets.len() - seconds.len(),
+                        targets: mesh.morph_targets.len(),
+                        seconds,
                     });
                 }
                 meshes.push(mesh);
@@ -188,6 +200,7 @@ impl<'l> Importer<'l, '_> {
         }
 
         self.moving_meshes(&mut skeleton, &mut meshes, &mut clips, &moving)?;
+        self.point_sample_tracks(&mut clips, &sampled);
 
         let asset = Asset {
             frame: SceneFrame {

@@ -17,10 +17,18 @@ use super::values::{self, is_half_type, matrix, numbers, round_to_half, token, t
 use super::xform::usd_matrix;
 use crate::ImportError;
 
-/// A mesh, its skin when bound, its blend-shape channels, and for a static mesh under
+/// A mesh, its skin when bound, its blend-shape channels, for a static mesh under
 /// time-sampled transforms the prims whose ops are animated (its points are then in the
-/// prim's own space: `root_motion.rs` attaches it to a joint that carries the motion).
-pub(super) type ImportedMesh = (Mesh, Option<SkinBinding>, Vec<Channel>, Vec<String>);
+/// prim's own space: `root_motion.rs` attaches it to a joint that carries the motion), and
+/// the times (seconds) of its time-sampled points, which are its last morph targets
+/// (`points.rs`).
+pub(super) type ImportedMesh = (
+    Mesh,
+    Option<SkinBinding>,
+    Vec<Channel>,
+    Vec<String>,
+    Option<Vec<f32>>,
+);
 
 impl<'l> Importer<'l, '_> {
     /// A primvar of `N`-tuples (`N = 1` reads plain numbers) with its indices.
@@ -197,7 +205,15 @@ impl<'l> Importer<'l, '_> {
                 Some(s.indices.clone()),
             ),
             None => {
-                let Some((points_value, points_prop)) = self.static_attr(&prim, "points") else {
+                // Time-sampled points play as morph targets (`points.rs`): no warning that
+                // only the first sample is used.
+                let points_attr = if Self::has_point_samples(&prim) {
+                    prim.prop("points")
+                        .and_then(|p| values::static_value(p).map(|(v, _)| (v, p.clone())))
+                } else {
+                    self.static_attr(&prim, "points")
+                };
+                let Some((points_value, points_prop)) = points_attr else {
                     if !self.behind_arc(index).is_empty() && skel.is_some() {
                         return Err(self.err(
                             &path,
@@ -227,6 +243,8 @@ impl<'l> Importer<'l, '_> {
             }
         };
         let n_points = points.len();
+        let sampled_rest =
+            (surface.is_none() && Self::has_point_samples(&prim)).then(|| points.clone());
         let (counts, indices) = match (counts, indices) {
             (Some(c), Some(i)) => (c, i),
             (None, None) => (Vec::new(), Vec::new()),
@@ -516,17 +534,30 @@ impl<'l> Importer<'l, '_> {
             }
         };
         let vertex_normals = normals.as_ref().is_some_and(|n| n.interp == Interp::Vertex);
-        let (targets, channels) = self.blend_shapes(
-            &prim,
-            &PointMap {
-                points: n_points,
-                source_vertex: &mesh.source_vertex,
-                linear,
-                vertex_normals,
-            },
-        )?;
+        let map = PointMap {
+            points: n_points,
+            source_vertex: &mesh.source_vertex,
+            linear,
+            vertex_normals,
+        };
+        let (mut targets, channels) = self.blend_shapes(&prim, &map)?;
+        let mut sample_times = None;
+        if let Some(rest) = sampled_rest {
+            if channels.is_empty() {
+                if let Some((samples, seconds)) = self.point_samples(&prim, &rest, &map)? {
+                    targets.extend(samples);
+                    sample_times = Some(seconds);
+                }
+            } else {
+                self.incomplete(
+                    &path,
+                    "time-sampled points on a mesh with blend shapes are not imported (the \
+                     first sample is used)",
+                );
+            }
+        }
         mesh.morph_targets = targets;
-        Ok(Some((mesh, skin, channels, moving)))
+        Ok(Some((mesh, skin, channels, moving, sample_times)))
     }
 
     // -----------------------------------------------------------------------------------

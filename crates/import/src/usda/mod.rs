@@ -89,6 +89,9 @@
 //!   skinnable prims (`BasisCurves`, `Points`) are left out with a warning naming the prim.
 //! - **Polygons**: the face sizes are kept in [`Mesh::polygons`] (the triangles are their
 //!   fans), so the USD writer gives the source's faces back.
+//! - **Time-sampled points** (a point cache, a baked simulation) become one morph target
+//!   per sample and a weight track in every clip that plays them as USD interpolates them
+//!   (`points.rs`), with a [`Warning::Note`].
 //!
 //! # Errors
 //! Syntax errors carry `file:line:column`. UsdSkel errors name the prim path:
@@ -138,6 +141,7 @@ mod importer;
 mod material;
 mod mesh;
 mod metadata;
+mod points;
 mod root_motion;
 mod shapes;
 mod skeleton;
