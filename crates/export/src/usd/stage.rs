@@ -291,9 +291,7 @@ pub(crate) fn build(
         Field::new("defaultPrim", root_name.as_str().into()),
         Field::new(
             "doc",
-            format!("Written by rigport {}", env!("CARGO_PKG_VERSION"))
-                .as_str()
-                .into(),
+            Value::Str(format!("Written by rigport {}", env!("CARGO_PKG_VERSION"))),
         ),
     ];
     if !anims.is_empty() || rest_anim {
