@@ -1,12 +1,16 @@
-//! USD layers for rigport, with no rig semantics: the `.usda` text format parsed into a
-//! [`Layer`] (`lex`, [`parse`]), one layer composed into prims ([`stage`]), typed reads of
-//! values ([`values`]), the binary crate format (`.usdc`) read into the same [`Layer`]
-//! ([`crate_file`]) and written from one ([`crate_write`]), and `.usdz` packages read and
-//! written ([`usdz`]).
+//! USD layers for rigport, with no rig semantics: a layer as typed data ([`layer`]), the
+//! `.usda` text format parsed into a [`Layer`] (`lex`, [`parse`]), one layer composed into
+//! prims ([`stage`]), typed reads of values ([`values`]), the binary crate format (`.usdc`)
+//! read into the same [`Layer`] ([`crate_file`]) and written from one ([`crate_write`]),
+//! and `.usdz` packages read and written ([`usdz`]).
 //!
-//! The dependencies inside the crate go one way: `precision` and `lex` <- [`parse`] <-
-//! [`stage`] <- [`values`]; [`crate_file`] and [`crate_write`] use [`parse`]'s layer;
-//! [`usdz`] uses both encodings.
+//! Writers describe a layer once, as typed calls to a [`sink::LayerSink`]: the
+//! [`printer::UsdaPrinter`] streams them as `.usda` text, the [`sink::LayerBuilder`] makes
+//! them a [`Layer`] for the crate writer, so `.usdc` is never text printed and parsed back.
+//!
+//! The dependencies inside the crate go one way: [`layer`] <- `precision` and `lex` <-
+//! [`parse`] <- [`stage`] <- [`values`]; [`sink`] <- [`printer`]; [`crate_file`] and
+//! [`crate_write`] use the [`layer`]; [`usdz`] uses both encodings.
 //!
 //! ```
 //! use std::path::Path;
@@ -21,9 +25,12 @@
 pub mod crate_file;
 pub mod crate_write;
 mod error;
+pub mod layer;
 mod lex;
 pub mod parse;
 mod precision;
+pub mod printer;
+pub mod sink;
 pub mod stage;
 pub mod usdz;
 pub mod values;
@@ -31,5 +38,5 @@ pub mod values;
 pub use error::{
     utf8, CrateProblem, Location, Nesting, PackageProblem, Problem, UsdError, WriteProblem,
 };
-pub use parse::Layer;
+pub use layer::Layer;
 pub use usdz::read_layer;

@@ -8,7 +8,7 @@
 
 use std::collections::HashMap;
 
-use super::parse::{ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifier, Value};
+use super::layer::{ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifier, Value};
 
 /// A composed property.
 #[derive(Clone, Debug, Default)]

@@ -11,7 +11,8 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use super::crate_file;
-use super::parse::{self, Layer};
+use super::layer::Layer;
+use super::parse;
 use crate::error::{utf8, Location, PackageProblem, Problem, UsdError};
 
 /// The first bytes of a zip archive (a local file header).

@@ -1,8 +1,8 @@
 //! Typed reads of parsed values: numbers, tuples, matrices, tokens, and the rounding of
 //! `half` values.
 
+use super::layer::Value;
 pub use super::parse::narrow_to_type;
-use super::parse::Value;
 pub use super::precision::{is_float_type, is_half_type, round_to_half};
 use super::stage::Prop;
 

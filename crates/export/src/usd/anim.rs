@@ -7,8 +7,10 @@ use rigport_model::{Asset, Clip, Interpolation, Track, TrackTarget, Transform, W
 
 use super::mesh::MeshPlan;
 use super::sampler::{dot, Sampler};
-use super::text::{array, float, put, quoted, to_half, tuple, Usda};
+use super::values::{to_half, zero, zeroed};
 use crate::labels::mesh_label;
+use rigport_usd::layer::Specifier;
+use rigport_usd::sink::{AttrDecl, Data, LayerSink};
 
 /// Frame rates tried, after the one the key spacing suggests, to make the keys integral.
 const COMMON_RATES: [f64; 9] = [24.0, 25.0, 30.0, 48.0, 50.0, 60.0, 100.0, 120.0, 240.0];
@@ -352,9 +354,9 @@ pub(super) fn sample_times(
     out
 }
 
-/// Appends a quaternion `(w, x, y, z)` (USDA's quatf order) from xyzw.
-fn put_quat(out: &mut String, q: [f32; 4]) {
-    tuple(out, &[q[3], q[0], q[1], q[2]]);
+/// A quaternion `(w, x, y, z)` (USD's quatf order) from xyzw, `-0` as `0`.
+fn wxyz(q: &[f32; 4]) -> [f32; 4] {
+    zeroed([q[3], q[0], q[1], q[2]])
 }
 
 /// The rest pose of an animation's joints: translations, rotations (xyzw), scales (as
@@ -368,7 +370,7 @@ struct PoseSample {
 /// Writes one SkelAnimation: defaults (the rest pose and default morph weights), then
 /// time samples at `times`.
 pub(super) fn write_animation(
-    doc: &mut Usda,
+    doc: &mut dyn LayerSink,
     asset: &Asset,
     plans: &[MeshPlan],
     joint_tokens: &[String],
@@ -395,27 +397,29 @@ pub(super) fn write_animation(
             .collect(),
     };
     // Blend-shape channels of every mesh, in mesh order.
-    let channels: Vec<&String> = plans.iter().flat_map(|p| p.channels.iter()).collect();
+    let channels: Vec<&str> = plans
+        .iter()
+        .flat_map(|p| p.channels.iter().map(String::as_str))
+        .collect();
     let default_weights: Vec<f32> = plans
         .iter()
         .zip(&asset.meshes)
         .flat_map(|(p, m)| {
-            (0..p.channels.len()).map(|k| m.morph_weights.get(k).copied().unwrap_or(0.0))
+            (0..p.channels.len()).map(|k| zero(m.morph_weights.get(k).copied().unwrap_or(0.0)))
         })
         .collect();
 
-    doc.open(&format!("def SkelAnimation \"{}\"", anim.prim));
+    doc.begin_prim(Specifier::Def, Some("SkelAnimation"), &anim.prim, &[]);
     if !channels.is_empty() {
-        let line = doc.start();
-        line.push_str("uniform token[] blendShapes = ");
-        array(line, &channels, |s, c| quoted(s, c));
-        doc.end();
-        let line = doc.start();
-        line.push_str("float[] blendShapeWeights = ");
-        array(line, &default_weights, |s, w| float(s, *w));
-        doc.end();
+        doc.attribute(
+            AttrDecl::uniform("token[]", "blendShapes"),
+            Some(Data::Strs(&channels)),
+            &[],
+        );
+        let weights_decl = AttrDecl::new("float[]", "blendShapeWeights");
+        doc.attribute(weights_decl, Some(Data::Floats(&default_weights)), &[]);
         if !anim.morphs.is_empty() && !times.is_empty() {
-            doc.line("float[] blendShapeWeights.timeSamples = {");
+            doc.begin_time_samples(weights_decl);
             let mut weights = default_weights.clone();
             let mut buf = Vec::new();
             for &(tc, seconds) in times {
@@ -426,31 +430,26 @@ pub(super) fn write_animation(
                         buf.resize(n, 0.0);
                         sampler.sample(seconds, &mut buf);
                         for (w, v) in weights.iter_mut().skip(offset).zip(&buf) {
-                            *w = *v as f32;
+                            *w = zero(*v as f32);
                         }
                     }
                     offset += n;
                 }
-                let line = doc.start();
-                line.push_str("    ");
-                put(line, tc);
-                line.push_str(": ");
-                array(line, &weights, |s, w| float(s, *w));
-                line.push(',');
-                doc.end();
+                doc.time_sample(tc, Data::Floats(&weights));
             }
-            doc.line("}");
+            doc.end_time_samples();
         }
     }
-    let tokens: Vec<&String> = anim
+    let tokens: Vec<&str> = anim
         .joints
         .iter()
-        .filter_map(|&j| joint_tokens.get(j))
+        .filter_map(|&j| joint_tokens.get(j).map(String::as_str))
         .collect();
-    let line = doc.start();
-    line.push_str("uniform token[] joints = ");
-    array(line, &tokens, |s, t| quoted(s, t));
-    doc.end();
+    doc.attribute(
+        AttrDecl::uniform("token[]", "joints"),
+        Some(Data::Strs(&tokens)),
+        &[],
+    );
 
     // Each attribute's time samples are computed as they are written (a pose at a time),
     // so a clip of millions of frames never holds its poses.
@@ -458,10 +457,10 @@ pub(super) fn write_animation(
     let mut value = [0.0_f64; 4];
     write_attribute(
         doc,
-        "quatf[] rotations",
+        AttrDecl::new("quatf[]", "rotations"),
         &rest_pose.r,
         times,
-        |s, q| put_quat(s, *q),
+        wxyz,
         |seconds, previous, out| {
             for (k, (samplers, rest)) in anim.trs.iter().zip(&rest).enumerate() {
                 let mut q = match &samplers[1] {
@@ -484,10 +483,10 @@ pub(super) fn write_animation(
     );
     write_attribute(
         doc,
-        "half3[] scales",
+        AttrDecl::new("half3[]", "scales"),
         &rest_pose.s,
         times,
-        |s, v| tuple(s, v),
+        |v| zeroed(*v),
         |seconds, _, out| {
             for (samplers, rest) in anim.trs.iter().zip(&rest) {
                 out.push(match &samplers[2] {
@@ -502,10 +501,10 @@ pub(super) fn write_animation(
     );
     write_attribute(
         doc,
-        "float3[] translations",
+        AttrDecl::new("float3[]", "translations"),
         &rest_pose.t,
         times,
-        |s, v| tuple(s, v),
+        |v| zeroed(*v),
         |seconds, _, out| {
             for (samplers, rest) in anim.trs.iter().zip(&rest) {
                 out.push(match &samplers[0] {
@@ -518,7 +517,7 @@ pub(super) fn write_animation(
             }
         },
     );
-    doc.close();
+    doc.end_prim();
     if half_error.worst > HALF_REPORT_TOLERANCE {
         warnings.push(Warning::Repaired {
             location: anim.location.clone(),
@@ -533,39 +532,34 @@ pub(super) fn write_animation(
 /// Writes `decl = [rest...]` and, when `times` is not empty, `decl.timeSamples` with one
 /// array per `(time code, seconds)`: `pose(seconds, previous, out)` pushes the values at
 /// `seconds` into the empty `out`, `previous` holding those of the time before (empty at
-/// the first).
-fn write_attribute<T>(
-    doc: &mut Usda,
-    decl: &str,
+/// the first). Each value goes to the sink as `written(value)`.
+fn write_attribute<T, const N: usize>(
+    doc: &mut dyn LayerSink,
+    decl: AttrDecl<'_>,
     rest: &[T],
     times: &[(f64, f64)],
-    each: impl Fn(&mut String, &T) + Copy,
+    written: impl Fn(&T) -> [f32; N],
     mut pose: impl FnMut(f64, &[T], &mut Vec<T>),
-) {
-    let line = doc.start();
-    line.push_str(decl);
-    line.push_str(" = ");
-    array(line, rest, each);
-    doc.end();
+) where
+    for<'v> &'v [[f32; N]]: Into<Data<'v>>,
+{
+    let mut out: Vec<[f32; N]> = rest.iter().map(&written).collect();
+    doc.attribute(decl, Some(out.as_slice().into()), &[]);
     if times.is_empty() {
         return;
     }
-    doc.line(&format!("{decl}.timeSamples = {{"));
+    doc.begin_time_samples(decl);
     let mut previous: Vec<T> = Vec::new();
     let mut current: Vec<T> = Vec::with_capacity(rest.len());
     for &(tc, seconds) in times {
         current.clear();
         pose(seconds, &previous, &mut current);
-        let line = doc.start();
-        line.push_str("    ");
-        put(line, tc);
-        line.push_str(": ");
-        array(line, &current, each);
-        line.push(',');
-        doc.end();
+        out.clear();
+        out.extend(current.iter().map(&written));
+        doc.time_sample(tc, out.as_slice().into());
         std::mem::swap(&mut previous, &mut current);
     }
-    doc.line("}");
+    doc.end_time_samples();
 }
 
 /// Tracks the largest relative change made by rounding scales to half precision.

@@ -18,7 +18,9 @@
 use rigport_model::{Asset, Material, TextureRef, Wrap};
 
 use super::names::Namespace;
-use super::text::{put, quoted, Usda};
+use super::values::zeroed;
+use rigport_usd::layer::Specifier;
+use rigport_usd::sink::{AttrDecl, Data, Field, LayerSink};
 
 /// Name of the Scope holding the Material prims.
 pub(crate) const MATERIALS: &str = "Materials";
@@ -50,9 +52,9 @@ fn wrap_token(w: Wrap) -> &'static str {
     }
 }
 
-/// Writes the `Materials` scope; `files[k]` is the relative path of image `k`.
+/// Describes the `Materials` scope; `files[k]` is the relative path of image `k`.
 pub(crate) fn write_materials(
-    doc: &mut Usda,
+    doc: &mut dyn LayerSink,
     asset: &Asset,
     root_path: &str,
     prims: &[String],
@@ -61,10 +63,10 @@ pub(crate) fn write_materials(
     if asset.materials.is_empty() {
         return;
     }
-    doc.open(&format!("def Scope \"{MATERIALS}\""));
+    doc.begin_prim(Specifier::Def, Some("Scope"), MATERIALS, &[]);
     for (k, (material, prim)) in asset.materials.iter().zip(prims).enumerate() {
         if k > 0 {
-            doc.blank();
+            doc.blank_line();
         }
         write_material(
             doc,
@@ -74,66 +76,77 @@ pub(crate) fn write_materials(
             files,
         );
     }
-    doc.close();
-    doc.blank();
+    doc.end_prim();
+    doc.blank_line();
 }
 
-fn write_material(doc: &mut Usda, m: &Material, path: &str, prim: &str, files: &[String]) {
-    let header = format!("def Material \"{prim}\"");
-    if !m.name.is_empty() && m.name != prim {
-        doc.open_meta(&header);
-        let line = doc.start();
-        line.push_str("displayName = ");
-        quoted(line, &m.name);
-        doc.end();
-        doc.close_meta();
-        doc.open_body();
+/// A `def Shader` prim with its `info:id`.
+fn begin_shader(doc: &mut dyn LayerSink, prim: &str, id: &str) {
+    doc.begin_prim(Specifier::Def, Some("Shader"), prim, &[]);
+    doc.attribute(
+        AttrDecl::uniform("token", "info:id"),
+        Some(Data::Str(id)),
+        &[],
+    );
+}
+
+fn write_material(doc: &mut dyn LayerSink, m: &Material, path: &str, prim: &str, files: &[String]) {
+    let meta = if !m.name.is_empty() && m.name != prim {
+        vec![Field::new("displayName", m.name.as_str().into())]
     } else {
-        doc.open(&header);
-    }
-    doc.line(&format!(
-        "token outputs:surface.connect = <{path}/PreviewSurface.outputs:surface>"
-    ));
-    doc.blank();
-    doc.open("def Shader \"PreviewSurface\"");
-    doc.line("uniform token info:id = \"UsdPreviewSurface\"");
+        Vec::new()
+    };
+    doc.begin_prim(Specifier::Def, Some("Material"), prim, &meta);
+    doc.connection(
+        AttrDecl::new("token", "outputs:surface"),
+        &format!("{path}/PreviewSurface.outputs:surface"),
+    );
+    doc.blank_line();
+    begin_shader(doc, "PreviewSurface", "UsdPreviewSurface");
     let [r, g, b, a] = m.base_color_factor;
     let base_file = m
         .base_color_texture
         .as_ref()
         .and_then(|t| files.get(t.image.get()).map(|f| (t, f)));
     if base_file.is_some() {
-        doc.line(&format!(
-            "color3f inputs:diffuseColor.connect = <{path}/BaseColorTexture.outputs:rgb>"
-        ));
-        doc.line(&format!(
-            "float inputs:opacity.connect = <{path}/BaseColorTexture.outputs:a>"
-        ));
+        doc.connection(
+            AttrDecl::new("color3f", "inputs:diffuseColor"),
+            &format!("{path}/BaseColorTexture.outputs:rgb"),
+        );
+        doc.connection(
+            AttrDecl::new("float", "inputs:opacity"),
+            &format!("{path}/BaseColorTexture.outputs:a"),
+        );
     } else {
-        color3(doc, "color3f inputs:diffuseColor", [r, g, b]);
-        float(doc, "float inputs:opacity", a);
+        color3(doc, "inputs:diffuseColor", [r, g, b]);
+        float(doc, "inputs:opacity", a);
     }
-    color3(doc, "color3f inputs:emissiveColor", m.emissive_factor);
-    float(doc, "float inputs:metallic", m.metallic_factor);
+    color3(doc, "inputs:emissiveColor", m.emissive_factor);
+    float(doc, "inputs:metallic", m.metallic_factor);
     let normal_file = m
         .normal_texture
         .as_ref()
         .and_then(|t| files.get(t.image.get()).map(|f| (t, f)));
     if normal_file.is_some() {
-        doc.line(&format!(
-            "normal3f inputs:normal.connect = <{path}/NormalTexture.outputs:rgb>"
-        ));
+        doc.connection(
+            AttrDecl::new("normal3f", "inputs:normal"),
+            &format!("{path}/NormalTexture.outputs:rgb"),
+        );
     }
     if m.alpha_mode == rigport_model::AlphaMode::Mask {
-        float(doc, "float inputs:opacityThreshold", m.alpha_cutoff);
+        float(doc, "inputs:opacityThreshold", m.alpha_cutoff);
     }
-    float(doc, "float inputs:roughness", m.roughness_factor);
-    doc.line("int inputs:useSpecularWorkflow = 0");
-    doc.line("token outputs:surface");
-    doc.close();
+    float(doc, "inputs:roughness", m.roughness_factor);
+    doc.attribute(
+        AttrDecl::new("int", "inputs:useSpecularWorkflow"),
+        Some(Data::Int(0)),
+        &[],
+    );
+    doc.attribute(AttrDecl::new("token", "outputs:surface"), None, &[]);
+    doc.end_prim();
     let mut readers: Vec<u32> = Vec::new();
     if let Some((t, file)) = base_file {
-        doc.blank();
+        doc.blank_line();
         write_texture(
             doc,
             path,
@@ -147,7 +160,7 @@ fn write_material(doc: &mut Usda, m: &Material, path: &str, prim: &str, files: &
         readers.push(t.tex_coord);
     }
     if let Some((t, file)) = normal_file {
-        doc.blank();
+        doc.blank_line();
         let s = m.normal_scale;
         write_texture(
             doc,
@@ -164,17 +177,21 @@ fn write_material(doc: &mut Usda, m: &Material, path: &str, prim: &str, files: &
     readers.sort_unstable();
     readers.dedup();
     for k in readers {
-        doc.blank();
-        doc.open(&format!("def Shader \"{}Reader\"", st_name(k)));
-        doc.line("uniform token info:id = \"UsdPrimvarReader_float2\"");
-        let line = doc.start();
-        line.push_str("string inputs:varname = ");
-        quoted(line, &st_name(k));
-        doc.end();
-        doc.line("float2 outputs:result");
-        doc.close();
+        doc.blank_line();
+        begin_shader(
+            doc,
+            &format!("{}Reader", st_name(k)),
+            "UsdPrimvarReader_float2",
+        );
+        doc.attribute(
+            AttrDecl::new("string", "inputs:varname"),
+            Some(Data::Str(&st_name(k))),
+            &[],
+        );
+        doc.attribute(AttrDecl::new("float2", "outputs:result"), None, &[]);
+        doc.end_prim();
     }
-    doc.close();
+    doc.end_prim();
 }
 
 #[allow(
@@ -182,7 +199,7 @@ fn write_material(doc: &mut Usda, m: &Material, path: &str, prim: &str, files: &
     reason = "one shader's fields, written in one place"
 )]
 fn write_texture(
-    doc: &mut Usda,
+    doc: &mut dyn LayerSink,
     path: &str,
     prim: &str,
     t: &TextureRef,
@@ -191,54 +208,57 @@ fn write_texture(
     bias: Option<[f32; 4]>,
     color_space: &str,
 ) {
-    doc.open(&format!("def Shader \"{prim}\""));
-    doc.line("uniform token info:id = \"UsdUVTexture\"");
+    begin_shader(doc, prim, "UsdUVTexture");
     if let Some(bias) = bias {
-        float4(doc, "float4 inputs:bias", bias);
+        float4(doc, "inputs:bias", bias);
     }
-    doc.line(&format!("asset inputs:file = @./{file}@"));
-    float4(doc, "float4 inputs:scale", scale);
-    let line = doc.start();
-    line.push_str("token inputs:sourceColorSpace = ");
-    quoted(line, color_space);
-    doc.end();
-    doc.line(&format!(
-        "float2 inputs:st.connect = <{path}/{}Reader.outputs:result>",
-        st_name(t.tex_coord)
-    ));
-    doc.line(&format!(
-        "token inputs:wrapS = \"{}\"",
-        wrap_token(t.sampler.wrap_s)
-    ));
-    doc.line(&format!(
-        "token inputs:wrapT = \"{}\"",
-        wrap_token(t.sampler.wrap_t)
-    ));
-    doc.line("float outputs:a");
-    doc.line("float3 outputs:rgb");
-    doc.close();
+    doc.attribute(
+        AttrDecl::new("asset", "inputs:file"),
+        Some(Data::Asset(&format!("./{file}"))),
+        &[],
+    );
+    float4(doc, "inputs:scale", scale);
+    doc.attribute(
+        AttrDecl::new("token", "inputs:sourceColorSpace"),
+        Some(Data::Str(color_space)),
+        &[],
+    );
+    doc.connection(
+        AttrDecl::new("float2", "inputs:st"),
+        &format!("{path}/{}Reader.outputs:result", st_name(t.tex_coord)),
+    );
+    doc.attribute(
+        AttrDecl::new("token", "inputs:wrapS"),
+        Some(Data::Str(wrap_token(t.sampler.wrap_s))),
+        &[],
+    );
+    doc.attribute(
+        AttrDecl::new("token", "inputs:wrapT"),
+        Some(Data::Str(wrap_token(t.sampler.wrap_t))),
+        &[],
+    );
+    doc.attribute(AttrDecl::new("float", "outputs:a"), None, &[]);
+    doc.attribute(AttrDecl::new("float3", "outputs:rgb"), None, &[]);
+    doc.end_prim();
 }
 
-fn float(doc: &mut Usda, decl: &str, v: f32) {
-    let line = doc.start();
-    line.push_str(decl);
-    line.push_str(" = ");
-    put(line, v);
-    doc.end();
+/// `float name = v`, the value as it is (a `-0` stays `-0`).
+fn float(doc: &mut dyn LayerSink, name: &str, v: f32) {
+    doc.attribute(AttrDecl::new("float", name), Some(Data::Float(v)), &[]);
 }
 
-fn color3(doc: &mut Usda, decl: &str, c: [f32; 3]) {
-    let line = doc.start();
-    line.push_str(decl);
-    line.push_str(" = ");
-    super::text::tuple(line, &c);
-    doc.end();
+fn color3(doc: &mut dyn LayerSink, name: &str, c: [f32; 3]) {
+    doc.attribute(
+        AttrDecl::new("color3f", name),
+        Some(Data::Float3(zeroed(c))),
+        &[],
+    );
 }
 
-fn float4(doc: &mut Usda, decl: &str, c: [f32; 4]) {
-    let line = doc.start();
-    line.push_str(decl);
-    line.push_str(" = ");
-    super::text::tuple(line, &c);
-    doc.end();
+fn float4(doc: &mut dyn LayerSink, name: &str, c: [f32; 4]) {
+    doc.attribute(
+        AttrDecl::new("float4", name),
+        Some(Data::Float4(zeroed(c))),
+        &[],
+    );
 }

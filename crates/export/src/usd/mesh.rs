@@ -5,10 +5,12 @@ use rigport_model::{Asset, Mesh, Warning};
 
 use super::skeleton::SKELETON;
 use super::skin::{skin_rows, Binding};
-use super::text::{array, float, matrix, put, tuple, write_tokens, Usda};
 use super::topology::{topology, Topology};
+use super::values::{rows, zero, zeroed};
 use super::{SkinningMethod, UsdOptions};
 use crate::labels::mesh_label;
+use rigport_usd::layer::{Specifier, Value};
+use rigport_usd::sink::{AttrDecl, Data, Field, LayerSink, Targets};
 
 /// One mesh as it will be written.
 pub(super) struct MeshPlan {
@@ -38,30 +40,30 @@ pub(super) struct MeshContext<'a> {
     pub(super) cache_clip: Option<(&'a rigport_model::Clip, &'a [(f64, f64)])>,
 }
 
-/// Writes `decl = [..] ( interpolation = "vertex" [elementSize = n] )`.
+/// A primvar: `decl = value ( [elementSize = n] interpolation = "..." )`.
 fn write_primvar(
-    doc: &mut Usda,
-    decl: &str,
-    value: impl FnOnce(&mut String),
+    doc: &mut dyn LayerSink,
+    decl: AttrDecl<'_>,
+    value: Data<'_>,
     element_size: Option<usize>,
     interpolation: &str,
 ) {
-    let line = doc.start();
-    line.push_str(decl);
-    line.push_str(" = ");
-    value(line);
-    line.push_str(" (");
-    doc.end();
+    let mut meta = Vec::with_capacity(2);
     if let Some(n) = element_size {
-        doc.line(&format!("    elementSize = {n}"));
+        meta.push(Field::new("elementSize", (n as f64).into()));
     }
-    doc.line(&format!("    interpolation = \"{interpolation}\""));
-    doc.line(")");
+    meta.push(Field::new("interpolation", interpolation.into()));
+    doc.attribute(decl, Some(value), &meta);
+}
+
+/// Points, normals or offsets as the sink takes them (`-0` as `0`).
+fn float3s(values: &[Vec3]) -> Vec<[f32; 3]> {
+    values.iter().map(|v| zeroed(v.to_array())).collect()
 }
 
 /// Writes one Mesh prim (and its BlendShape children).
 pub(super) fn write_mesh(
-    doc: &mut Usda,
+    doc: &mut dyn LayerSink,
     asset: &Asset,
     mi: usize,
     mesh: &Mesh,
@@ -70,72 +72,66 @@ pub(super) fn write_mesh(
     warnings: &mut Vec<Warning>,
 ) {
     let label = mesh_label(mi, mesh);
-    let header = format!("def Mesh \"{}\"", plan.prim);
     let material = mesh.material.and_then(|m| ctx.material_paths.get(m.get()));
     let mut schemas = Vec::new();
     if material.is_some() {
-        schemas.push("\"MaterialBindingAPI\"");
+        schemas.push(Value::from("MaterialBindingAPI"));
     }
     if !matches!(plan.binding, Binding::None) {
-        schemas.push("\"SkelBindingAPI\"");
+        schemas.push(Value::from("SkelBindingAPI"));
     }
     // The source's name, when the prim's had to differ from it.
     let source_name = mesh_prim_source_name(mesh);
     let display = (!source_name.is_empty() && source_name != plan.prim).then_some(source_name);
-    if schemas.is_empty() && display.is_none() {
-        doc.open(&header);
-    } else {
-        doc.open_meta(&header);
-        if !schemas.is_empty() {
-            doc.line(&format!("prepend apiSchemas = [{}]", schemas.join(", ")));
-        }
-        if let Some(name) = display {
-            let line = doc.start();
-            line.push_str("displayName = ");
-            super::text::quoted(line, name);
-            doc.end();
-        }
-        doc.close_meta();
-        doc.open_body();
+    let mut meta = Vec::new();
+    if !schemas.is_empty() {
+        meta.push(Field::prepend("apiSchemas", Value::List(schemas)));
     }
+    if let Some(name) = display {
+        meta.push(Field::new("displayName", name.into()));
+    }
+    doc.begin_prim(Specifier::Def, Some("Mesh"), &plan.prim, &meta);
 
     if let Some((lo, hi)) = mesh.bounds() {
-        let line = doc.start();
-        line.push_str("float3[] extent = ");
-        array(line, &[lo, hi], |s, v| tuple(s, &v.to_array()));
-        doc.end();
+        doc.attribute(
+            AttrDecl::new("float3[]", "extent"),
+            Some(Data::Float3s(&float3s(&[lo, hi]))),
+            &[],
+        );
     }
     let skin = match plan.binding {
         Binding::Skinned { skin, .. } => asset.skins.get(skin),
         _ => None,
     };
     let topo = topology(mesh, skin);
-    let line = doc.start();
-    line.push_str("int[] faceVertexCounts = ");
-    array(line, &topo.counts, |s, c| put(s, c));
-    doc.end();
+    doc.attribute(
+        AttrDecl::new("int[]", "faceVertexCounts"),
+        Some(Data::Ints(&topo.counts)),
+        &[],
+    );
     // Faces are counter-clockwise (glTF's and the model's rule), USD's default
     // `orientation = "rightHanded"`: written as they are.
-    let line = doc.start();
-    line.push_str("int[] faceVertexIndices = ");
     let flat: Vec<u32> = topo
         .corners
         .iter()
         .map(|&v| topo.vertex_point[v as usize])
         .collect();
-    array(line, &flat, |s, i| put(s, i));
-    doc.end();
+    doc.attribute(
+        AttrDecl::new("int[]", "faceVertexIndices"),
+        Some(Data::Ints(&flat)),
+        &[],
+    );
 
-    let normals = mesh_normals(mesh, &label, warnings);
-    write_vertex_data(doc, "normal3f[] normals", &topo, &normals, |s, n| {
-        tuple(s, &n.to_array())
-    });
-    let line = doc.start();
-    line.push_str("point3f[] points = ");
-    array(line, &pick(&mesh.positions, &topo.point_vertex), |s, p| {
-        tuple(s, &p.to_array())
-    });
-    doc.end();
+    let normals = float3s(&mesh_normals(mesh, &label, warnings));
+    write_vertex_data(doc, AttrDecl::new("normal3f[]", "normals"), &topo, &normals);
+    doc.attribute(
+        AttrDecl::new("point3f[]", "points"),
+        Some(Data::Float3s(&pick(
+            &float3s(&mesh.positions),
+            &topo.point_vertex,
+        ))),
+        &[],
+    );
     if plan.points_cache {
         write_point_samples(doc, mi, mesh, ctx);
     }
@@ -154,8 +150,8 @@ pub(super) fn write_mesh(
     if !identity {
         write_primvar(
             doc,
-            "int[] primvars:rigport:sourceVertex",
-            |s| array(s, &mesh.source_vertex, |s, v| put(s, v)),
+            AttrDecl::new("int[]", "primvars:rigport:sourceVertex"),
+            Data::Ints(&mesh.source_vertex),
             None,
             "vertex",
         );
@@ -185,15 +181,15 @@ pub(super) fn write_mesh(
             write_geom_bind(doc, &bind);
             write_primvar(
                 doc,
-                "int[] primvars:skel:jointIndices",
-                |s| array(s, &[joint], |s, j| put(s, j)),
+                AttrDecl::new("int[]", "primvars:skel:jointIndices"),
+                Data::Ints(&[joint as u32]),
                 Some(1),
                 "constant",
             );
             write_primvar(
                 doc,
-                "float[] primvars:skel:jointWeights",
-                |s| s.push_str("[1]"),
+                AttrDecl::new("float[]", "primvars:skel:jointWeights"),
+                Data::Floats(&[1.0]),
                 Some(1),
                 "constant",
             );
@@ -221,22 +217,27 @@ pub(super) fn write_mesh(
                         .collect();
                 }
                 write_geom_bind(doc, &geom_bind);
+                let weights: Vec<f32> = rows.weights.iter().map(|&w| zero(w)).collect();
                 write_primvar(
                     doc,
-                    "int[] primvars:skel:jointIndices",
-                    |s| array(s, &rows.indices, |s, j| put(s, j)),
+                    AttrDecl::new("int[]", "primvars:skel:jointIndices"),
+                    Data::Ints(&rows.indices),
                     Some(rows.element_size),
                     "vertex",
                 );
                 write_primvar(
                     doc,
-                    "float[] primvars:skel:jointWeights",
-                    |s| array(s, &rows.weights, |s, w| float(s, *w)),
+                    AttrDecl::new("float[]", "primvars:skel:jointWeights"),
+                    Data::Floats(&weights),
                     Some(rows.element_size),
                     "vertex",
                 );
                 if ctx.options.skinning.unwrap_or(binding.method) == SkinningMethod::Dqs {
-                    doc.line("uniform token primvars:skel:skinningMethod = \"dualQuaternion\"");
+                    doc.attribute(
+                        AttrDecl::uniform("token", "primvars:skel:skinningMethod"),
+                        Some(Data::Str("dualQuaternion")),
+                        &[],
+                    );
                 }
             }
             skeleton_rel = Some(skeleton_path(skeleton));
@@ -244,59 +245,67 @@ pub(super) fn write_mesh(
     }
 
     if let Some(uvs) = &mesh.uvs {
-        // The model's UVs follow glTF (origin top-left, v down); USD's st have their origin
-        // bottom-left with t up.
-        let st: Vec<Vec2> = uvs.iter().map(|uv| Vec2::new(uv.x, 1.0 - uv.y)).collect();
-        write_vertex_data(doc, "texCoord2f[] primvars:st", &topo, &st, |s, v| {
-            tuple(s, &v.to_array())
-        });
+        write_vertex_data(
+            doc,
+            AttrDecl::new("texCoord2f[]", "primvars:st"),
+            &topo,
+            &st(uvs),
+        );
     }
 
     // Further UV sets: primvars:st1, st2, ... (same convention).
     for (k, uvs) in mesh.extra_uvs.iter().enumerate() {
-        let st: Vec<Vec2> = uvs.iter().map(|uv| Vec2::new(uv.x, 1.0 - uv.y)).collect();
+        let name = format!("primvars:{}", super::material::st_name(k as u32 + 1));
         write_primvar(
             doc,
-            &format!(
-                "texCoord2f[] primvars:{}",
-                super::material::st_name(k as u32 + 1)
-            ),
-            |s| array(s, &st, |s, v| tuple(s, &v.to_array())),
+            AttrDecl::new("texCoord2f[]", &name),
+            Data::Float2s(&st(uvs)),
             None,
             "vertex",
         );
     }
     if let Some(path) = material {
-        doc.line(&format!("rel material:binding = <{path}>"));
+        doc.relationship("material:binding", Targets::One(path));
     }
 
     let mesh_path = format!("{}/{}", ctx.root_path, plan.prim);
     if !plan.channels.is_empty() && skeleton_rel.is_some() {
-        write_tokens(doc, "uniform token[] skel:blendShapes", &plan.channels);
-        let line = doc.start();
-        line.push_str("rel skel:blendShapeTargets = ");
-        array(line, &plan.shapes, |s, shape| {
-            s.push('<');
-            s.push_str(&mesh_path);
-            s.push('/');
-            s.push_str(shape);
-            s.push('>');
-        });
-        doc.end();
+        let channels: Vec<&str> = plan.channels.iter().map(String::as_str).collect();
+        doc.attribute(
+            AttrDecl::uniform("token[]", "skel:blendShapes"),
+            Some(Data::Strs(&channels)),
+            &[],
+        );
+        let targets: Vec<String> = plan
+            .shapes
+            .iter()
+            .map(|shape| format!("{mesh_path}/{shape}"))
+            .collect();
+        doc.relationship("skel:blendShapeTargets", Targets::List(&targets));
     }
     if let Some(path) = &skeleton_rel {
-        doc.line(&format!("rel skel:skeleton = <{path}>"));
+        doc.relationship("skel:skeleton", Targets::One(path));
     }
     // rigport meshes are polygonal; USD's fallback scheme would subdivide them.
-    doc.line("uniform token subdivisionScheme = \"none\"");
+    doc.attribute(
+        AttrDecl::uniform("token", "subdivisionScheme"),
+        Some(Data::Str("none")),
+        &[],
+    );
 
     if skeleton_rel.is_some() {
         for (target, shape) in mesh.morph_targets.iter().zip(&plan.shapes) {
-            doc.blank();
+            doc.blank_line();
             write_blend_shape(doc, target, shape, &topo.point_vertex);
         }
     }
-    doc.close();
+    doc.end_prim();
+}
+
+/// A UV set as USD's `st`: the model's UVs follow glTF (origin top-left, v down); USD's st
+/// have their origin bottom-left with t up.
+fn st(uvs: &[Vec2]) -> Vec<[f32; 2]> {
+    uvs.iter().map(|uv| zeroed([uv.x, 1.0 - uv.y])).collect()
 }
 
 /// The values of the vertices `which` (a point's vertex), in that order.
@@ -310,37 +319,26 @@ fn pick<T: Copy + Default>(values: &[T], which: &[u32]) -> Vec<T> {
 /// A per-vertex primvar: `vertex` interpolation when every point's vertices agree (bit for
 /// bit), else `faceVarying`, one value per face corner.
 fn write_vertex_data<T: Copy + Default + PartialEq>(
-    doc: &mut Usda,
-    decl: &str,
+    doc: &mut dyn LayerSink,
+    decl: AttrDecl<'_>,
     topo: &Topology,
     values: &[T],
-    put_value: impl Fn(&mut String, &T) + Copy,
-) {
+) where
+    for<'v> &'v [T]: Into<Data<'v>>,
+{
     if topo.per_point(|a, b| values.get(a) == values.get(b)) {
         let per_point = pick(values, &topo.point_vertex);
-        write_primvar(
-            doc,
-            decl,
-            |s| array(s, &per_point, put_value),
-            None,
-            "vertex",
-        );
+        write_primvar(doc, decl, per_point.as_slice().into(), None, "vertex");
     } else {
         let per_corner = pick(values, &topo.corners);
-        write_primvar(
-            doc,
-            decl,
-            |s| array(s, &per_corner, put_value),
-            None,
-            "faceVarying",
-        );
+        write_primvar(doc, decl, per_corner.as_slice().into(), None, "faceVarying");
     }
 }
 
 /// `point3f[] points.timeSamples`: at each time code of the selected clip, the rest points
 /// plus the morph targets weighted by the clip's weight track of mesh `mi` (summed in
 /// `f64` in target order, then rounded to `f32`). Nothing without such a track.
-fn write_point_samples(doc: &mut Usda, mi: usize, mesh: &Mesh, ctx: &MeshContext<'_>) {
+fn write_point_samples(doc: &mut dyn LayerSink, mi: usize, mesh: &Mesh, ctx: &MeshContext<'_>) {
     let Some((clip, times)) = ctx.cache_clip else {
         return;
     };
@@ -355,8 +353,8 @@ fn write_point_samples(doc: &mut Usda, mi: usize, mesh: &Mesh, ctx: &MeshContext
     }
     let sampler = super::sampler::Sampler::new(track);
     let mut weights = vec![0.0f64; k];
-    let mut points: Vec<Vec3> = Vec::with_capacity(mesh.positions.len());
-    doc.line("point3f[] points.timeSamples = {");
+    let mut points: Vec<[f32; 3]> = Vec::with_capacity(mesh.positions.len());
+    doc.begin_time_samples(AttrDecl::new("point3f[]", "points"));
     for &(tc, seconds) in times {
         sampler.sample(seconds, &mut weights);
         points.clear();
@@ -369,30 +367,25 @@ fn write_point_samples(doc: &mut Usda, mi: usize, mesh: &Mesh, ctx: &MeshContext
                     }
                 }
             }
-            points.push(p.as_vec3());
+            points.push(zeroed(p.as_vec3().to_array()));
         }
-        let line = doc.start();
-        line.push_str("    ");
-        put(line, tc);
-        line.push_str(": ");
-        array(line, &points, |s, p| tuple(s, &p.to_array()));
-        line.push(',');
-        doc.end();
+        doc.time_sample(tc, Data::Float3s(&points));
     }
-    doc.line("}");
+    doc.end_time_samples();
 }
 
 /// `matrix4d primvars:skel:geomBindTransform = ...`.
-fn write_geom_bind(doc: &mut Usda, m: &DMat4) {
-    let line = doc.start();
-    line.push_str("matrix4d primvars:skel:geomBindTransform = ");
-    matrix(line, m);
-    doc.end();
+fn write_geom_bind(doc: &mut dyn LayerSink, m: &DMat4) {
+    doc.attribute(
+        AttrDecl::new("matrix4d", "primvars:skel:geomBindTransform"),
+        Some(Data::Matrix4(rows(m))),
+        &[],
+    );
 }
 
 /// One BlendShape prim: offsets (sparse with `pointIndices` when some points do not move).
 fn write_blend_shape(
-    doc: &mut Usda,
+    doc: &mut dyn LayerSink,
     target: &rigport_model::MorphTarget,
     prim: &str,
     point_vertex: &[u32],
@@ -426,26 +419,28 @@ fn write_blend_shape(
                 .collect()
         }
     };
-    doc.open(&format!("def BlendShape \"{prim}\""));
+    doc.begin_prim(Specifier::Def, Some("BlendShape"), prim, &[]);
     if let Some(normals) = &target.normal_deltas {
-        let line = doc.start();
-        line.push_str("uniform vector3f[] normalOffsets = ");
-        array(line, &pick(normals), |s, v| tuple(s, &v.to_array()));
-        doc.end();
+        doc.attribute(
+            AttrDecl::uniform("vector3f[]", "normalOffsets"),
+            Some(Data::Float3s(&float3s(&pick(normals)))),
+            &[],
+        );
     }
-    let line = doc.start();
-    line.push_str("uniform vector3f[] offsets = ");
-    array(line, &pick(&target.position_deltas), |s, v| {
-        tuple(s, &v.to_array())
-    });
-    doc.end();
+    doc.attribute(
+        AttrDecl::uniform("vector3f[]", "offsets"),
+        Some(Data::Float3s(&float3s(&pick(&target.position_deltas)))),
+        &[],
+    );
     if !dense {
-        let line = doc.start();
-        line.push_str("uniform int[] pointIndices = ");
-        array(line, &moved, |s, v| put(s, v));
-        doc.end();
+        let moved: Vec<u32> = moved.iter().map(|&v| v as u32).collect();
+        doc.attribute(
+            AttrDecl::uniform("int[]", "pointIndices"),
+            Some(Data::Ints(&moved)),
+            &[],
+        );
     }
-    doc.close();
+    doc.end_prim();
 }
 
 /// Unit normals: given ones (already-unit kept bit for bit, others normalized, zero-length
@@ -498,7 +493,7 @@ pub(crate) fn mesh_prim_source_name(mesh: &rigport_model::Mesh) -> &str {
 /// joint `joint`'s local transform: the rest value as default, and where the first clip
 /// animates the joint, time samples at the clip's time codes (rotations unit and
 /// sign-continuous; USD slerps `quatf` between samples as glTF LINEAR does).
-fn write_xform_ops(doc: &mut Usda, asset: &Asset, joint: usize, ctx: &MeshContext<'_>) {
+fn write_xform_ops(doc: &mut dyn LayerSink, asset: &Asset, joint: usize, ctx: &MeshContext<'_>) {
     use rigport_model::{JointIndex, TrackTarget};
     let Some(rest) = asset.skeleton.joints().get(joint).map(|j| j.rest_local) else {
         return;
@@ -540,20 +535,22 @@ fn write_xform_ops(doc: &mut Usda, asset: &Asset, joint: usize, ctx: &MeshContex
         ),
     ];
     for (name, ty, value, sampled) in ops {
-        let line = doc.start();
-        line.push_str(ty);
-        line.push(' ');
-        line.push_str(name);
-        line.push_str(" = ");
-        tuple(line, &value);
-        doc.end();
+        let decl = AttrDecl::new(ty, name);
+        let tuple = |v: &[f32]| -> Data<'static> {
+            match *v {
+                [a, b, c] => Data::Float3(zeroed([a, b, c])),
+                [a, b, c, d] => Data::Float4(zeroed([a, b, c, d])),
+                _ => Data::Floats(&[]),
+            }
+        };
+        doc.attribute(decl, Some(tuple(&value)), &[]);
         let Some((track, times)) = sampled else {
             continue;
         };
         let sampler = super::sampler::Sampler::new(track);
         let mut out = [0.0f64; 4];
         let mut prev: Option<[f32; 4]> = None;
-        doc.line(&format!("{ty} {name}.timeSamples = {{"));
+        doc.begin_time_samples(decl);
         for &(tc, seconds) in times {
             sampler.sample(seconds, &mut out);
             let value: Vec<f32> = if name == "xformOp:orient" {
@@ -568,15 +565,17 @@ fn write_xform_ops(doc: &mut Usda, asset: &Asset, joint: usize, ctx: &MeshContex
             } else {
                 out[..3].iter().map(|&v| v as f32).collect()
             };
-            let line = doc.start();
-            line.push_str("    ");
-            put(line, tc);
-            line.push_str(": ");
-            tuple(line, &value);
-            line.push(',');
-            doc.end();
+            doc.time_sample(tc, tuple(&value));
         }
-        doc.line("}");
+        doc.end_time_samples();
     }
-    doc.line("uniform token[] xformOpOrder = [\"xformOp:translate\", \"xformOp:orient\", \"xformOp:scale\"]");
+    doc.attribute(
+        AttrDecl::uniform("token[]", "xformOpOrder"),
+        Some(Data::Strs(&[
+            "xformOp:translate",
+            "xformOp:orient",
+            "xformOp:scale",
+        ])),
+        &[],
+    );
 }

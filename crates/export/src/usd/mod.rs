@@ -1,5 +1,8 @@
-//! Asset -> USD text (`.usda`) with UsdSkel; the same layer as a crate file (`.usdc`) or a
-//! package (`.usdz`, with the textures) through `rigport-usd` (`encode.rs`).
+//! Asset -> a USD stage with UsdSkel, described once to a `rigport-usd`
+//! [`LayerSink`](rigport_usd::sink::LayerSink): printed as text (`.usda`) by its
+//! [`UsdaPrinter`], or built as a typed [`Layer`](rigport_usd::Layer) by its
+//! [`LayerBuilder`] and written as a crate file (`.usdc`) or a package (`.usdz`, with the
+//! textures; `encode.rs`). No text is parsed back: the layer holds the numbers themselves.
 //!
 //! What the stage holds (`<root>` is the asset name made an identifier, `rig` when empty):
 //! - layer metadata: `defaultPrim = "<root>"`, `upAxis` (the asset's
@@ -141,6 +144,7 @@ mod stage;
 mod tests;
 mod text;
 mod topology;
+mod values;
 
 use std::path::{Path, PathBuf};
 
@@ -149,6 +153,8 @@ use rigport_model::{Asset, OutputFormat, SkinningMethod, UpAxis, Warning};
 use self::text::{Finished, Usda};
 use crate::ExportError;
 use rigport_atomic::TempFile;
+use rigport_usd::printer::UsdaPrinter;
+use rigport_usd::sink::{LayerBuilder, LayerSink};
 
 pub(crate) use self::text::SPILL_BYTES;
 
@@ -215,23 +221,24 @@ fn to_usda_with_stem(
     options: &UsdOptions,
     stem: &str,
 ) -> Result<ExportedUsd, ExportError> {
-    let (doc, images, warnings) = build_body(asset, options, stem, Usda::default())?;
+    let mut printer = UsdaPrinter::new(String::new());
+    let (images, warnings) = build_body(asset, options, stem, &mut printer)?;
     Ok(ExportedUsd {
-        text: doc.into_text(),
+        text: printer.into_inner(),
         images,
         warnings,
     })
 }
 
-/// Builds the stage into `doc`, with the texture files it names and the warnings.
+/// Describes the stage to `doc`; returns the texture files it names and the warnings.
 fn build_body(
     asset: &Asset,
     options: &UsdOptions,
     stem: &str,
-    mut doc: Usda,
-) -> Result<(Usda, Vec<crate::ImageFile>, Vec<Warning>), ExportError> {
+    doc: &mut dyn LayerSink,
+) -> Result<(Vec<crate::ImageFile>, Vec<Warning>), ExportError> {
     let names = crate::labels::image_file_names(stem, asset);
-    let warnings = stage::build(asset, options, &names, &mut doc)?;
+    let warnings = stage::build(asset, options, &names, doc)?;
     let images = names
         .into_iter()
         .zip(&asset.images)
@@ -242,7 +249,7 @@ fn build_body(
             bytes: image.bytes.clone(),
         })
         .collect();
-    Ok((doc, images, warnings))
+    Ok((images, warnings))
 }
 
 /// An export to a USD file, built and not yet in place, so that the caller can look at the
@@ -319,33 +326,38 @@ fn prepare_usd_spilling_at(
         path: path.to_path_buf(),
         source,
     };
-    let doc = match encoding {
-        // Where a long text goes: the file a link at `path` leads to. A path that cannot
-        // be written is reported when the text would be staged, else by `write`.
-        OutputFormat::Usda => match rigport_atomic::check_output(path) {
-            Ok(target) => Usda::spilling_to(&target, spill_at),
-            Err(_) => Usda::default(),
-        },
-        _ => Usda::default(),
-    };
-    let (doc, images, warnings) = build_body(asset, options, &stem, doc)?;
-    let (body, images) = match encoding {
+    let (body, images, warnings) = match encoding {
         OutputFormat::Usda => {
-            let body = match doc.finish().map_err(io_error)? {
+            // Where a long text goes: the file a link at `path` leads to. A path that
+            // cannot be written is reported when the text would be staged, else by `write`.
+            let doc = match rigport_atomic::check_output(path) {
+                Ok(target) => Usda::spilling_to(&target, spill_at),
+                Err(_) => Usda::default(),
+            };
+            let mut printer = UsdaPrinter::new(doc);
+            let (images, warnings) = build_body(asset, options, &stem, &mut printer)?;
+            let body = match printer.into_inner().finish().map_err(io_error)? {
                 Finished::Text(text) => Body::Text(text),
                 Finished::Staged { file, target } => Body::Staged { file, target },
             };
-            (body, images)
+            (body, images, warnings)
         }
-        OutputFormat::Usdc => (
-            Body::Encoded(encode::crate_file(&doc.into_text(), path)?),
-            images,
-        ),
-        // A package holds its textures.
-        _ => (
-            Body::Encoded(encode::package(&doc.into_text(), &images, &stem, path)?),
-            Vec::new(),
-        ),
+        _ => {
+            let mut builder = LayerBuilder::default();
+            let (images, warnings) = build_body(asset, options, &stem, &mut builder)?;
+            let layer = builder.finish();
+            if encoding == OutputFormat::Usdc {
+                (
+                    Body::Encoded(encode::crate_file(&layer, path)?),
+                    images,
+                    warnings,
+                )
+            } else {
+                // A package holds its textures.
+                let package = encode::package(&layer, &images, &stem, path)?;
+                (Body::Encoded(package), Vec::new(), warnings)
+            }
+        }
     };
     Ok(PreparedUsd {
         path: path.to_path_buf(),

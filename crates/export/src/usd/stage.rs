@@ -1,5 +1,7 @@
-//! Asset -> USDA text: the stage layout (the root prim, a SkelRoot when skinned, the Skeleton
-//! prims, the Animations scope, the clip variant set and the Mesh prims), written by [`build`].
+//! Asset -> a USD stage: the layout (the root prim, a SkelRoot when skinned, the Skeleton
+//! prims, the Animations scope, the clip variant set and the Mesh prims), described to a
+//! `rigport-usd` [`LayerSink`] by [`build`] (the printer for `.usda`, the layer builder
+//! for `.usdc`/`.usdz`).
 //!
 //! The parts live beside it: `checks` (what cannot be exported), `skeleton` (joint
 //! tokens, bind poses), `skin` (bindings, influence primvars), `mesh` (Mesh and
@@ -11,6 +13,8 @@ use std::collections::BTreeMap;
 
 use glam::DMat4;
 use rigport_model::{Asset, Warning};
+use rigport_usd::layer::{Specifier, Value};
+use rigport_usd::sink::{AttrDecl, Data, Field, LayerSink, Targets};
 
 use super::anim::{frame_rate, plan_clip, sample_times, write_animation, AnimPlan};
 use super::material::{material_prims, write_materials, MATERIALS};
@@ -18,7 +22,7 @@ use super::mesh::{write_mesh, MeshContext, MeshPlan};
 use super::names::{Namespace, Renames};
 use super::skeleton::{bind_poses, joint_tokens, transform_d, SKELETON};
 use super::skin::Binding;
-use super::text::{put, quoted, write_matrices, write_matrices_one, write_tokens, Usda};
+use super::values::rows;
 use super::UsdOptions;
 use crate::checks::{check, USD};
 use crate::{ExportError, Problem};
@@ -34,7 +38,7 @@ const DEFAULT_TIME_CODES_PER_SECOND: f64 = 24.0;
 /// Sampling rate for cubic-spline and step tracks when the keys fit no frame rate.
 const FALLBACK_RESAMPLE_FPS: f64 = 30.0;
 
-/// Writes the USDA text of `asset` into `doc`; returns the warnings of lossy steps.
+/// Describes the stage of `asset` to `doc`; returns the warnings of lossy steps.
 ///
 /// # Errors
 /// [`ExportError::Invalid`] listing every problem of the asset.
@@ -42,7 +46,7 @@ pub(crate) fn build(
     asset: &Asset,
     options: &UsdOptions,
     image_files: &[String],
-    doc: &mut Usda,
+    doc: &mut dyn LayerSink,
 ) -> Result<Vec<Warning>, ExportError> {
     let problems = check(asset, &USD);
     if !problems.is_empty() {
@@ -264,7 +268,7 @@ pub(crate) fn build(
     };
     let root_path = format!("/{root_name}");
 
-    // ------------------------------------------------------------------ text
+    // The stage, described to the sink.
     let sampled: Vec<Vec<(f64, f64)>> = anims
         .iter()
         .map(|anim| sample_times(anim, tcps, resample_fps, &mut warnings))
@@ -283,99 +287,104 @@ pub(crate) fn build(
         .collect();
     let (start, end) = ranges.first().copied().unwrap_or((0.0, 0.0));
 
-    doc.line("#usda 1.0");
-    doc.line("(");
-    {
-        let mut meta = |key: &str, value: &dyn Fn(&mut String)| {
-            let line = doc.start();
-            line.push_str("    ");
-            line.push_str(key);
-            line.push_str(" = ");
-            value(line);
-            doc.end();
-        };
-        meta("defaultPrim", &|s| quoted(s, &root_name));
-        meta("doc", &|s| {
-            quoted(
-                s,
-                &format!("Written by rigport {}", env!("CARGO_PKG_VERSION")),
-            )
-        });
-        if !anims.is_empty() || rest_anim {
-            let (start, end) = if start.is_finite() {
-                (start, end)
-            } else {
-                (0.0, 0.0)
-            };
-            meta("endTimeCode", &|s| put(s, end));
-            meta("metersPerUnit", &|s| put(s, meters_per_unit));
-            meta("startTimeCode", &|s| put(s, start));
-            meta("timeCodesPerSecond", &|s| put(s, tcps));
+    let mut layer_meta = vec![
+        Field::new("defaultPrim", root_name.as_str().into()),
+        Field::new(
+            "doc",
+            Value::Str(format!("Written by rigport {}", env!("CARGO_PKG_VERSION"))),
+        ),
+    ];
+    if !anims.is_empty() || rest_anim {
+        let (start, end) = if start.is_finite() {
+            (start, end)
         } else {
-            meta("metersPerUnit", &|s| put(s, meters_per_unit));
-        }
-        meta("upAxis", &|s| quoted(s, up_axis.as_str()));
+            (0.0, 0.0)
+        };
+        layer_meta.extend([
+            Field::new("endTimeCode", end.into()),
+            Field::new("metersPerUnit", meters_per_unit.into()),
+            Field::new("startTimeCode", start.into()),
+            Field::new("timeCodesPerSecond", tcps.into()),
+        ]);
+    } else {
+        layer_meta.push(Field::new("metersPerUnit", meters_per_unit.into()));
     }
-    doc.line(")");
-    doc.blank();
+    layer_meta.push(Field::new("upAxis", up_axis.as_str().into()));
+    doc.begin_layer(&layer_meta);
 
     let root_type = if skel_root { "SkelRoot" } else { "Xform" };
-    let header = format!("def {root_type} \"{root_name}\"");
-    if let Some(first) = anims.first() {
-        doc.open_meta(&header);
-        doc.line("variants = {");
-        {
-            let line = doc.start();
-            line.push_str("    string ");
-            line.push_str(CLIP_VARIANT_SET);
-            line.push_str(" = ");
-            quoted(line, &first.prim);
-            doc.end();
-        }
-        doc.line("}");
-        {
-            let line = doc.start();
-            line.push_str("prepend variantSets = ");
-            quoted(line, CLIP_VARIANT_SET);
-            doc.end();
-        }
-        doc.close_meta();
-        doc.open_body();
-    } else {
-        doc.open(&header);
-    }
+    let root_meta = match anims.first() {
+        Some(first) => vec![
+            Field::new(
+                "variants",
+                Value::Dict(vec![(CLIP_VARIANT_SET.into(), first.prim.as_str().into())]),
+            ),
+            Field::prepend("variantSets", CLIP_VARIANT_SET.into()),
+        ],
+        None => Vec::new(),
+    };
+    doc.begin_prim(Specifier::Def, Some(root_type), &root_name, &root_meta);
     if root_xform != DMat4::IDENTITY {
-        write_matrices_one(doc, "matrix4d xformOp:transform", &root_xform);
-        doc.line("uniform token[] xformOpOrder = [\"xformOp:transform\"]");
-        doc.blank();
+        doc.attribute(
+            AttrDecl::new("matrix4d", "xformOp:transform"),
+            Some(Data::Matrix4(rows(&root_xform))),
+            &[],
+        );
+        doc.attribute(
+            AttrDecl::uniform("token[]", "xformOpOrder"),
+            Some(Data::Strs(&["xformOp:transform"])),
+            &[],
+        );
+        doc.blank_line();
     }
 
     if skel_root {
         let rest_anim_prim = "rest";
+        let rest_anim_path = format!("{root_path}/{ANIMATIONS}/{rest_anim_prim}");
+        let tokens: Vec<&str> = joint_tokens.iter().map(String::as_str).collect();
+        let rest_rows: Vec<[f64; 16]> = rest_local.iter().map(rows).collect();
         for (k, prim) in skeleton_prims.iter().enumerate() {
-            doc.open_meta(&format!("def Skeleton \"{prim}\""));
-            doc.line("prepend apiSchemas = [\"SkelBindingAPI\"]");
-            doc.close_meta();
-            doc.open_body();
-            let binds = skeleton_binds.get(k).map(Vec::as_slice).unwrap_or(&[]);
-            write_matrices(doc, "uniform matrix4d[] bindTransforms", binds);
-            write_tokens(doc, "uniform token[] joints", &joint_tokens);
-            write_matrices(doc, "uniform matrix4d[] restTransforms", &rest_local);
+            doc.begin_prim(
+                Specifier::Def,
+                Some("Skeleton"),
+                prim,
+                &[Field::prepend(
+                    "apiSchemas",
+                    Value::List(vec!["SkelBindingAPI".into()]),
+                )],
+            );
+            let binds: Vec<[f64; 16]> = skeleton_binds
+                .get(k)
+                .map(|b| b.iter().map(rows).collect())
+                .unwrap_or_default();
+            doc.attribute(
+                AttrDecl::uniform("matrix4d[]", "bindTransforms"),
+                Some(Data::Matrix4s(&binds)),
+                &[],
+            );
+            doc.attribute(
+                AttrDecl::uniform("token[]", "joints"),
+                Some(Data::Strs(&tokens)),
+                &[],
+            );
+            doc.attribute(
+                AttrDecl::uniform("matrix4d[]", "restTransforms"),
+                Some(Data::Matrix4s(&rest_rows)),
+                &[],
+            );
             if rest_anim {
-                doc.line(&format!(
-                    "rel skel:animationSource = <{root_path}/{ANIMATIONS}/{rest_anim_prim}>"
-                ));
+                doc.relationship("skel:animationSource", Targets::One(&rest_anim_path));
             }
-            doc.close();
-            doc.blank();
+            doc.end_prim();
+            doc.blank_line();
         }
 
         if !anims.is_empty() || rest_anim {
-            doc.open(&format!("def Scope \"{ANIMATIONS}\""));
+            doc.begin_prim(Specifier::Def, Some("Scope"), ANIMATIONS, &[]);
             let mut first = true;
             for (anim, times) in anims.iter().zip(&sampled) {
                 if !first {
-                    doc.blank();
+                    doc.blank_line();
                 }
                 first = false;
                 write_animation(
@@ -408,8 +417,8 @@ pub(crate) fn build(
                     &mut warnings,
                 );
             }
-            doc.close();
-            doc.blank();
+            doc.end_prim();
+            doc.blank_line();
         }
     }
 
@@ -436,49 +445,37 @@ pub(crate) fn build(
             },
             &mut warnings,
         );
-        doc.blank();
+        doc.blank_line();
     }
 
     if !anims.is_empty() {
-        doc.line(&format!("variantSet \"{CLIP_VARIANT_SET}\" = {{"));
+        doc.begin_variant_set(CLIP_VARIANT_SET);
         let ranges_differ = ranges.windows(2).any(|w| w[0] != w[1]);
         for (anim, &(a, b)) in anims.iter().zip(&ranges) {
-            let line = doc.start();
-            line.push_str("    ");
-            quoted(line, &anim.prim);
-            if ranges_differ {
-                // Clips differ in length: each variant says its own range.
-                line.push_str(" (");
-                doc.end();
-                doc.line("        customData = {");
-                let line = doc.start();
-                line.push_str("            double endTimeCode = ");
-                put(line, b);
-                doc.end();
-                let line = doc.start();
-                line.push_str("            double startTimeCode = ");
-                put(line, a);
-                doc.end();
-                doc.line("        }");
-                doc.line("    ) {");
+            // Clips that differ in length: each variant says its own range.
+            let meta = if ranges_differ {
+                vec![Field::new(
+                    "customData",
+                    Value::Dict(vec![
+                        ("endTimeCode".into(), b.into()),
+                        ("startTimeCode".into(), a.into()),
+                    ]),
+                )]
             } else {
-                line.push_str(" {");
-                doc.end();
-            }
+                Vec::new()
+            };
+            doc.begin_variant(&anim.prim, &meta);
+            let source = format!("{root_path}/{ANIMATIONS}/{}", anim.prim);
             for prim in &skeleton_prims {
-                doc.line(&format!("        over \"{prim}\""));
-                doc.line("        {");
-                doc.line(&format!(
-                    "            rel skel:animationSource = <{root_path}/{ANIMATIONS}/{}>",
-                    anim.prim
-                ));
-                doc.line("        }");
+                doc.begin_prim(Specifier::Over, None, prim, &[]);
+                doc.relationship("skel:animationSource", Targets::One(&source));
+                doc.end_prim();
             }
-            doc.line("    }");
+            doc.end_variant();
         }
-        doc.line("}");
+        doc.end_variant_set();
     }
-    doc.close();
+    doc.end_prim();
     Ok(warnings)
 }
 

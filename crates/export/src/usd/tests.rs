@@ -730,7 +730,7 @@ fn reference(asset: &Asset, clip: Option<&Clip>, t: f64) -> (Vec<DMat4>, Vec<DVe
             }
             // SkelAnimation scales are half3[]: the documented (and reported) loss.
             TrackTarget::Scale(j) => {
-                let h = |x: f64| f64::from(super::text::to_half(x as f32));
+                let h = |x: f64| f64::from(super::values::to_half(x as f32));
                 local[j.get()].2 = DVec3::new(h(v[0]), h(v[1]), h(v[2]));
             }
             TrackTarget::MorphWeights(m) => weights[m.get()] = v,

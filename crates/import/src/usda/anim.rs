@@ -7,7 +7,7 @@ use rigport_model::glam::Quat;
 use rigport_model::{Clip, Interpolation, JointIndex, Track, TrackTarget, Warning};
 
 use super::importer::{resolve_path, Importer, SkelData};
-use super::parse::{self, PrimSpec, Value};
+use super::layer::{self, PrimSpec, Value};
 use super::stage::{Prim, Stage};
 use super::values::{self, is_half_type, numbers, round_to_half, tokens, tuples};
 use crate::ImportError;
@@ -66,12 +66,12 @@ fn unique_clip(mut clip: Clip, names: &mut HashMap<String, usize>) -> Clip {
 /// SkelAnimation (found by walking the layer's specs, so unselected variants are only
 /// composed when they hold one).
 fn variant_defines_animation(
-    root: &parse::PrimBody,
+    root: &layer::PrimBody,
     prim_path: &str,
     set: &str,
     variant: &str,
 ) -> bool {
-    fn defines(body: &parse::PrimBody) -> bool {
+    fn defines(body: &layer::PrimBody) -> bool {
         body.children
             .iter()
             .any(|c| c.type_name.as_deref() == Some("SkelAnimation") || defines(&c.body))
@@ -80,7 +80,7 @@ fn variant_defines_animation(
                 .iter()
                 .any(|s| s.variants.iter().any(|(_, _, b)| defines(b)))
     }
-    fn find<'a>(body: &'a parse::PrimBody, rest: &[&str], out: &mut Vec<&'a PrimSpec>) {
+    fn find<'a>(body: &'a layer::PrimBody, rest: &[&str], out: &mut Vec<&'a PrimSpec>) {
         let Some((first, tail)) = rest.split_first() else {
             return;
         };

@@ -6,7 +6,7 @@ use std::process::Command;
 
 use super::{import, import_slice};
 use rigport_usd::crate_file::{read, MAGIC};
-use rigport_usd::parse::{ListOp, PropKind, Specifier, Value};
+use rigport_usd::layer::{ListOp, PropKind, Specifier, Value};
 
 fn corpus(rel: &str) -> Option<PathBuf> {
     rigport_testkit::corpus(&format!("6_usd/{rel}"))

@@ -247,7 +247,7 @@ mod tests {
             ("def Cone \"N\" { double radius = 1 \n double height = 5 \n uniform token axis = \"X\" }", 2.5),
         ] {
             let text = format!("#usda 1.0\n{src}\n");
-            let layer = super::super::parse::parse(&text, std::path::Path::new("t.usda"))
+            let layer = rigport_usd::parse::parse(&text, std::path::Path::new("t.usda"))
                 .expect("parses");
             let stage = super::super::stage::Stage::compose(&layer.root, None);
             let prim = &stage.prims[0];

@@ -8,7 +8,7 @@ use glam::DMat4;
 use rigport_model::glam::Mat4;
 use rigport_model::{UpAxis, Warning};
 
-use super::parse::{Layer, Value};
+use super::layer::{Layer, Value};
 use super::stage::{Prim, Prop, Stage};
 use super::values::{self, matrices, numbers};
 use super::xform::{self, usd_matrix};

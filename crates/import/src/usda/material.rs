@@ -22,7 +22,7 @@ use rigport_model::{
 };
 
 use super::importer::Importer;
-use super::parse::Value;
+use super::layer::Value;
 use super::stage::Prim;
 use super::values::{number, token, tuple};
 

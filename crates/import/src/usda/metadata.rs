@@ -4,7 +4,7 @@
 use rigport_model::{UpAxis, Warning};
 
 use super::importer::Importer;
-use super::parse;
+use super::layer;
 use super::stage;
 use super::values::{number, token};
 use crate::problem::Rule;
@@ -18,7 +18,7 @@ pub const DEFAULT_METERS_PER_UNIT: f64 = 0.01;
 pub const DEFAULT_TIME_CODES_PER_SECOND: f64 = 24.0;
 
 impl<'l> Importer<'l, '_> {
-    fn layer_meta(&self, key: &str) -> Option<&'l parse::Meta> {
+    fn layer_meta(&self, key: &str) -> Option<&'l layer::Meta> {
         self.layer.meta.iter().rev().find(|m| m.key == key)
     }
 

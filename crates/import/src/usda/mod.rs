@@ -151,7 +151,7 @@ mod tests;
 mod xform;
 
 // The generic layer code lives in `rigport-usd`; these names keep the mapping's paths.
-use rigport_usd::{parse, stage, usdz, values};
+use rigport_usd::{layer, stage, usdz, values};
 
 use std::path::Path;
 

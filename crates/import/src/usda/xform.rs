@@ -11,7 +11,7 @@
 
 use glam::{DMat4, DQuat, DVec3};
 
-use super::parse::Value;
+use super::layer::Value;
 use super::stage::{Prim, Prop};
 use super::values::{matrix, number, tokens, tuple};
 

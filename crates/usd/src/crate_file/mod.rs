@@ -57,10 +57,10 @@ pub(crate) use self::layout::child_path;
 use self::layout::CrateFile;
 pub use self::layout::MAGIC;
 use self::value::Decoded;
-use super::parse::{
+use super::layer::{
     Layer, ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifier, Value, VariantSetSpec,
-    MAX_DEPTH,
 };
+use super::parse::MAX_DEPTH;
 use crate::error::{CrateProblem, Nesting, Problem, UsdError};
 
 /// `SdfSpecType` values used here.

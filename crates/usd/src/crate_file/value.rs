@@ -7,7 +7,7 @@
 use super::coding::{self, Width};
 use super::layout::{CrateFile, Cursor, MAX_VALUE_DEPTH};
 use crate::error::{CrateProblem, Nesting, Problem, UsdError};
-use crate::parse::{ListOp, Value};
+use crate::layer::{ListOp, Value};
 
 /// A crate type number (`Usd_CrateFile::TypeEnum`).
 pub(crate) type TypeId = u8;

@@ -35,7 +35,7 @@ use self::tables::Tables;
 use self::values::ty;
 use crate::crate_file::child_path;
 use crate::error::{Location, UsdError, WriteProblem};
-use crate::parse::{Layer, ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifier, Value};
+use crate::layer::{Layer, ListOp, Meta, PrimBody, PrimSpec, PropKind, PropSpec, Specifier, Value};
 
 /// `SdfSpecType` values.
 mod spec_type {

@@ -3,7 +3,8 @@
 use std::path::Path;
 
 use super::write;
-use crate::parse::{parse, Layer, Meta, PrimBody, Value};
+use crate::layer::{Layer, Meta, PrimBody, Value};
+use crate::parse::parse;
 
 /// Line and column numbers cleared (a binary layer has none).
 pub(crate) fn without_lines(layer: &Layer) -> Layer {

@@ -8,7 +8,7 @@
 //! reader reads).
 
 use super::tables::{put_u64, Tables};
-use crate::parse::{ListOp, Value};
+use crate::layer::{ListOp, Value};
 
 /// Crate type numbers used by the writer.
 pub(crate) mod ty {
