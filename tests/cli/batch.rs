@@ -532,3 +532,78 @@ fn the_memory_budget_is_shared_by_the_jobs() {
     );
     assert!(!two.join("end_sites.glb").exists());
 }
+
+/// A Pinocchio mesh paired with another mesh's weights (the Armadillo's mesh and skeleton
+/// with the human scan's `attachment.out`, cut to the Armadillo's 8988 rows): it converts
+/// with a W005 warning that the weights may belong to another mesh, `--deny-warnings`
+/// refuses it (exit 4, nothing written), and a batch reports the warning for the item.
+#[test]
+fn weights_of_another_mesh_are_reported_and_denied() {
+    let armadillo = "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo";
+    let human = "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1";
+    let (Some(obj), Some(skel), Some(att)) = (
+        corpus(&format!("{armadillo}/Armadillo.obj")),
+        corpus(&format!("{armadillo}/skeleton.out")),
+        corpus(&format!("{human}/attachment.out")),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let rows = std::fs::read_to_string(&obj)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("v "))
+        .count();
+    let cut: String = std::fs::read_to_string(&att)
+        .unwrap()
+        .lines()
+        .take(rows)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let mixed = dir.path().join("human_attachment.out");
+    std::fs::write(&mixed, cut).unwrap();
+    let (obj_s, skel_s, mixed_s) = (
+        obj.to_str().unwrap(),
+        skel.to_str().unwrap(),
+        mixed.to_str().unwrap(),
+    );
+    let out = dir.path().join("mixed.glb");
+    let denied = rigport(&[
+        "convert",
+        "--deny-warnings",
+        "--mesh",
+        obj_s,
+        "--skeleton",
+        skel_s,
+        "--attachment",
+        mixed_s,
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&denied.stderr);
+    assert_eq!(denied.status.code(), Some(4), "{stderr}");
+    assert!(
+        stderr.contains("warning[W005]") && stderr.contains("may belong to another mesh"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+
+    let manifest = dir.path().join("m.jsonl");
+    let line = serde_json::json!({
+        "id": "mixed",
+        "command": "convert",
+        "inputs": [obj_s, skel_s, mixed_s],
+        "outputs": ["mixed.glb"],
+    });
+    std::fs::write(&manifest, format!("{line}\n")).unwrap();
+    let outdir = dir.path().join("out");
+    let run = batch(&[&manifest, &outdir], &[]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report = records(&report_of(&outdir));
+    let warnings = report[0]["warnings"].to_string();
+    assert!(warnings.contains("W005"), "{warnings}");
+}

@@ -3,9 +3,9 @@
 //!
 //! glTF 2.0 (§3.7.2.2, "Morph Targets") defines a morphed position as
 //! `base + Σ weightᵢ · targetᵢ`, applied to the mesh before its skin; UsdSkel applies blend
-//! shapes before skinning as well. A mesh's weights are its defaults ([`Mesh::morph_weights`],
-//! glTF's `mesh.weights`), replaced at each time by a clip's morph-weight track when the
-//! clip animates that mesh. Time-sampled USD points arrive as morph targets with such a
+//! shapes before skinning as well. A mesh's weights are its defaults
+//! ([`rigport_model::Mesh::morph_weights`], glTF's `mesh.weights`), replaced at each time
+//! by a clip's morph-weight track when the clip animates that mesh. Time-sampled USD points arrive as morph targets with such a
 //! track (one target per sample), so they play the same way.
 //!
 //! ```

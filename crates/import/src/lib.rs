@@ -21,6 +21,7 @@ pub mod pinocchio;
 pub mod problem;
 mod text;
 pub mod usda;
+pub mod weights_fit;
 
 pub use detect::detect;
 pub use error::{check_asset, ImportError, Location, Problem};

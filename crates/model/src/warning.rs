@@ -41,6 +41,15 @@ pub enum Warning {
         /// What is missing and what the result lacks.
         message: String,
     },
+    /// The input reads cleanly but is probably wrong: its parts measure as if they did not
+    /// belong together (skin weights whose heaviest bone is far from most vertices, as when
+    /// a weights file belongs to another mesh with the same vertex count).
+    Suspect {
+        /// Where.
+        location: String,
+        /// What was measured, and what it suggests.
+        message: String,
+    },
     /// A fact about the input the user may want to know (e.g. which layout was detected).
     Note {
         /// Where.
@@ -52,7 +61,7 @@ pub enum Warning {
 
 /// Every warning code with its kebab-case name and meaning, in code order (the table
 /// `docs/WARNINGS.md` documents). A code never changes meaning once released.
-pub const WARNING_CODES: [(&str, &str, &str); 5] = [
+pub const WARNING_CODES: [(&str, &str, &str); 6] = [
     (
         "W001",
         "weights-renormalized",
@@ -72,6 +81,11 @@ pub const WARNING_CODES: [(&str, &str, &str); 5] = [
         "W004",
         "incomplete",
         "part of what the input should hold is absent, and the result lacks it",
+    ),
+    (
+        "W005",
+        "suspect",
+        "the input reads cleanly but measures as probably wrong (e.g. weights of another mesh)",
     ),
     (
         "N001",
@@ -118,7 +132,8 @@ impl Warning {
             Warning::InfluencesDropped { .. } => 1,
             Warning::Repaired { .. } => 2,
             Warning::Incomplete { .. } => 3,
-            Warning::Note { .. } => 4,
+            Warning::Suspect { .. } => 4,
+            Warning::Note { .. } => 5,
         };
         WARNING_CODES[i]
     }
@@ -146,6 +161,7 @@ impl fmt::Display for Warning {
             ),
             Warning::Repaired { location, message } => write!(f, "{location}: repaired: {message}"),
             Warning::Incomplete { location, message } => write!(f, "{location}: {message}"),
+            Warning::Suspect { location, message } => write!(f, "{location}: suspect: {message}"),
             Warning::Note { location, message } => write!(f, "{location}: {message}"),
         }
     }

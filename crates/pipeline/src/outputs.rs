@@ -28,17 +28,23 @@ pub(crate) fn extension(path: &Path) -> String {
 }
 
 /// Checks the outputs of a command before any work is done: each (and the `.bin` beside a
-/// `.gltf`) must be a regular file or absent, symbolic links followed, and a `.gltf` must
-/// not be a symbolic link (see `rigport_export::PreparedGltf::write`) (an output error
-/// else), and none may be one of `inputs`, compared by file identity (device and inode on
-/// Unix), so a link or a second path to an input counts (a usage error).
+/// `.gltf`) must be a regular file or absent, symbolic links followed, its folder must
+/// exist and take a new file (a temporary file is made there and removed: a missing or
+/// read-only folder fails now, not after a long computation), and a `.gltf` must not be a
+/// symbolic link (see `rigport_export::PreparedGltf::write`) (an output error else), and
+/// none may be one of `inputs`, compared by file identity (device and inode on Unix), so a
+/// link or a second path to an input counts (a usage error).
 ///
 /// # Errors
 /// As above.
 pub(crate) fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<(), PipelineError> {
     for &output in outputs {
         let mut files = vec![output.to_path_buf()];
-        rigport_export::check_output(output).map_err(|e| PipelineError::output(output, e))?;
+        let target =
+            rigport_export::check_output(output).map_err(|e| PipelineError::output(output, e))?;
+        // Written the way the output will be: a temporary file beside it, then renamed.
+        rigport_atomic::TempFile::create_beside(&target, b"")
+            .map_err(|e| PipelineError::output(output, e))?;
         if extension(output) == "gltf" {
             if std::fs::symlink_metadata(output).is_ok_and(|m| m.file_type().is_symlink()) {
                 return Err(PipelineError::output(output, Message(
@@ -149,5 +155,30 @@ mod tests {
         let input = Path::new("../../fixtures/bvh/end_sites.bvh");
         let err = check_outputs(&[input], &[input.to_path_buf()]).unwrap_err();
         assert!(err.to_string().contains("this output is one of the inputs"));
+    }
+
+    #[test]
+    fn an_output_folder_that_cannot_take_the_file_fails_before_any_work() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("gone/walk.glb");
+        let err = check_outputs(&[&missing], &[]).unwrap_err();
+        assert!(err.is_output(), "{err}");
+        assert!(check_outputs(&[&dir.path().join("walk.glb")], &[]).is_ok());
+        // The probe leaves nothing behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt as _;
+            let locked = dir.path().join("locked");
+            std::fs::create_dir(&locked).unwrap();
+            std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+            // Root writes anywhere: the check is only meaningful when the folder refuses.
+            let refuses = std::fs::write(locked.join("probe"), b"").is_err();
+            if refuses {
+                let err = check_outputs(&[&locked.join("walk.glb")], &[]).unwrap_err();
+                assert!(err.is_output(), "{err}");
+            }
+            std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
+        }
     }
 }

@@ -226,6 +226,10 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
         .collect();
     let mut asset = assembled.asset;
     asset.ik_handles = ik_handles.clone();
+    warnings.extend(crate::weights_fit::check(
+        &asset,
+        &config.display().to_string(),
+    ));
     let pick = |values: &[DVec3]| -> Vec<DVec3> {
         assembled
             .order

@@ -445,6 +445,7 @@ fn assemble_from<'a>(
         ..Default::default()
     };
     crate::check_asset(&asset, here)?;
+    warnings.extend(crate::weights_fit::check(&asset, name));
     Ok(Imported { asset, warnings })
 }
 
