@@ -33,7 +33,7 @@ pub fn rigport_ok(args: &[&str]) -> String {
 // rigport-testkit, shared with the crates' tests.
 pub use rigport_testkit::gltf_validator::{assert_valid, validate};
 pub use rigport_testkit::npy::{read_npy, read_npz, NpyArray};
-pub use rigport_testkit::{corpus, require};
+pub use rigport_testkit::{corpus, corpus_dir, require};
 
 /// The Pinocchio rigs of the corpus: (label, mesh, skeleton, attachment).
 pub const PINOCCHIO_RIGS: [(&str, &str, &str, &str); 4] = [

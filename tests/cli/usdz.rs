@@ -239,3 +239,79 @@ fn usd_without_an_encoding_is_refused() {
         "{err}"
     );
 }
+
+/// The images a `.glb` embeds (bufferView images), in `images` order.
+fn glb_images(glb: &Path) -> Vec<Vec<u8>> {
+    let bytes = std::fs::read(glb).unwrap();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin_start = 20 + json_len + 8;
+    let views = json["bufferViews"].as_array().cloned().unwrap_or_default();
+    json["images"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default()
+        .iter()
+        .map(|image| {
+            let view = &views[image["bufferView"].as_u64().unwrap() as usize];
+            let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+            let len = view["byteLength"].as_u64().unwrap() as usize;
+            bytes[bin_start + offset..bin_start + offset + len].to_vec()
+        })
+        .collect()
+}
+
+/// Every corpus `.usdz` converted to `.glb` keeps the textures its package holds, byte for
+/// byte (Reality Converter's `0/…` members included), with a valid glb, and the material
+/// binds them (no 0.18 grey fallback).
+#[test]
+fn usdz_textures_are_kept_in_the_glb_byte_for_byte() {
+    let dir = corpus_dir().join("6_usd");
+    if require("the corpus (../shared/corpus)", dir.is_dir().then_some(())).is_none() {
+        return;
+    }
+    let mut packages: Vec<PathBuf> = Vec::new();
+    let mut stack = vec![dir];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = entry.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|e| e == "usdz") {
+                packages.push(p);
+            }
+        }
+    }
+    let mut textured = 0;
+    for usdz in packages {
+        let mut archive = zip::ZipArchive::new(std::fs::File::open(&usdz).unwrap()).unwrap();
+        let mut members: Vec<Vec<u8>> = Vec::new();
+        for i in 1..archive.len() {
+            let mut file = archive.by_index(i).unwrap();
+            let name = file.name().to_ascii_lowercase();
+            if name.ends_with(".png") || name.ends_with(".jpg") || name.ends_with(".jpeg") {
+                let mut data = Vec::new();
+                file.read_to_end(&mut data).unwrap();
+                members.push(data);
+            }
+        }
+        if members.is_empty() {
+            continue;
+        }
+        textured += 1;
+        let out = tempfile::tempdir().unwrap();
+        let glb = out.path().join("out.glb");
+        let log = rigport_ok(&["convert", s(&usdz), "-o", s(&glb)]);
+        assert!(!log.contains("cannot be read"), "{}: {log}", usdz.display());
+        let images = glb_images(&glb);
+        for member in &members {
+            assert!(
+                images.contains(member),
+                "{}: a texture of the package is not in the glb byte for byte",
+                usdz.display()
+            );
+        }
+        assert_valid(&glb);
+    }
+    assert!(textured > 0, "no corpus .usdz holds textures");
+}

@@ -17,8 +17,12 @@ use rigport_model::{Asset, SkinBinding, Warning};
 /// Below this share of near vertices the weights are suspect.
 pub const MIN_NEAR_SHARE: f64 = 0.5;
 
+/// Fewer weighted vertices than this say too little to judge (a test's handful).
+pub const MIN_VERTICES: usize = 50;
+
 /// The share of `skin`'s vertices (0..=1) whose heaviest influence is on a bone near them;
-/// `None` for a skin without weighted vertices or a skeleton of one joint.
+/// `None` for a skin with fewer than [`MIN_VERTICES`] weighted vertices or a skeleton of
+/// one joint.
 pub fn near_share(asset: &Asset, skin: &SkinBinding) -> Option<f64> {
     let mesh = asset.meshes.get(skin.mesh.get())?;
     let skeleton = &asset.skeleton;
@@ -76,7 +80,7 @@ pub fn near_share(asset: &Asset, skin: &SkinBinding) -> Option<f64> {
             near += 1;
         }
     }
-    (weighted > 0).then(|| near as f64 / weighted as f64)
+    (weighted >= MIN_VERTICES).then(|| near as f64 / weighted as f64)
 }
 
 /// A [`Warning::Suspect`] at `location` for each skin of `asset` whose

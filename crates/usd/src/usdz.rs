@@ -43,6 +43,74 @@ pub fn read_layer(bytes: &[u8], path: &Path) -> Result<Layer, UsdError> {
     }
 }
 
+/// A `.usdz` package held in memory, whose members are read by name.
+pub struct Package<'a> {
+    bytes: &'a [u8],
+    /// The root layer's folder in the archive (`""` at the top), which relative asset
+    /// paths start from.
+    root_dir: String,
+    /// Member names, in archive order.
+    names: Vec<String>,
+}
+
+impl<'a> Package<'a> {
+    /// The package in `bytes`, or `None` when they are not a zip archive (a `.usda` or
+    /// `.usdc` layer).
+    ///
+    /// # Errors
+    /// An archive that cannot be read, is empty or does not start with a layer.
+    pub fn open(bytes: &'a [u8], path: &Path) -> Result<Option<Self>, UsdError> {
+        if !bytes.starts_with(ZIP_MAGIC) {
+            return Ok(None);
+        }
+        let archive = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| {
+            UsdError::new(Location::file(path), PackageProblem::Unreadable(e).into())
+        })?;
+        let names: Vec<String> = archive.file_names().map(str::to_string).collect();
+        // `file_names` is in no set order: the root is the first member by index.
+        let (root, _) = root_layer(bytes, path)?;
+        let root_dir = match root.rfind('/') {
+            Some(k) => root[..=k].to_string(),
+            None => String::new(),
+        };
+        Ok(Some(Self {
+            bytes,
+            root_dir,
+            names,
+        }))
+    }
+
+    /// The member an asset path of the root layer names (relative to the root layer's
+    /// folder; `./` and `..` segments resolved), if the package holds it: its name and
+    /// bytes. `None` for a path outside the package, an absolute path, or a member that
+    /// cannot be read.
+    pub fn member(&self, asset_path: &str) -> Option<(String, Vec<u8>)> {
+        if asset_path.starts_with('/') || asset_path.contains(['\\', ':']) {
+            return None;
+        }
+        let joined = format!("{}{asset_path}", self.root_dir);
+        let mut parts: Vec<&str> = Vec::new();
+        for part in joined.split('/') {
+            match part {
+                "" | "." => {}
+                ".." => {
+                    parts.pop()?;
+                }
+                p => parts.push(p),
+            }
+        }
+        let name = parts.join("/");
+        if !self.names.contains(&name) {
+            return None;
+        }
+        let mut archive = zip::ZipArchive::new(std::io::Cursor::new(self.bytes)).ok()?;
+        let mut file = archive.by_name(&name).ok()?;
+        let mut data = Vec::with_capacity((file.size() as usize).min(self.bytes.len()));
+        file.read_to_end(&mut data).ok()?;
+        Some((name, data))
+    }
+}
+
 /// The name and bytes of a package's first member.
 fn root_layer(bytes: &[u8], path: &Path) -> Result<(String, Vec<u8>), UsdError> {
     let zip_error = |e: zip::result::ZipError| {

@@ -37,6 +37,8 @@ pub(super) struct Importer<'l, 'p> {
     pub(super) skel_world: DMat4,
     /// Blend-shape channels of the imported meshes, for the SkelAnimations' weights.
     pub(super) mesh_shapes: Vec<super::shapes::MeshShapes>,
+    /// The package the layer came from (a `.usdz`), whose members textures name.
+    pub(super) package: Option<rigport_usd::usdz::Package<'p>>,
 }
 
 /// Interpolation of a primvar (`UsdGeomPrimvar`).

@@ -6,20 +6,30 @@
 //! | UsdPreviewSurface | model |
 //! |---|---|
 //! | `inputs:diffuseColor` value, `inputs:opacity` value | `base_color_factor` |
-//! | `inputs:diffuseColor.connect` to a `UsdUVTexture` | `base_color_texture` (its `inputs:file` read beside the layer, `inputs:scale` as the factor, wrap modes, UV set from the `UsdPrimvarReader_float2` `varname`: `st` 0, `stN` N) |
+//! | `inputs:diffuseColor.connect` to a `UsdUVTexture` | `base_color_texture` (its `inputs:file`, `inputs:scale` as the factor, wrap modes, UV set from the `UsdPrimvarReader_float2` `varname`: `st` 0, `stN` N) |
 //! | `inputs:metallic`, `inputs:roughness` | `metallic_factor`, `roughness_factor` (USD's defaults 0 and 0.5 when unauthored) |
+//! | `inputs:metallic.connect` to `outputs:b` and `inputs:roughness.connect` to `outputs:g` of one `UsdUVTexture` | `metallic_roughness_texture` (glTF's packing; factors 1) |
 //! | `inputs:emissiveColor` | `emissive_factor` |
+//! | `inputs:emissiveColor.connect` to a `UsdUVTexture` | `emissive_texture` (factor 1) |
+//! | `inputs:occlusion.connect` to a `UsdUVTexture` | `occlusion_texture` |
 //! | `inputs:opacityThreshold` > 0 | `alpha_mode = Mask`, `alpha_cutoff` |
 //! | `inputs:normal.connect` to a `UsdUVTexture` | `normal_texture` |
 //!
 //! A Mesh's `rel material:binding` picks its material. Only absolute connection paths are
-//! followed; texture files are read beside the layer's file (not from inside a `.usdz`).
+//! followed. A texture's file is the package's member when the layer came from a `.usdz`
+//! (the asset path taken relative to the root layer's folder in the archive), else the
+//! file beside the layer. A texture that cannot be read, and a connected input the model
+//! cannot hold (metallic and roughness from different images or channels, opacity from a
+//! texture, ...), are left out with a [`rigport_model::Warning::Incomplete`] naming the
+//! shader input.
 
 use std::collections::HashMap;
 
 use rigport_model::{
     AlphaMode, Image, ImageIndex, Material, MaterialIndex, Sampler, TextureRef, Wrap,
 };
+
+use rigport_model::Warning;
 
 use super::importer::Importer;
 use super::layer::Value;
@@ -55,6 +65,7 @@ impl<'l> Importer<'l, '_> {
     pub(super) fn materials(&mut self) -> Materials {
         let mut out = Materials::default();
         let mut image_paths: Vec<std::path::PathBuf> = Vec::new();
+        let mut warnings = Vec::new();
         for i in 0..self.stage.prims.len() {
             let Some(prim) = self.stage.prims.get(i) else {
                 continue;
@@ -106,40 +117,93 @@ impl<'l> Importer<'l, '_> {
                     material.alpha_cutoff = t as f32;
                 }
             }
+            // Each connected input: the texture shader and the output it reads.
             let connected = |name: &str| {
                 shader
                     .prop(name)
                     .and_then(|p| p.connect)
                     .and_then(|c| c.first())
                     .and_then(|c| split_connection(c))
-                    .map(|(p, _)| p)
+                    .and_then(|(p, output)| Some((self.stage.get(p)?, output)))
             };
-            if let Some(tex) = connected("inputs:diffuseColor").and_then(|p| self.stage.get(p)) {
-                if let Some((texture, scale)) = self.texture(tex, &mut out.images, &mut image_paths)
+            let mut lost: Vec<&str> = Vec::new();
+            let mut take = |name: &'static str, lost: &mut Vec<&str>| {
+                let (tex, _) = connected(name)?;
+                let got = self.texture(tex, &mut out.images, &mut image_paths, &mut warnings);
+                if got.is_none() && shader_id(tex) != Some("UsdUVTexture") {
+                    lost.push(name);
+                }
+                got
+            };
+            if let Some((texture, scale)) = take("inputs:diffuseColor", &mut lost) {
+                material.base_color_texture = Some(texture);
+                material.base_color_factor = scale.unwrap_or([1.0; 4]);
+            }
+            if let Some((texture, _)) = take("inputs:normal", &mut lost) {
+                material.normal_texture = Some(texture);
+            }
+            if let Some((texture, _)) = take("inputs:emissiveColor", &mut lost) {
+                material.emissive_texture = Some(texture);
+                material.emissive_factor = [1.0; 3];
+            }
+            if let Some((texture, _)) = take("inputs:occlusion", &mut lost) {
+                material.occlusion_texture = Some(texture);
+            }
+            // glTF packs metallic in blue and roughness in green of one image.
+            match (connected("inputs:metallic"), connected("inputs:roughness")) {
+                (None, None) => {}
+                (Some((m, m_out)), Some((r, r_out)))
+                    if m.path == r.path && m_out.ends_with(":b") && r_out.ends_with(":g") =>
                 {
-                    material.base_color_texture = Some(texture);
-                    material.base_color_factor = scale.unwrap_or([1.0; 4]);
+                    if let Some((texture, _)) = take("inputs:metallic", &mut lost) {
+                        material.metallic_roughness_texture = Some(texture);
+                        material.metallic_factor = 1.0;
+                        material.roughness_factor = 1.0;
+                    }
+                }
+                (m, r) => {
+                    lost.extend(m.map(|_| "inputs:metallic"));
+                    lost.extend(r.map(|_| "inputs:roughness"));
                 }
             }
-            if let Some(tex) = connected("inputs:normal").and_then(|p| self.stage.get(p)) {
-                if let Some((texture, _)) = self.texture(tex, &mut out.images, &mut image_paths) {
-                    material.normal_texture = Some(texture);
+            for input in [
+                "inputs:opacity",
+                "inputs:specularColor",
+                "inputs:clearcoat",
+                "inputs:displacement",
+            ] {
+                if connected(input).is_some() {
+                    lost.push(input);
                 }
+            }
+            if !lost.is_empty() {
+                warnings.push(Warning::Incomplete {
+                    location: self.location(&shader.path),
+                    message: format!(
+                        "{} {} connected to what a glTF material cannot hold (metallic and \
+                         roughness from one texture's blue and green only): left out",
+                        lost.join(", "),
+                        if lost.len() == 1 { "is" } else { "are" }
+                    ),
+                });
             }
             out.by_path
                 .insert(prim.path.clone(), MaterialIndex(out.materials.len() as u32));
             out.materials.push(material);
         }
+        self.warnings.extend(warnings);
         out
     }
 
     /// A `UsdUVTexture` shader as a texture reference (loading its file) and its
-    /// `inputs:scale`; `None` (with a warning) when the file cannot be read.
+    /// `inputs:scale`; `None` when the shader is not a `UsdUVTexture` with a file, or (with
+    /// a warning in `warnings`) when the file cannot be read.
     fn texture(
         &self,
         shader: &Prim<'l>,
         images: &mut Vec<Image>,
         image_paths: &mut Vec<std::path::PathBuf>,
+        warnings: &mut Vec<Warning>,
     ) -> Option<(TextureRef, Option<[f32; 4]>)> {
         if shader_id(shader) != Some("UsdUVTexture") {
             return None;
@@ -149,23 +213,44 @@ impl<'l> Importer<'l, '_> {
             return None;
         };
         let relative = file.strip_prefix("./").unwrap_or(file);
-        let path = self
-            .path
-            .parent()
-            .unwrap_or(std::path::Path::new(""))
-            .join(relative);
+        // Inside the package first (a `.usdz`), then beside the layer's file.
+        let in_package = self.package.as_ref().and_then(|p| p.member(relative));
+        let path = match &in_package {
+            Some((name, _)) => std::path::PathBuf::from(format!("{}[{name}]", self.path.display())),
+            None => self
+                .path
+                .parent()
+                .unwrap_or(std::path::Path::new(""))
+                .join(relative),
+        };
         let image = match image_paths.iter().position(|p| *p == path) {
             Some(k) => ImageIndex(k as u32),
             None => {
-                let bytes = std::fs::read(&path).ok()?;
+                let bytes = match in_package {
+                    Some((_, bytes)) => bytes,
+                    None => match std::fs::read(&path) {
+                        Ok(bytes) => bytes,
+                        Err(e) => {
+                            warnings.push(Warning::Incomplete {
+                                location: self.location(&shader.path),
+                                message: format!(
+                                    "the texture {file:?} cannot be read ({e}): the material \
+                                     is imported without it"
+                                ),
+                            });
+                            return None;
+                        }
+                    },
+                };
                 let mime_type = Image::sniff_mime_type(&bytes)
                     .unwrap_or("application/octet-stream")
                     .to_string();
+                let name = std::path::Path::new(relative)
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
                 images.push(Image {
-                    name: path
-                        .file_name()
-                        .map(|n| n.to_string_lossy().into_owned())
-                        .unwrap_or_default(),
+                    name,
                     mime_type,
                     bytes,
                 });

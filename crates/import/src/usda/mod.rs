@@ -193,6 +193,7 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
         up_axis: UpAxis::Y,
         skel_world: DMat4::IDENTITY,
         mesh_shapes: Vec::new(),
+        package: usdz::Package::open(bytes, path)?,
     };
     let asset = importer.run()?;
     Ok(Imported {
