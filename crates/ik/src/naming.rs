@@ -1,6 +1,8 @@
 //! Joint-name conventions of the skeletons rigport meets (CMU ASF, cgspeed BVH, Mixamo,
 //! Bandai, Pinocchio, the demo): finding the feet by name, or as named, and the name helpers
-//! the retarget maps use.
+//! the retarget maps use. Names are evidence only where the structure cannot tell
+//! (`crate::retarget::roles`): which side a chain is on when the pose does not show it, end
+//! sites and twist joints.
 
 use rigport_model::{JointIndex, Skeleton};
 
@@ -54,6 +56,83 @@ const PINOCCHIO_HUMAN: [(&str, &str); 17] = [
     ("bone_16", "bone_15"),
     ("bone_17", "bone_16"),
 ];
+
+/// Which side of the body a joint's name puts it on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NamedSide {
+    /// The character's left.
+    Left,
+    /// The character's right.
+    Right,
+}
+
+/// The body words CMU's ASF bone names put after their `l`/`r` side letter (`lfemur`).
+const CMU_PARTS: [&str; 12] = [
+    "hipjoint", "femur", "tibia", "foot", "toes", "clavicle", "humerus", "radius", "wrist", "hand",
+    "fingers", "thumb",
+];
+
+/// The side a joint's name states, in the conventions rigport meets: a `Left`/`Right`
+/// word anywhere (`LeftUpLeg`, `mixamorig:RightArm`, `upperarm_left`), an `L`/`R` token
+/// before or after a separator (`UpperLeg_L`, `L_Hip`, `thigh.l`, `Bip01 L Thigh`), an
+/// upper-case `L`/`R` before an upper-case letter (cgspeed's `LHipJoint`, `RThumb`) or
+/// CMU's lower-case `l`/`r` before a body word (`lfemur`). `None` when the name says
+/// nothing (`Hips`, `bone_5`, `j12`).
+pub fn named_side(name: &str) -> Option<NamedSide> {
+    let bare = bare(name);
+    let lower = bare.to_ascii_lowercase();
+    let has_left = lower.contains("left");
+    let has_right = lower.contains("right");
+    if has_left != has_right {
+        return Some(if has_left {
+            NamedSide::Left
+        } else {
+            NamedSide::Right
+        });
+    }
+    let side = |c: char| match c.to_ascii_lowercase() {
+        'l' => Some(NamedSide::Left),
+        'r' => Some(NamedSide::Right),
+        _ => None,
+    };
+    let tokens: Vec<&str> = bare
+        .split(['_', '.', ' ', '-'])
+        .filter(|t| !t.is_empty())
+        .collect();
+    if tokens.len() > 1 {
+        for t in &tokens {
+            if t.len() == 1 {
+                if let Some(s) = t.chars().next().and_then(side) {
+                    return Some(s);
+                }
+            }
+        }
+    }
+    let mut chars = bare.chars();
+    if let (Some(first), Some(second)) = (chars.next(), chars.next()) {
+        if matches!(first, 'L' | 'R') && second.is_ascii_uppercase() {
+            return side(first);
+        }
+        if matches!(first, 'l' | 'r') && CMU_PARTS.contains(&&lower[1..]) {
+            return side(first);
+        }
+    }
+    None
+}
+
+/// Whether a joint's name marks an end site rather than a joint that turns anything: the
+/// BVH importer names an `End Site` `<parent>_end`, Mixamo `HeadTop_End`, 3ds Max `... Nub`.
+pub fn is_end_site(name: &str) -> bool {
+    let lower = bare(name).to_ascii_lowercase();
+    lower.ends_with("end") || lower.ends_with("nub") || lower.ends_with("site")
+}
+
+/// Whether a joint's name marks a twist (roll) joint, which sits along a bone rather than
+/// at a joint of the body (`upperarm_twist_01`, `LeftArmRoll`).
+pub fn is_twist(name: &str) -> bool {
+    let lower = bare(name).to_ascii_lowercase();
+    lower.contains("twist") || lower.contains("roll")
+}
 
 /// A joint name without its namespace (`mixamorig:LeftFoot` -> `LeftFoot`).
 fn bare(name: &str) -> &str {

@@ -16,7 +16,7 @@ fn demo() -> rigport_model::Asset {
 }
 
 fn run(source: &Skeleton, clip: &Clip, target: &Skeleton, options: &RetargetOptions) -> Retargeted {
-    let map = auto_map(source, target, Vec3::Y, Vec3::Y).expect("a map");
+    let map = auto_map(source, target, Vec3::Y, Vec3::Y, Some(clip)).expect("a map");
     let input = RetargetInput {
         source,
         source_up: Vec3::Y,
