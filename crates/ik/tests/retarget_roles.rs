@@ -297,3 +297,218 @@ fn every_corpus_motion_under_every_naming_maps_every_limb_onto_human_model1() {
         eprintln!("{line}");
     }
 }
+
+/// A BVH skeleton as cgspeed's first release of the CMU database names it (18 joints:
+/// `LeftHip` the upper leg, `LeftCollar` the clavicle, `LeftShoulder` the upper arm), Y up,
+/// facing +z (the character's left at +x), knees bent a little forward, with end sites.
+fn cgspeed_bvh() -> String {
+    let leg = |side: &str, x: f32| {
+        format!(
+            "JOINT {side}Hip\n{{\nOFFSET {x} -5 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+             JOINT {side}Knee\n{{\nOFFSET 0 -42 2\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+             JOINT {side}Ankle\n{{\nOFFSET 0 -40 -2\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+             End Site\n{{\nOFFSET 0 -8 14\n}}\n}}\n}}\n}}\n"
+        )
+    };
+    let arm = |side: &str, s: f32| {
+        format!(
+            "JOINT {side}Collar\n{{\nOFFSET {} 20 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+             JOINT {side}Shoulder\n{{\nOFFSET {} 0 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+             JOINT {side}Elbow\n{{\nOFFSET {} 0 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+             JOINT {side}Wrist\n{{\nOFFSET {} 0 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+             End Site\n{{\nOFFSET {} 0 0\n}}\n}}\n}}\n}}\n}}\n",
+            3.0 * s,
+            15.0 * s,
+            28.0 * s,
+            25.0 * s,
+            18.0 * s
+        )
+    };
+    format!(
+        "HIERARCHY\nROOT Hips\n{{\nOFFSET 0 0 0\n\
+         CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n\
+         {}{}JOINT Chest\n{{\nOFFSET 0 25 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n{}{}\
+         JOINT Neck\n{{\nOFFSET 0 24 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+         JOINT Head\n{{\nOFFSET 0 8 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+         End Site\n{{\nOFFSET 0 18 0\n}}\n}}\n}}\n}}\n}}\n\
+         MOTION\nFrames: 2\nFrame Time: 0.033333\n{}\n{}\n",
+        leg("Left", 9.0),
+        leg("Right", -9.0),
+        arm("Left", 1.0),
+        arm("Right", -1.0),
+        vec!["0"; 57].join(" "),
+        vec!["0"; 57].join(" ")
+    )
+}
+
+/// `bvh` with its `ROOT`/`JOINT` names renamed by `rename`.
+fn rename_bvh(bvh: &str, rename: impl Fn(usize, &str) -> String) -> String {
+    let mut k = 0;
+    bvh.lines()
+        .map(|line| match line.split_once(' ') {
+            Some((kw @ ("ROOT" | "JOINT"), name)) => {
+                k += 1;
+                format!("{kw} {}", rename(k - 1, name))
+            }
+            _ => line.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+fn import_bvh(text: &str) -> Asset {
+    let path = Path::new("renamed.bvh");
+    let bvh = rigport_import::bvh::parse(text, path).unwrap();
+    rigport_import::bvh::to_asset("renamed", &bvh)
+        .unwrap()
+        .asset
+}
+
+/// cgspeed's original names, with Mixamo's, Bandai Namco's and numbered ones for them.
+const CGSPEED_RENAMED: [(&str, &str, &str, &str); 8] = [
+    ("Hip", "UpLeg", "UpperLeg", "thigh"),
+    ("Knee", "Leg", "LowerLeg", "calf"),
+    ("Ankle", "Foot", "Foot", "foot"),
+    ("Collar", "Shoulder", "Shoulder", "clavicle"),
+    ("Shoulder", "Arm", "UpperArm", "upperarm"),
+    ("Elbow", "ForeArm", "LowerArm", "lowerarm"),
+    ("Wrist", "Hand", "Hand", "hand"),
+    ("Chest", "Spine2", "Chest", "spine_03"),
+];
+
+#[test]
+fn renamed_copies_find_the_same_roles() {
+    let original = cgspeed_bvh();
+    let asset = import_bvh(&original);
+    let body = body_of(&asset);
+    let named: Vec<(&str, &str)> = body
+        .roles
+        .iter()
+        .map(|&(r, j)| (r, asset.skeleton.joint(j).name.as_str()))
+        .collect();
+    let expected = [
+        ("Hips", "Hips"),
+        ("Chest", "Chest"),
+        ("Neck", "Neck"),
+        ("Head", "Head"),
+        ("LeftShoulder", "LeftCollar"),
+        ("LeftUpperArm", "LeftShoulder"),
+        ("LeftLowerArm", "LeftElbow"),
+        ("LeftHand", "LeftWrist"),
+        ("RightShoulder", "RightCollar"),
+        ("RightUpperArm", "RightShoulder"),
+        ("RightLowerArm", "RightElbow"),
+        ("RightHand", "RightWrist"),
+        ("LeftUpperLeg", "LeftHip"),
+        ("LeftLowerLeg", "LeftKnee"),
+        ("LeftFoot", "LeftAnkle"),
+        ("RightUpperLeg", "RightHip"),
+        ("RightLowerLeg", "RightKnee"),
+        ("RightFoot", "RightAnkle"),
+    ];
+    assert_eq!(named, expected, "{body:?}");
+    assert_eq!(body.sides, "geometry");
+    // Mixamo (`mixamorig:LeftUpLeg`), Bandai Namco (`UpperLeg_L`), Unreal-like lower case
+    // (`thigh_l`) and numbered joints (`j0`..`j17`).
+    let part = |name: &str, column: usize| {
+        let (side, rest) = name
+            .strip_prefix("Left")
+            .map(|r| ("Left", r))
+            .or_else(|| name.strip_prefix("Right").map(|r| ("Right", r)))
+            .unwrap_or(("", name));
+        let row = CGSPEED_RENAMED.iter().find(|r| r.0 == rest);
+        let new = row.map_or(rest, |r| [r.0, r.1, r.2, r.3][column]);
+        (side, new.to_string())
+    };
+    let namings: [(&str, Box<dyn Fn(usize, &str) -> String>); 4] = [
+        (
+            "Mixamo",
+            Box::new(|_, n| {
+                let (side, p) = part(n, 1);
+                format!("mixamorig:{side}{p}")
+            }),
+        ),
+        (
+            "Bandai Namco",
+            Box::new(|_, n| match part(n, 2) {
+                ("", p) => p,
+                (side, p) => format!("{p}_{}", &side[..1]),
+            }),
+        ),
+        (
+            "lower case",
+            Box::new(|_, n| match part(n, 3) {
+                ("", p) => p.to_lowercase(),
+                (side, p) => format!("{p}_{}", side[..1].to_lowercase()),
+            }),
+        ),
+        ("numbered", Box::new(|k, _| format!("j{k}"))),
+    ];
+    for (label, rename) in namings {
+        let copy = import_bvh(&rename_bvh(&original, rename));
+        let found = body_of(&copy);
+        assert_eq!(found.roles, body.roles, "{label}: {found:?}");
+        assert_eq!(found.pelvis, body.pelvis, "{label}");
+        assert_eq!(found.sides, "geometry", "{label}");
+    }
+}
+
+#[test]
+fn names_tell_the_side_only_when_the_pose_cannot() {
+    use rigport_ik::naming::{named_side, NamedSide::*};
+    for (name, side) in [
+        ("LeftUpLeg", Some(Left)),
+        ("mixamorig:RightArm", Some(Right)),
+        ("UpperLeg_L", Some(Left)),
+        ("thigh_r", Some(Right)),
+        ("Bip01 L Thigh", Some(Left)),
+        ("LHipJoint", Some(Left)),
+        ("RThumb", Some(Right)),
+        ("lfemur", Some(Left)),
+        ("rclavicle", Some(Right)),
+        ("LowerBack", None),
+        ("Root", None),
+        ("lowerneck", None),
+        ("bone_5", None),
+        ("j12", None),
+    ] {
+        assert_eq!(named_side(name), side, "{name}");
+    }
+    // A straight-legged skeleton without toes shows no facing: the names decide, and a
+    // mirrored copy (the `Left` chains at -x) keeps its named sides.
+    let straight = cgspeed_bvh()
+        .replace("OFFSET 0 -42 2", "OFFSET 0 -42 0")
+        .replace("OFFSET 0 -40 -2", "OFFSET 0 -40 0");
+    let mirrored = straight
+        .replace("OFFSET 9 -5 0", "OFFSET X -5 0")
+        .replace("OFFSET -9 -5 0", "OFFSET 9 -5 0")
+        .replace("OFFSET X -5 0", "OFFSET -9 -5 0");
+    for text in [straight, mirrored] {
+        let asset = import_bvh(&text);
+        let body = body_of(&asset);
+        assert_eq!(body.sides, "names");
+        let hip = body.joint("LeftUpperLeg").unwrap();
+        assert_eq!(asset.skeleton.joint(hip).name, "LeftHip");
+    }
+}
+
+#[test]
+fn the_demo_character_shows_every_limb() {
+    let demo = rigport_demo::build(1).unwrap().asset;
+    let body = find_body(&demo.skeleton, rigport_model::glam::Vec3::Y, None).unwrap();
+    assert_eq!(body.limbs(), Limb::ALL.to_vec());
+    // Its joints sit at the head of the bone each turns and are named after the bone's end
+    // (`shin_l` is at the hip): the structure reads them by position, as its convention.
+    for (role, name) in [
+        ("LeftUpperLeg", "shin_l"),
+        ("LeftFoot", "toe_l"),
+        ("RightShoulder", "upper_arm_r"),
+        ("RightUpperArm", "forearm_r"),
+        ("RightHand", "fingertip_r"),
+        ("Chest", "chest"),
+        ("Head", "head_top"),
+    ] {
+        let j = body.joint(role).unwrap();
+        assert_eq!(demo.skeleton.joint(j).name, name, "{role}");
+    }
+}
