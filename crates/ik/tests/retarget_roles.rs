@@ -376,6 +376,9 @@ const CGSPEED_RENAMED: [(&str, &str, &str, &str); 8] = [
     ("Chest", "Spine2", "Chest", "spine_03"),
 ];
 
+/// A renaming: joint order index and old name to the new name.
+type Rename<'a> = Box<dyn Fn(usize, &str) -> String + 'a>;
+
 #[test]
 fn renamed_copies_find_the_same_roles() {
     let original = cgspeed_bvh();
@@ -420,7 +423,7 @@ fn renamed_copies_find_the_same_roles() {
         let new = row.map_or(rest, |r| [r.0, r.1, r.2, r.3][column]);
         (side, new.to_string())
     };
-    let namings: [(&str, Box<dyn Fn(usize, &str) -> String>); 4] = [
+    let namings: [(&str, Rename<'_>); 4] = [
         (
             "Mixamo",
             Box::new(|_, n| {
