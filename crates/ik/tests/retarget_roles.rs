@@ -515,3 +515,30 @@ fn the_demo_character_shows_every_limb() {
         assert_eq!(demo.skeleton.joint(j).name, name, "{role}");
     }
 }
+
+/// Legs hanging from a pelvis joint below the hips, the spine from the hips: the hips are
+/// the hips, the pelvis joint takes no role.
+#[test]
+fn legs_below_a_pelvis_joint() {
+    let original = cgspeed_bvh();
+    let legs_start = original.find("JOINT LeftHip").unwrap();
+    let legs_end = original.find("JOINT Chest").unwrap();
+    let wrapped = format!(
+        "{}JOINT Pelvis\n{{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n{}}}\n{}",
+        &original[..legs_start],
+        &original[legs_start..legs_end],
+        &original[legs_end..]
+    )
+    .replace(&vec!["0"; 57].join(" "), &vec!["0"; 60].join(" "));
+    let (plain, pelvis) = (import_bvh(&original), import_bvh(&wrapped));
+    let names = |a: &Asset| {
+        let body = body_of(a);
+        body.roles
+            .iter()
+            .map(|&(r, j)| (r, a.skeleton.joint(j).name.clone()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(names(&pelvis), names(&plain));
+    let body = body_of(&pelvis);
+    assert_eq!(pelvis.skeleton.joint(body.pelvis).name, "Hips");
+}

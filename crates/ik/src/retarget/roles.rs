@@ -18,16 +18,17 @@
 //!    cgspeed's `LHipJoint`, Pinocchio's pelvis bone, is not taken for it), then knee,
 //!    ankle and toe. The shoulders (upper arms) are the arms' first joints at least 1.25
 //!    times as far apart as the hips (with one arm, its first joint as far out as a hip);
-//!    the joint before is the collar (clavicle); then elbow and wrist. End
-//!    sites and twist joints (by name) are skipped, so a twist joint or an `End Site` never
-//!    takes a place.
+//!    the joint before is the collar (clavicle); then elbow and wrist. End sites and twist
+//!    joints (by name) are skipped, so a twist joint or an `End Site` never takes a place.
 //! 5. **Spine and head.** From the pelvis branch to the joint the arms hang from (the
-//!    chest): hips, spine, spine1, chest; from there to the head: neck, neck1, head. When
-//!    the hierarchy hangs from the shoulders (Pinocchio's human template), the torso roles
-//!    follow the hierarchy from its root down to the pelvis branch, so a map never reverses
-//!    the hierarchy.
-//! 6. **Left and right.** The body faces where the toes point from the ankles, else where
-//!    the knees bend; the character's right is `facing x up`. Without either, the chains'
+//!    chest): hips, spine, spine1, chest; from there to the head: neck, neck1, head. Legs
+//!    hanging from a pelvis joint below the hips leave that joint out. When the hierarchy
+//!    hangs from the shoulders (Pinocchio's human template: the legs' and the head's chains
+//!    meet where the arms hang), the torso roles follow the hierarchy from its root down
+//!    to the pelvis branch, so a map never reverses it.
+//! 6. **Left and right.** The body faces where the toes point from the ankles and the
+//!    knees bend (in a stride a foot may point anywhere, a bent knee points forward); the
+//!    character's right is `facing x up`. Without either, the chains'
 //!    names decide ([`crate::naming::named_side`]); without those, the body is taken to
 //!    face +z, the convention of the formats rigport reads.
 //!
@@ -466,9 +467,22 @@ pub fn body_in_pose(
         (None, None) => None,
     };
     let top = top.unwrap_or(branch);
-    let pelvis = if top == branch {
+    // The legs may hang from a pelvis joint below the hips (`Hips -> Pelvis -> LeftUpLeg`,
+    // the spine from `Hips`): then the top is the hips. When the top is where the arms hang
+    // (or below it), the hierarchy hangs from the shoulders; without arms, when the top is
+    // well above the pelvis.
+    let hangs = match chest {
+        Some(c) => tree.is_below(top, c),
+        None => tree.height(top) - tree.height(branch) >= 0.15 * height,
+    };
+    let pelvis = if !hangs {
         // Hips, the joints up to the chest, the chest, then the neck and head.
-        roles.push(("Hips", branch));
+        let spine: Vec<usize> = match head_top {
+            Some(h) if top != branch => std::iter::once(top).chain(tree.down(top, h)).collect(),
+            _ => spine.clone(),
+        };
+        let hips = spine[0];
+        roles.push(("Hips", hips));
         let ci = chest.and_then(|c| spine.iter().position(|&j| j == c));
         let (between, head_part) = match ci {
             Some(ci) => (&spine[1..ci], &spine[ci + 1..]),
@@ -477,11 +491,11 @@ pub fn body_in_pose(
         for (role, &j) in ["Spine", "Spine1"].iter().zip(tree.places(between).iter()) {
             roles.push((role, j));
         }
-        if let Some(c) = chest.filter(|&c| c != branch) {
+        if let Some(c) = chest.filter(|&c| c != hips) {
             roles.push(("Chest", c));
         }
         head_roles(&tree.places(head_part), &mut roles);
-        branch
+        hips
     } else {
         // The hierarchy hangs from above the pelvis: its root is the hips, the joints down
         // to the pelvis branch the spine, the branch the chest.
