@@ -542,3 +542,24 @@ fn legs_below_a_pelvis_joint() {
     let body = body_of(&pelvis);
     assert_eq!(pelvis.skeleton.joint(body.pelvis).name, "Hips");
 }
+
+/// The corpus's human rigs without joint names show every limb: Khronos's RiggedFigure and
+/// CesiumMan (glTF nodes without names) besides Pinocchio's `human_model1`.
+#[test]
+fn unnamed_corpus_rigs_show_every_limb() {
+    for rig in [
+        HUMAN_MODEL1,
+        "5_gltf/khronos_samples__nobuyuki83_delfem2/RiggedFigure.glb",
+        "5_gltf/khronos_samples__nobuyuki83_delfem2/CesiumMan.glb",
+    ] {
+        let Some(path) = rigport_testkit::corpus(rig) else {
+            return;
+        };
+        let asset = open(&[path]);
+        let body = find_body(&asset.skeleton, up_in_model(&asset.frame), None)
+            .unwrap_or_else(|| panic!("{rig}: no body"));
+        assert_eq!(body.limbs(), Limb::ALL.to_vec(), "{rig}: {body:?}");
+        assert_eq!(body.sides, "geometry", "{rig}");
+        eprintln!("{rig}: {} roles, sides by {}", body.roles.len(), body.sides);
+    }
+}
