@@ -85,10 +85,12 @@ pub enum Command {
     Animate(AnimateArgs),
     /// Re-time a clip (resample, speed, warp curve, reverse, trim), baked to linear keys.
     Retime(RetimeArgs),
-    /// Put a motion (BVH, ASF/AMC, glTF clip) onto another rig: joints mapped by name
-    /// conventions or --map, rotations transferred relative to each rest pose, hips scaled.
+    /// Put a motion (BVH, ASF/AMC, glTF clip) onto another rig: joints mapped by the body
+    /// roles both skeletons' structure shows or --map, rotations transferred relative to
+    /// each rest pose, hips scaled.
     #[command(
-        after_help = "MAP.json: {\"joints\": {\"SOURCE\": \"TARGET\" or [\"TARGET\", ...]}, \"pelvis\": {\"source\": \"S\", \"target\": \"T\"}} (pelvis optional)."
+        after_help = "MAP.json: {\"joints\": {\"SOURCE\": \"TARGET\" or [\"TARGET\", ...]}, \"pelvis\": {\"source\": \"S\", \"target\": \"T\"}} (pelvis optional).\n\
+        A map (built in or given) that leaves a leg, an arm, the spine or the head of the motion driving nothing, or puts a limb on a limb of another role, exits 1 naming the joints; --allow-partial writes the result with warning W004."
     )]
     Retarget(RetargetArgs),
     /// Play clips one after another with crossfades, optionally as a seamless loop.

@@ -1,6 +1,7 @@
 //! Exit codes, documented in `rigport --help`, and pipeline errors worded for the command
 //! line (the libraries name no flag).
 
+use rigport_ik::retarget::RetargetError;
 use rigport_import::detect::{DetectError, PinocchioFile};
 use rigport_pipeline::PipelineError;
 
@@ -64,6 +65,12 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
                 "{over}; raise it with --max-memory if the machine has the memory"
             )
         }
+        err if is_partial_map(&err) => {
+            return anyhow::Error::msg(format!(
+                "{:#}; to retarget anyway, pass --allow-partial",
+                anyhow::Error::from(err)
+            ))
+        }
         err => return err.into(),
     };
     let message = match detect {
@@ -91,6 +98,18 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
         _ => return err.into(),
     };
     anyhow::Error::msg(message)
+}
+
+/// Whether a retarget failed on a partial joint map (`RetargetError::PartialMap`).
+fn is_partial_map(err: &PipelineError) -> bool {
+    let mut cur: Option<&(dyn std::error::Error + 'static)> = Some(err);
+    while let Some(e) = cur {
+        if let Some(RetargetError::PartialMap(_)) = e.downcast_ref::<RetargetError>() {
+            return true;
+        }
+        cur = e.source();
+    }
+    false
 }
 
 /// The exit code for an error, from the markers in its chain.

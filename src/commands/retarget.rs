@@ -19,7 +19,8 @@ pub struct RetargetArgs {
     /// The rig to put it on: files or a folder, as for inputs.
     #[arg(long, value_name = "RIG", required = true, num_args = 1..)]
     pub onto: Vec<PathBuf>,
-    /// A joint map (see below); default: chosen by joint names.
+    /// A joint map (see below); default: joint for joint by name, else by the body roles
+    /// both skeletons' structure shows.
     #[arg(long, value_name = "MAP.json")]
     pub map: Option<PathBuf>,
     /// The clip to retarget (default: the first).
@@ -31,6 +32,10 @@ pub struct RetargetArgs {
     /// Turn the arms so the wrists follow the source's, scaled like the hips.
     #[arg(long)]
     pub match_hands: bool,
+    /// Retarget even when the joint map leaves a limb of the motion unmapped or puts it on
+    /// a limb of another role (a warning, W004, rather than an error).
+    #[arg(long)]
+    pub allow_partial: bool,
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
@@ -51,6 +56,7 @@ pub fn run(ctx: &Context, args: &RetargetArgs) -> Result<()> {
         options: RetargetOptions {
             plant_feet: args.plant_feet,
             match_hands: args.match_hands,
+            allow_partial: args.allow_partial,
             ..RetargetOptions::default()
         },
         json: args.json,

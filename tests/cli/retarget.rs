@@ -202,11 +202,13 @@ fn bad_maps_exit_1_with_the_json_path() {
         assert!(stderr.contains(expected), "{name}: {stderr}");
         assert!(!out.exists(), "{name}: no output");
     }
-    // A good map file works.
-    let map = dir.path().join("good.json");
+    // A well-formed map file that moves one leg only leaves the other limbs of the motion
+    // unmapped: exit 1 naming each, nothing written (issue 28; until then it wrote a rig
+    // whose arms, head and right leg kept their rest pose, with exit 0).
+    let map = dir.path().join("one_leg.json");
     std::fs::write(&map, r#"{"joints": {"Hips": "root", "LeftUpLeg": "bone_9", "LeftLeg": "bone_10", "LeftFoot": "bone_11"}, "pelvis": {"source": "Hips", "target": "bone_4"}}"#).unwrap();
-    let out = dir.path().join("good.glb");
-    rigport_ok(&[
+    let out = dir.path().join("one_leg.glb");
+    let args = [
         "retarget",
         s(&bvh),
         "--onto",
@@ -215,9 +217,142 @@ fn bad_maps_exit_1_with_the_json_path() {
         s(&map),
         "-o",
         s(&out),
+    ];
+    let run = rigport(&args);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    for limb in [
+        "the source's right leg (RightUpLeg, RightLeg) drives no target joint",
+        "the source's left arm (LeftArm, LeftForeArm)",
+        "the source's right arm (RightArm, RightForeArm)",
+        "the source's head (Neck, Neck1, Head)",
+        "--allow-partial",
+    ] {
+        assert!(stderr.contains(limb), "{limb}: {stderr}");
+    }
+    assert!(!stderr.contains("left leg"), "{stderr}");
+    assert!(!out.exists(), "no output");
+    // With --allow-partial it is written, with a coded warning naming the limbs.
+    let mut partial = args.to_vec();
+    partial.push("--allow-partial");
+    let run = rigport(&partial);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning[W004]: retarget map (file): the map is partial")
+            && stderr.contains("right leg (RightUpLeg, RightLeg)"),
+        "{stderr}"
+    );
+    assert_valid(&out);
+}
+
+/// `walk.bvh` with the joint names of cgspeed's first release of the CMU database:
+/// `LeftHip` is the upper leg, `LeftShoulder` the upper arm, `LeftCollar` the clavicle.
+fn cgspeed_original_names(bvh: &str) -> String {
+    let rename = |name: &str| -> String {
+        let (side, part) = match name.strip_prefix("Left") {
+            Some(p) => ("Left", p),
+            None => match name.strip_prefix("Right") {
+                Some(p) => ("Right", p),
+                None => {
+                    return if name == "Spine1" {
+                        "Chest".into()
+                    } else {
+                        name.into()
+                    }
+                }
+            },
+        };
+        let part = match part {
+            "UpLeg" => "Hip",
+            "Leg" => "Knee",
+            "Foot" => "Ankle",
+            "ToeBase" => "Toe",
+            "Shoulder" => "Collar",
+            "Arm" => "Shoulder",
+            "ForeArm" => "Elbow",
+            "Hand" => "Wrist",
+            p => p,
+        };
+        format!("{side}{part}")
+    };
+    bvh.lines()
+        .map(|line| {
+            let trimmed = line.trim_start();
+            match trimmed.split_once(' ') {
+                Some((kw @ ("JOINT" | "ROOT"), name)) => {
+                    let indent = &line[..line.len() - trimmed.len()];
+                    format!("{indent}{kw} {}", rename(name.trim()))
+                }
+                _ => line.to_string(),
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n"
+}
+
+/// Issue 28: cgspeed's original names matched 5 of 18 joints of the built-in maps, put
+/// `RightShoulder` (the upper arm) on the clavicle and left the legs and arms frozen, with
+/// exit 0. The structure finds every limb, and the report lists each role's joints.
+#[test]
+fn cgspeed_original_names_move_every_limb() {
+    let (Some(bvh), Some(model1)) = (corpus(WALK_BVH), corpus(HUMAN_MODEL1)) else {
+        return;
+    };
+    let dir = scratch();
+    let renamed = dir.path().join("walk_cgspeed.bvh");
+    let text = std::fs::read_to_string(&bvh).unwrap();
+    std::fs::write(&renamed, cgspeed_original_names(&text)).unwrap();
+    let out = dir.path().join("walk.glb");
+    let run = rigport(&[
+        "retarget",
+        s(&renamed),
+        "--onto",
+        s(&model1),
+        "-o",
+        s(&out),
+        "--json",
         "--quiet",
     ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     assert_valid(&out);
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let roles = report["roles"].as_array().unwrap();
+    let row = |role: &str| roles.iter().find(|r| r["role"] == role).unwrap();
+    for (role, source) in [
+        ("LeftUpperLeg", "LeftHip"),
+        ("LeftLowerLeg", "LeftKnee"),
+        ("LeftFoot", "LeftAnkle"),
+        ("RightUpperLeg", "RightHip"),
+        ("RightLowerLeg", "RightKnee"),
+        ("RightFoot", "RightAnkle"),
+        ("LeftShoulder", "LeftCollar"),
+        ("LeftUpperArm", "LeftShoulder"),
+        ("LeftLowerArm", "LeftElbow"),
+        ("RightShoulder", "RightCollar"),
+        ("RightUpperArm", "RightShoulder"),
+        ("RightLowerArm", "RightElbow"),
+        ("Chest", "Chest"),
+        ("Neck", "Neck"),
+    ] {
+        let r = row(role);
+        assert_eq!(r["source"], source, "{r}");
+        assert_eq!(r["driven_by"], source, "{r}");
+        assert!(
+            r["target"].as_str().is_some_and(|t| t.starts_with("bone_")),
+            "{r}"
+        );
+    }
+    let limbs = report["limbs"].as_array().unwrap();
+    assert!(limbs.len() >= 4, "{limbs:?}");
+    for l in limbs {
+        assert!(l["max_error"].as_f64().unwrap() < 0.1, "{l}");
+    }
 }
 
 #[test]

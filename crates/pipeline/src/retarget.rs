@@ -1,6 +1,6 @@
 //! `rigport retarget`'s pipeline: a source asset's clip put onto a target rig through a
-//! joint map (a `MAP.json` file or the built-in maps chosen by name), with the report as
-//! JSON.
+//! joint map (a `MAP.json` file, or the body roles both skeletons' structure shows), with
+//! the report as JSON.
 //!
 //! [`run`] is the whole pipeline; [`crate::retarget()`] is the same function.
 
@@ -8,7 +8,7 @@ use std::path::Path;
 
 use rigport_ik::footlock::up_in_model;
 use rigport_ik::retarget::RetargetReport;
-use rigport_ik::retarget::{JointMap, RetargetInput, RetargetOptions, auto_map, retarget};
+use rigport_ik::retarget::{JointMap, Limb, RetargetInput, RetargetOptions, auto_map, retarget};
 use rigport_model::{Asset, Warning};
 use serde_json::{Value, json};
 
@@ -45,7 +45,7 @@ pub struct RetargetRequest {
     pub onto: Input,
     /// The source clip (the first when `None`).
     pub clip: Option<String>,
-    /// A `MAP.json` (default: the built-in maps, chosen by joint names).
+    /// A `MAP.json` (default: [`auto_map`]: by name, else by body structure).
     pub map: Option<std::path::PathBuf>,
     /// Planting and hand matching.
     pub options: RetargetOptions,
@@ -132,7 +132,7 @@ pub(crate) struct Done {
 }
 
 /// Puts `source`'s clip named `clip` (or its first) onto `target`, mapped by `map_file`
-/// or by the built-in maps.
+/// or by [`auto_map`].
 ///
 /// # Errors
 /// No such clip, a bad map file (with its JSON path), no joints in common, or a failed
@@ -159,8 +159,14 @@ pub(crate) fn onto(
             JointMap::from_pairs(&source.skeleton, &file.pairs, file.pelvis, "file")
                 .ok_or_else(|| PipelineError::Invalid(format!("{}: no pairs", path.display())))?
         }
-        None => auto_map(&source.skeleton, &target.skeleton, source_up, target_up)
-            .map_err(|e| PipelineError::step("no joint map", e))?,
+        None => auto_map(
+            &source.skeleton,
+            &target.skeleton,
+            source_up,
+            target_up,
+            Some(found),
+        )
+        .map_err(|e| PipelineError::step("no joint map", e))?,
     };
     let input = RetargetInput {
         source: &source.skeleton,
@@ -201,10 +207,16 @@ pub(crate) fn report_json(done: &Done) -> Value {
     let pairs: Vec<_> = (r.pairs.iter())
         .map(|(s, t, role)| json!({"source": s, "target": t, "role": role}))
         .collect();
+    let roles: Vec<_> = (r.roles.iter())
+        .map(|row| {
+            json!({"role": row.role, "limb": Limb::of(row.role).map(Limb::label),
+                "source": row.source, "target": row.target, "driven_by": row.driven_by})
+        })
+        .collect();
     let hands: Vec<_> = (r.hands.iter())
         .map(|(l, e)| json!({"label": l, "max_error": e}))
         .collect();
-    json!({"clip": done.clip, "map": r.map, "pairs": pairs, "unmapped": r.unmapped,
+    json!({"clip": done.clip, "map": r.map, "pairs": pairs, "roles": roles, "unmapped": r.unmapped,
         "reference": r.reference, "scale_vertical": r.scale_vertical,
         "scale_horizontal": r.scale_horizontal, "frames": r.frames, "height": r.height,
         "limbs": limbs, "feet": feet, "planted": r.planted, "hands": hands})

@@ -1,10 +1,12 @@
-//! Joint maps: which source joint drives which target joint. Built-in conventions name
-//! the joints of each body role; [`auto_map`] picks the conventions of both skeletons by
-//! name matching.
+//! Joint maps: which source joint drives which target joint. [`auto_map`] pairs the body
+//! roles both skeletons' structure shows ([`super::roles`]); built-in naming conventions
+//! name the joints of each role for skeletons whose structure shows no body, and say how
+//! far a skeleton's names agree with its structure.
 
 use glam::Vec3;
-use rigport_model::{JointIndex, Skeleton};
+use rigport_model::{Clip, JointIndex, Skeleton};
 
+use super::roles::{find_body, Body};
 use super::RetargetError;
 use crate::naming::{find_bare, is_pinocchio_human};
 
@@ -35,243 +37,12 @@ pub struct JointMap {
     pub how: String,
 }
 
-/// The body roles built-in conventions name, in the order reports list them.
-pub const ROLES: [&str; 27] = [
-    "Hips",
-    "Spine",
-    "Spine1",
-    "Chest",
-    "Neck",
-    "Neck1",
-    "Head",
-    "LeftShoulder",
-    "LeftUpperArm",
-    "LeftLowerArm",
-    "LeftHand",
-    "RightShoulder",
-    "RightUpperArm",
-    "RightLowerArm",
-    "RightHand",
-    "LeftUpperLeg",
-    "LeftLowerLeg",
-    "LeftFoot",
-    "LeftToes",
-    "RightUpperLeg",
-    "RightLowerLeg",
-    "RightFoot",
-    "RightToes",
-    // Unused by the built-in conventions; kept so file maps can name them.
-    "LeftFingers",
-    "RightFingers",
-    "LeftThumb",
-    "RightThumb",
-];
+pub use super::roles::ROLES;
 
-/// A naming convention: `(role, joint name)` pairs. Names compare without case and after
-/// any namespace prefix (`mixamorig:LeftArm` is `LeftArm`).
-#[derive(Clone, Copy, Debug)]
-pub struct Convention {
-    /// A label for reports.
-    pub label: &'static str,
-    /// `(role, joint name)`.
-    pub joints: &'static [(&'static str, &'static str)],
-    /// The joint at the pelvis (where the hips' position is measured).
-    pub pelvis: &'static str,
-}
-
-/// CMU's ASF skeletons as rigport names them: each ASF bone becomes a joint at the bone's
-/// start, so `lfemur` is at the hip, `ltibia` at the knee, `lfoot` at the ankle.
-pub const CMU_ASF: Convention = Convention {
-    label: "CMU ASF",
-    pelvis: "root",
-    joints: &[
-        ("Hips", "root"),
-        ("Spine", "lowerback"),
-        ("Spine1", "upperback"),
-        ("Chest", "thorax"),
-        ("Neck", "lowerneck"),
-        ("Neck1", "upperneck"),
-        ("Head", "head"),
-        ("LeftShoulder", "lclavicle"),
-        ("LeftUpperArm", "lhumerus"),
-        ("LeftLowerArm", "lradius"),
-        ("LeftHand", "lwrist"),
-        ("RightShoulder", "rclavicle"),
-        ("RightUpperArm", "rhumerus"),
-        ("RightLowerArm", "rradius"),
-        ("RightHand", "rwrist"),
-        ("LeftUpperLeg", "lfemur"),
-        ("LeftLowerLeg", "ltibia"),
-        ("LeftFoot", "lfoot"),
-        ("LeftToes", "ltoes"),
-        ("RightUpperLeg", "rfemur"),
-        ("RightLowerLeg", "rtibia"),
-        ("RightFoot", "rfoot"),
-        ("RightToes", "rtoes"),
-    ],
-};
-
-/// cgspeed's BVH conversion of the CMU database (`LowerBack`, `Spine`, `Spine1`).
-pub const CGSPEED_BVH: Convention = Convention {
-    label: "cgspeed BVH",
-    pelvis: "Hips",
-    joints: &[
-        ("Hips", "Hips"),
-        ("Spine", "LowerBack"),
-        ("Spine1", "Spine"),
-        ("Chest", "Spine1"),
-        ("Neck", "Neck"),
-        ("Neck1", "Neck1"),
-        ("Head", "Head"),
-        ("LeftShoulder", "LeftShoulder"),
-        ("LeftUpperArm", "LeftArm"),
-        ("LeftLowerArm", "LeftForeArm"),
-        ("LeftHand", "LeftHand"),
-        ("RightShoulder", "RightShoulder"),
-        ("RightUpperArm", "RightArm"),
-        ("RightLowerArm", "RightForeArm"),
-        ("RightHand", "RightHand"),
-        ("LeftUpperLeg", "LeftUpLeg"),
-        ("LeftLowerLeg", "LeftLeg"),
-        ("LeftFoot", "LeftFoot"),
-        ("LeftToes", "LeftToeBase"),
-        ("RightUpperLeg", "RightUpLeg"),
-        ("RightLowerLeg", "RightLeg"),
-        ("RightFoot", "RightFoot"),
-        ("RightToes", "RightToeBase"),
-    ],
-};
-
-/// Mixamo and most HumanIK exports (`Spine`, `Spine1`, `Spine2`; `mixamorig:` prefixes).
-pub const MIXAMO: Convention = Convention {
-    label: "Mixamo",
-    pelvis: "Hips",
-    joints: &[
-        ("Hips", "Hips"),
-        ("Spine", "Spine"),
-        ("Spine1", "Spine1"),
-        ("Chest", "Spine2"),
-        ("Neck", "Neck"),
-        ("Head", "Head"),
-        ("LeftShoulder", "LeftShoulder"),
-        ("LeftUpperArm", "LeftArm"),
-        ("LeftLowerArm", "LeftForeArm"),
-        ("LeftHand", "LeftHand"),
-        ("RightShoulder", "RightShoulder"),
-        ("RightUpperArm", "RightArm"),
-        ("RightLowerArm", "RightForeArm"),
-        ("RightHand", "RightHand"),
-        ("LeftUpperLeg", "LeftUpLeg"),
-        ("LeftLowerLeg", "LeftLeg"),
-        ("LeftFoot", "LeftFoot"),
-        ("LeftToes", "LeftToeBase"),
-        ("RightUpperLeg", "RightUpLeg"),
-        ("RightLowerLeg", "RightLeg"),
-        ("RightFoot", "RightFoot"),
-        ("RightToes", "RightToeBase"),
-    ],
-};
-
-/// The Bandai Namco Research motion dataset's BVH (`UpperArm_L`, `Toes_R`).
-pub const BANDAI_NAMCO_BVH: Convention = Convention {
-    label: "Bandai Namco BVH",
-    pelvis: "Hips",
-    joints: &[
-        ("Hips", "Hips"),
-        ("Spine", "Spine"),
-        ("Chest", "Chest"),
-        ("Neck", "Neck"),
-        ("Head", "Head"),
-        ("LeftShoulder", "Shoulder_L"),
-        ("LeftUpperArm", "UpperArm_L"),
-        ("LeftLowerArm", "LowerArm_L"),
-        ("LeftHand", "Hand_L"),
-        ("RightShoulder", "Shoulder_R"),
-        ("RightUpperArm", "UpperArm_R"),
-        ("RightLowerArm", "LowerArm_R"),
-        ("RightHand", "Hand_R"),
-        ("LeftUpperLeg", "UpperLeg_L"),
-        ("LeftLowerLeg", "LowerLeg_L"),
-        ("LeftFoot", "Foot_L"),
-        ("LeftToes", "Toes_L"),
-        ("RightUpperLeg", "UpperLeg_R"),
-        ("RightLowerLeg", "LowerLeg_R"),
-        ("RightFoot", "Foot_R"),
-        ("RightToes", "Toes_R"),
-    ],
-};
-
-/// rigport's demo character, a Pinocchio-style rig: each joint sits at the head of the
-/// bone it drives and is named after the bone's end point (`shin_l` is at the hip and
-/// turns the thigh, `toe_l` is at the ankle and turns the foot). It has no toe-tip joint.
-pub const RIGPORT_DEMO: Convention = Convention {
-    label: "rigport demo",
-    pelvis: "hips",
-    joints: &[
-        ("Hips", "hips"),
-        ("Spine", "spine"),
-        ("Spine1", "chest"),
-        ("Chest", "neck"),
-        ("Neck", "head"),
-        ("Head", "head_top"),
-        ("LeftShoulder", "upper_arm_l"),
-        ("LeftUpperArm", "forearm_l"),
-        ("LeftLowerArm", "hand_l"),
-        ("LeftHand", "fingertip_l"),
-        ("RightShoulder", "upper_arm_r"),
-        ("RightUpperArm", "forearm_r"),
-        ("RightLowerArm", "hand_r"),
-        ("RightHand", "fingertip_r"),
-        ("LeftUpperLeg", "shin_l"),
-        ("LeftLowerLeg", "foot_l"),
-        ("LeftFoot", "toe_l"),
-        ("RightUpperLeg", "shin_r"),
-        ("RightLowerLeg", "foot_r"),
-        ("RightFoot", "toe_r"),
-    ],
-};
-
-/// Pinocchio's `HumanSkeleton` (skeleton.cpp) as rigport names it: one joint per bone,
-/// `bone_<k>` at the head of the bone ending at Pinocchio joint `k`, and `root` at joint 0
-/// (the shoulders). Pinocchio's spine hangs from the shoulders (`bone_1` shoulders to
-/// back, `bone_2` back to hips), so the source's hips drive the root, its spine `bone_1`,
-/// its chest `bone_2` (the order of the hierarchy kept: a map may not reverse it); the hip
-/// bones `bone_4`/`bone_8` follow `bone_2`, and the pelvis point is their head. The
-/// template has no hand or toe joints. Which side is left is decided from the rest pose
-/// ([`auto_map`]): Pinocchio's `l` joints lie at -x of a template that faces +z, the
-/// character's right.
-pub const PINOCCHIO_HUMAN: Convention = Convention {
-    label: "Pinocchio human template",
-    pelvis: "bone_4",
-    joints: &[
-        ("Hips", "root"),
-        ("Spine", "bone_1"),
-        ("Chest", "bone_2"),
-        ("Neck", "bone_3"),
-        ("LeftShoulder", "bone_12"),
-        ("LeftUpperArm", "bone_13"),
-        ("LeftLowerArm", "bone_14"),
-        ("RightShoulder", "bone_15"),
-        ("RightUpperArm", "bone_16"),
-        ("RightLowerArm", "bone_17"),
-        ("LeftUpperLeg", "bone_5"),
-        ("LeftLowerLeg", "bone_6"),
-        ("LeftFoot", "bone_7"),
-        ("RightUpperLeg", "bone_9"),
-        ("RightLowerLeg", "bone_10"),
-        ("RightFoot", "bone_11"),
-    ],
-};
-
-/// Every built-in convention, in the order [`auto_map`] tries them on ties.
-pub const CONVENTIONS: [Convention; 6] = [
-    CMU_ASF,
-    CGSPEED_BVH,
-    MIXAMO,
-    BANDAI_NAMCO_BVH,
+pub use crate::naming::{
+    Convention, BANDAI_NAMCO_BVH, CGSPEED_BVH, CMU_ASF, CONVENTIONS, MIXAMO, PINOCCHIO_HUMAN,
     RIGPORT_DEMO,
-    PINOCCHIO_HUMAN,
-];
+};
 
 /// The joints of `skeleton` for each role of `convention` (roles whose joint is missing
 /// are left out). For Pinocchio's template the sides are swapped when its `l` limbs lie
@@ -339,20 +110,22 @@ fn best_convention(
     best
 }
 
-/// The map chosen by names: when at least 90% of the target's joints (and at least two)
-/// have a source joint of the same name, joint for joint by name (a rig onto its own
-/// skeleton, or two rigs of one convention); otherwise through the body roles of the
-/// conventions ([`CONVENTIONS`]) that name the most joints of each skeleton.
+/// The map chosen for two skeletons: when at least 90% of the target's joints (and at
+/// least two) have a source joint of the same name, joint for joint by name (a rig onto its
+/// own skeleton, or two rigs of one convention); otherwise role for role between the bodies
+/// both skeletons' structure shows ([`find_body`]; the source's read from `source_clip`'s
+/// first frame when its rest pose does not stand); otherwise through the body roles of the
+/// naming conventions ([`CONVENTIONS`]) that name the most joints of each skeleton.
 /// `source_up`/`target_up` are the model-space up directions.
 ///
 /// # Errors
-/// [`RetargetError::NoMap`] when neither skeleton's convention is known or they share
-/// fewer than 5 roles.
+/// [`RetargetError::NoMap`] when no way finds at least 5 roles in both skeletons.
 pub fn auto_map(
     source: &Skeleton,
     target: &Skeleton,
     source_up: Vec3,
     target_up: Vec3,
+    source_clip: Option<&Clip>,
 ) -> Result<JointMap, RetargetError> {
     let same: Vec<MapPair> = target
         .joints()
@@ -376,6 +149,34 @@ pub fn auto_map(
                 pairs: same,
                 pelvis,
                 how: "by name (same joint names)".into(),
+            });
+        }
+    }
+    if let (Some(bs), Some(bt)) = (
+        find_body(source, source_up, source_clip),
+        find_body(target, target_up, None),
+    ) {
+        let mut pairs: Vec<MapPair> = bt
+            .roles
+            .iter()
+            .filter_map(|&(role, t)| {
+                bs.joint(role).map(|s| MapPair {
+                    source: s,
+                    target: t,
+                    role: Some(role),
+                })
+            })
+            .collect();
+        if pairs.len() >= 5 {
+            pairs.sort_by_key(|p| p.target);
+            return Ok(JointMap {
+                pairs,
+                pelvis: (bs.pelvis, bt.pelvis),
+                how: format!(
+                    "by body structure: source {} -> target {}",
+                    evidence(source, &bs, source_up),
+                    evidence(target, &bt, target_up)
+                ),
             });
         }
     }
@@ -403,10 +204,31 @@ pub fn auto_map(
         (Some(s), Some(t)) if roles >= 5 => Ok(JointMap {
             pairs,
             pelvis: (s, t),
-            how: format!("{} -> {}", sc.label, tc.label),
+            how: format!("by names: {} -> {}", sc.label, tc.label),
         }),
         _ => Err(RetargetError::NoMap),
     }
+}
+
+/// What a body was read from, for [`JointMap::how`]: the pose, how the sides were told,
+/// and how far the best naming convention agrees (`"(rest pose, sides by geometry;
+/// cgspeed BVH names agree on 23 of 23 roles)"`).
+fn evidence(skeleton: &Skeleton, body: &Body, up: Vec3) -> String {
+    let names = match best_convention(skeleton, up) {
+        Some((c, found)) => {
+            let agree = found
+                .iter()
+                .filter(|(r, j)| body.joint(r) == Some(*j))
+                .count();
+            format!(
+                "{} names agree on {agree} of {} roles",
+                c.label,
+                body.roles.len()
+            )
+        }
+        None => "no known names".to_string(),
+    };
+    format!("({}, sides by {}; {names})", body.pose, body.sides)
 }
 
 /// Number of ancestors of `j`.
@@ -421,7 +243,8 @@ pub(crate) fn depth(skeleton: &Skeleton, j: JointIndex) -> usize {
 }
 
 /// The body roles of `skeleton`'s joints under the built-in convention that names the most
-/// of them (empty when none names 5). `up` is the model-space up direction.
+/// of them (empty when none names 5), for skeletons whose structure shows no body. `up` is
+/// the model-space up direction.
 pub fn roles_of(skeleton: &Skeleton, up: Vec3) -> Vec<(&'static str, JointIndex)> {
     best_convention(skeleton, up)
         .map(|b| b.1)

@@ -35,7 +35,12 @@
 //!    frame as the hips; the hand keeps its world orientation.
 //! 5. **Feet** (optional): the feet are planted with [`crate::footlock`] on the target.
 //!
-//! The [`RetargetReport`] gives, per limb (each chain of mapped joints from a branching
+//! Before the transfer the map is checked against the bodies both skeletons' structure shows
+//! ([`roles`]): a limb of the source that drives nothing, or drives a limb of another role,
+//! makes the map partial, an error unless [`RetargetOptions::allow_partial`] (then a
+//! warning).
+//!
+//! The [`RetargetReport`] lists every body role with its source and target joints, and gives, per limb (each chain of mapped joints from a branching
 //! joint down to a mapped leaf), how far the end effector's path relative to the limb's
 //! first joint strays from the source's path scaled by the limb-length ratio, in target
 //! limb lengths; and each foot's slide during its contacts.
@@ -48,7 +53,7 @@
 //! let demo = rigport_demo::build(1)?;
 //! let asset = &demo.asset;
 //! let clip = &asset.clips[0];
-//! let map = auto_map(&asset.skeleton, &asset.skeleton, Vec3::Y, Vec3::Y)?;
+//! let map = auto_map(&asset.skeleton, &asset.skeleton, Vec3::Y, Vec3::Y, Some(clip))?;
 //! let input = RetargetInput {
 //!     source: &asset.skeleton,
 //!     source_up: Vec3::Y,
@@ -66,11 +71,13 @@
 pub mod align;
 pub mod maps;
 mod report;
+pub mod roles;
 #[cfg(test)]
 mod tests;
 
 pub use maps::{auto_map, JointMap, MapPair};
-pub use report::{LimbError, RetargetReport, Retargeted};
+pub use report::{LimbError, RetargetReport, Retargeted, RoleRow};
+pub use roles::{find_body, Body, Limb, MapProblem};
 
 use glam::{Mat4, Quat, Vec3};
 use rigport_model::{Clip, JointIndex, Skeleton, Transform, Warning};
@@ -88,9 +95,13 @@ use rigport_eval::{EvalError, LocalToModelJob};
 /// Why a clip could not be retargeted.
 #[derive(Debug, thiserror::Error)]
 pub enum RetargetError {
-    /// No built-in convention names enough joints of both skeletons.
-    #[error("no joint map: the skeletons share no known naming convention (CMU ASF, cgspeed BVH, Mixamo, Bandai Namco BVH, rigport demo, Pinocchio human template) with at least 5 body roles, nor joint names; give a map file")]
+    /// Neither the skeletons' structure nor a built-in convention finds enough body roles
+    /// in both.
+    #[error("no joint map: the skeletons' structure shows no two bodies with at least 5 roles in common, and they share no known naming convention (CMU ASF, cgspeed BVH, Mixamo, Bandai Namco BVH, rigport demo, Pinocchio human template) nor joint names; give a map file")]
     NoMap,
+    /// The map leaves a limb of the source unmoved, or puts a limb on another.
+    #[error("the joint map is partial: {}", .0.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))]
+    PartialMap(Vec<MapProblem>),
     /// A map pair names a joint out of range.
     #[error("the map names joint {joint} of the {side}, which has {joints} joints")]
     MapIndex {
@@ -130,6 +141,9 @@ pub struct RetargetOptions {
     pub match_hands: bool,
     /// Foot-locking settings for `plant_feet` (and for finding contacts in the report).
     pub footlock: FootlockOptions,
+    /// Retarget with a partial map ([`RetargetError::PartialMap`]) and warn about it
+    /// (`Warning::Incomplete`) rather than fail.
+    pub allow_partial: bool,
 }
 
 /// The skeletons, clip and map [`retarget`] works on. Up directions are unit vectors in
@@ -261,8 +275,45 @@ pub fn retarget(
     let rest_t = target.model_rest_matrices();
     let (up_s, up_t) = (unit_or_y(input.source_up), unit_or_y(input.target_up));
     let (pelvis_s, pelvis_t) = input.map.pelvis;
-    let roles_s = maps::roles_of(source, up_s);
-    let roles_t = maps::roles_of(target, up_t);
+    let body_s = roles::find_body(source, up_s, Some(input.clip));
+    let body_t = roles::find_body(target, up_t, None);
+    let mut warnings = Vec::new();
+    if let Some(body) = &body_s {
+        let pairs: Vec<(JointIndex, JointIndex)> = input
+            .map
+            .pairs
+            .iter()
+            .map(|p| (p.source, p.target))
+            .collect();
+        let problems = roles::check_pairs(&pairs, source, body, target, body_t.as_ref());
+        if !problems.is_empty() {
+            if !options.allow_partial {
+                return Err(RetargetError::PartialMap(problems));
+            }
+            warnings.push(Warning::Incomplete {
+                location: format!("retarget map ({})", input.map.how),
+                message: format!(
+                    "the map is partial, the result lacks the motion of: {}",
+                    problems
+                        .iter()
+                        .map(ToString::to_string)
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                ),
+            });
+        }
+    }
+    let role_rows = {
+        let pairs: Vec<(JointIndex, JointIndex)> = input
+            .map
+            .pairs
+            .iter()
+            .map(|p| (p.source, p.target))
+            .collect();
+        report::role_rows(source, target, &pairs, body_s.as_ref(), body_t.as_ref())
+    };
+    let roles_s = body_s.map_or_else(|| maps::roles_of(source, up_s), |b| b.roles);
+    let roles_t = body_t.map_or_else(|| maps::roles_of(target, up_t), |b| b.roles);
     let legs_s = legs_of(source, &roles_s);
     let legs_t = legs_of(target, &roles_t);
     // The source's reference pose: its rest pose, or the clip's first frame when the rest
@@ -430,7 +481,6 @@ pub fn retarget(
     mask.rotation[root_t.get()] = true;
     let mut clip = bake(&input.clip.name, &times, &frames, &mask)?;
 
-    let mut warnings = Vec::new();
     let (feet, planted) = plant(input, options, &legs_t, up_t, &mut clip, &mut warnings)?;
     let final_pos = {
         let compiled = CompiledClip::new(&clip, target)?;
@@ -467,6 +517,7 @@ pub fn retarget(
             })
             .collect(),
         unmapped,
+        roles: role_rows,
         reference,
         scale_vertical: scale_v,
         scale_horizontal: scale_h,

@@ -1,9 +1,55 @@
 //! What a retarget returns: the clip, and the report `rigport retarget` prints (the map,
 //! the scales, each limb's end-effector error, the feet and hands).
 
-use rigport_model::{Clip, Warning};
+use rigport_model::{Clip, JointIndex, Skeleton, Warning};
 
+use super::roles::{Body, ROLES};
 use crate::footlock::FootReport;
+
+/// One body role of the report: its joint in each skeleton's body and which source joint
+/// the map makes drive the target's.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RoleRow {
+    /// The role (one of [`ROLES`]).
+    pub role: &'static str,
+    /// The source joint playing it, when the source's body shows it.
+    pub source: Option<String>,
+    /// The target joint playing it, when the target's body shows it.
+    pub target: Option<String>,
+    /// The source joint the map makes drive that target joint (`None`: it keeps its rest
+    /// pose).
+    pub driven_by: Option<String>,
+}
+
+/// The rows of every role either body shows, in [`ROLES`] order.
+pub(crate) fn role_rows(
+    source: &Skeleton,
+    target: &Skeleton,
+    pairs: &[(JointIndex, JointIndex)],
+    source_body: Option<&Body>,
+    target_body: Option<&Body>,
+) -> Vec<RoleRow> {
+    let name = |s: &Skeleton, j: JointIndex| s.joints().get(j.get()).map(|x| x.name.clone());
+    ROLES
+        .iter()
+        .filter_map(|&role| {
+            let s = source_body.and_then(|b| b.joint(role));
+            let t = target_body.and_then(|b| b.joint(role));
+            if s.is_none() && t.is_none() {
+                return None;
+            }
+            let driven_by = t
+                .and_then(|t| pairs.iter().find(|(_, x)| *x == t))
+                .and_then(|(s, _)| name(source, *s));
+            Some(RoleRow {
+                role,
+                source: s.and_then(|j| name(source, j)),
+                target: t.and_then(|j| name(target, j)),
+                driven_by,
+            })
+        })
+        .collect()
+}
 
 /// One limb's end-effector error.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,6 +79,9 @@ pub struct RetargetReport {
     pub pairs: Vec<(String, String, Option<&'static str>)>,
     /// Target joints no source joint drives (they keep their rest pose).
     pub unmapped: Vec<String>,
+    /// Every body role either skeleton's structure shows, with its source and target
+    /// joints (empty when neither shows a body).
+    pub roles: Vec<RoleRow>,
     /// The source pose the target's rest pose is matched to: `"rest pose"`, or `"first
     /// frame"` when the source's rest pose does not stand (hips less than half a leg above
     /// the ankles).
@@ -78,6 +127,24 @@ impl RetargetReport {
             .map(|(s, t, _)| format!("{s}->{t}"))
             .collect();
         lines.push(format!("mapped: {}", pairs.join(", ")));
+        if !self.roles.is_empty() {
+            lines.push("| role | source | target |".into());
+            lines.push("| --- | --- | --- |".into());
+            for r in &self.roles {
+                let none = || "-".to_string();
+                let target = match (&r.target, &r.driven_by) {
+                    (None, _) => none(),
+                    (Some(t), Some(d)) if r.source.as_ref() == Some(d) => t.clone(),
+                    (Some(t), Some(d)) => format!("{t} (driven by {d})"),
+                    (Some(t), None) => format!("{t} (not driven)"),
+                };
+                lines.push(format!(
+                    "| {} | {} | {target} |",
+                    r.role,
+                    r.source.clone().unwrap_or_else(none)
+                ));
+            }
+        }
         lines.push("| limb | joints | end-effector error max / mean (limb lengths) |".into());
         lines.push("| --- | --- | ---: |".into());
         for l in &self.limbs {

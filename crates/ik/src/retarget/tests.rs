@@ -16,7 +16,7 @@ fn demo() -> rigport_model::Asset {
 }
 
 fn run(source: &Skeleton, clip: &Clip, target: &Skeleton, options: &RetargetOptions) -> Retargeted {
-    let map = auto_map(source, target, Vec3::Y, Vec3::Y).expect("a map");
+    let map = auto_map(source, target, Vec3::Y, Vec3::Y, Some(clip)).expect("a map");
     let input = RetargetInput {
         source,
         source_up: Vec3::Y,
@@ -215,4 +215,83 @@ fn bad_maps_are_refused() {
         retarget(&input, &RetargetOptions::default()),
         Err(RetargetError::MapIndex { .. })
     ));
+}
+
+/// A map that leaves a limb unmoved, or puts a leg on the other leg, is refused naming the
+/// joints; `allow_partial` retargets it with a coded warning.
+#[test]
+fn partial_maps_are_refused_unless_allowed() {
+    let asset = demo();
+    let s = &asset.skeleton;
+    let clip = &asset.clips[0];
+    let full = auto_map(s, s, Vec3::Y, Vec3::Y, Some(clip)).expect("a map");
+    let joint = |name: &str| s.find(name).expect("joint");
+    let left_arm = ["upper_arm_l", "forearm_l", "hand_l", "fingertip_l"].map(joint);
+    let no_left_arm: Vec<(JointIndex, JointIndex)> = full
+        .pairs
+        .iter()
+        .filter(|p| !left_arm.contains(&p.source))
+        .map(|p| (p.source, p.target))
+        .collect();
+    let swapped: Vec<(JointIndex, JointIndex)> = full
+        .pairs
+        .iter()
+        .map(|p| {
+            let name = &s.joint(p.source).name;
+            let other = match name.strip_suffix("_l") {
+                Some(stem) if stem == "shin" => format!("{stem}_r"),
+                _ => name.clone(),
+            };
+            (p.source, joint(&other))
+        })
+        .filter(|(src, t)| s.joint(*src).name != "shin_r" || *t != joint("shin_r"))
+        .collect();
+    let run = |pairs: &[(JointIndex, JointIndex)], allow_partial: bool| {
+        let map = JointMap::from_pairs(s, pairs, Some(full.pelvis), "test").expect("pairs");
+        let input = RetargetInput {
+            source: s,
+            source_up: Vec3::Y,
+            clip,
+            target: s,
+            target_up: Vec3::Y,
+            map: &map,
+        };
+        let options = RetargetOptions {
+            allow_partial,
+            ..RetargetOptions::default()
+        };
+        retarget(&input, &options)
+    };
+    match run(&no_left_arm, false) {
+        Err(RetargetError::PartialMap(problems)) => assert_eq!(
+            problems,
+            vec![MapProblem::Unmapped {
+                limb: Limb::LeftArm,
+                joints: vec!["forearm_l".into(), "hand_l".into()],
+            }]
+        ),
+        other => panic!("{other:?}"),
+    }
+    let out = run(&no_left_arm, true).expect("allowed");
+    let warning = out
+        .warnings
+        .iter()
+        .find(|w| w.code() == "W004")
+        .expect("a W004 warning");
+    assert!(
+        warning.to_string().contains("left arm (forearm_l, hand_l)"),
+        "{warning}"
+    );
+    match run(&swapped, false) {
+        Err(RetargetError::PartialMap(problems)) => assert!(
+            problems.contains(&MapProblem::WrongLimb {
+                source: "shin_l".into(),
+                source_limb: Limb::LeftLeg,
+                target: "shin_r".into(),
+                target_limb: Limb::RightLeg,
+            }),
+            "{problems:?}"
+        ),
+        other => panic!("{other:?}"),
+    }
 }
