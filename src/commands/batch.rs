@@ -68,9 +68,12 @@ pub enum ItemRun {
 /// command modules do not import each other, the dispatcher or the top-level parser.
 pub type RunItem = fn(Vec<OsString>, bool, Arc<Mutex<Vec<String>>>) -> ItemRun;
 
-/// The commands an item may run: those that read inputs and write one output file.
-const COMMANDS: [&str; 8] = [
-    "convert", "animate", "retime", "sequence", "ik", "bake", "render", "eval",
+/// The commands an item may run: those that read inputs and write one output file. Files
+/// an item reads besides its inputs (retarget's `--onto` rig and `--map`, cloth's garment,
+/// ik's handles, animate's keys) go in its options.
+const COMMANDS: [&str; 11] = [
+    "convert", "animate", "retime", "sequence", "ik", "footlock", "retarget", "cloth", "bake",
+    "render", "eval",
 ];
 
 /// Runs `batch`.

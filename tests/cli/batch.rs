@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use crate::common::{corpus, rigport, scratch};
+use crate::common::{corpus, repo, rigport, scratch};
 
 /// Every file under `dir` (relative path -> bytes), reports left out (their `seconds`
 /// vary).
@@ -606,4 +606,98 @@ fn weights_of_another_mesh_are_reported_and_denied() {
     let report = records(&report_of(&outdir));
     let warnings = report[0]["warnings"].to_string();
     assert!(warnings.contains("W005"), "{warnings}");
+}
+
+/// One item of each command that reads inputs and writes one file, footlock, retarget and
+/// cloth among them: every item is done, and a `--resume` run skips them all.
+#[test]
+fn every_single_output_command_runs_in_a_batch_and_resumes() {
+    let (Some(dash), Some(human), Some(arm)) = (
+        corpus("4_bvh/bandai_namco_ds1/dataset-1_dash_normal_001.bvh"),
+        corpus("1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1"),
+        corpus("6_usd/ustc_cg_24_hw10__USTC-CG/arm_with_cloth.usda"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let fixtures = repo().join("fixtures");
+    let branch = |ext: &str| fixtures.join(format!("pinocchio/branch{ext}"));
+    let (obj, skel, att) = (
+        branch(".obj"),
+        branch("_skeleton.out"),
+        branch("_attachment.out"),
+    );
+    let handles = dir.path().join("reach.json");
+    std::fs::write(
+        &handles,
+        r#"{"fps": 10, "handles": [{"joint": "bone_2", "relative": true,
+            "keys": [{"time": 0, "position": [0, 0, 0]}, {"time": 1, "position": [0.1, -0.1, 0]}]}]}"#,
+    )
+    .unwrap();
+    let skin = fixtures.join("gltf/skin_basic.glb");
+    let (human_s, handles_s) = (human.display().to_string(), handles.display().to_string());
+    let lines = [
+        item(
+            "retime",
+            "retime",
+            &[&dash],
+            &["--speed", "2"],
+            "dash_fast.glb",
+        ),
+        item("footlock", "footlock", &[&dash], &[], "dash_clean.glb"),
+        item(
+            "retarget",
+            "retarget",
+            &[&dash],
+            &["--onto", &human_s],
+            "dash_on_human.glb",
+        ),
+        item(
+            "cloth",
+            "cloth",
+            &[&arm],
+            &["--garment", "Grid", "--seconds", "0.5"],
+            "arm_cloth.glb",
+        ),
+        item(
+            "ik",
+            "ik",
+            &[&obj, &skel, &att],
+            &["--handles", &handles_s],
+            "reach.glb",
+        ),
+        item(
+            "bake",
+            "bake",
+            &[&skin],
+            &["--skinning", "dqs"],
+            "bend_dqs.glb",
+        ),
+        item(
+            "render",
+            "render",
+            &[&dash],
+            &["--size", "64x64"],
+            "dash.png",
+        ),
+    ];
+    let manifest = dir.path().join("m.jsonl");
+    std::fs::write(&manifest, lines.join("\n") + "\n").unwrap();
+    let out = dir.path().join("out");
+    let run = batch(&[&manifest, &out], &[]);
+    let report = records(&report_of(&out));
+    for r in &report {
+        assert_eq!(r["status"], "done", "{r}");
+    }
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert_eq!(report.len(), lines.len());
+    let again = batch(&[&manifest, &out], &["--resume"]);
+    assert!(again.status.success());
+    for r in records(&report_of(&out)) {
+        assert_eq!(r["status"], "skipped", "{r}");
+    }
 }

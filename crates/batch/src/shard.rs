@@ -66,7 +66,9 @@ impl Shard {
     /// `JOB_COMPLETION_INDEX` with `JOB_COMPLETIONS` (a Kubernetes Indexed Job sets the
     /// index; the job spec sets the count, see docs/scale.md), else
     /// `SLURM_ARRAY_TASK_ID` with `SLURM_ARRAY_TASK_COUNT` (a Slurm job array; the index is
-    /// taken relative to `SLURM_ARRAY_TASK_MIN` when that is set, so `--array=1-3` works).
+    /// `(ID - SLURM_ARRAY_TASK_MIN) / SLURM_ARRAY_TASK_STEP`, each 0 and 1 when unset, so
+    /// `--array=1-3` and the stepped `--array=0-4:2`, whose tasks 0, 2, 4 are shards 0, 1, 2
+    /// of 3, both cover every item; a task ID off the step is an error).
     /// `var` looks a variable up (`|k| std::env::var(k).ok()` in a program).
     ///
     /// # Errors
@@ -95,7 +97,15 @@ impl Shard {
                 Some(m) => m.trim().parse().map_err(|_| bad())?,
                 None => 0,
             };
-            let index = id.checked_sub(min).ok_or_else(bad)?;
+            let step: usize = match var("SLURM_ARRAY_TASK_STEP") {
+                Some(m) => m.trim().parse().map_err(|_| bad())?,
+                None => 1,
+            };
+            let offset = id.checked_sub(min).ok_or_else(bad)?;
+            if step == 0 || offset % step != 0 {
+                return Err(bad());
+            }
+            let index = offset / step;
             return Shard::parse(&format!("{index}/{}", count.trim()), name).map(Some);
         }
         Ok(None)
@@ -166,6 +176,35 @@ mod tests {
             Shard::from_env(slurm),
             Ok(Some(Shard { index: 2, count: 3 }))
         );
+        // `--array=0-4:2`: tasks 0, 2 and 4 are the three shards, each item in one.
+        let stepped = |id: &'static str| {
+            Shard::from_env(env(&[
+                ("SLURM_ARRAY_TASK_ID", id),
+                ("SLURM_ARRAY_TASK_COUNT", "3"),
+                ("SLURM_ARRAY_TASK_MIN", "0"),
+                ("SLURM_ARRAY_TASK_MAX", "4"),
+                ("SLURM_ARRAY_TASK_STEP", "2"),
+            ]))
+        };
+        let shards: Vec<Shard> = ["0", "2", "4"]
+            .into_iter()
+            .map(|id| stepped(id).unwrap().unwrap())
+            .collect();
+        assert_eq!(
+            shards
+                .iter()
+                .map(|s| (s.index, s.count))
+                .collect::<Vec<_>>(),
+            [(0, 3), (1, 3), (2, 3)]
+        );
+        for k in 0..20 {
+            assert_eq!(
+                shards.iter().filter(|s| s.contains(k)).count(),
+                1,
+                "item {k}"
+            );
+        }
+        assert!(stepped("3").is_err(), "a task off the step");
         let lone = env(&[("JOB_COMPLETION_INDEX", "0")]);
         assert!(matches!(
             Shard::from_env(lone),
