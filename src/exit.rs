@@ -2,6 +2,7 @@
 //! line (the libraries name no flag).
 
 use rigport_import::detect::{DetectError, PinocchioFile};
+use rigport_model::Warning;
 use rigport_pipeline::PipelineError;
 
 /// An input could not be read or is invalid (the message names file and line).
@@ -91,6 +92,24 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
         _ => return err.into(),
     };
     anyhow::Error::msg(message)
+}
+
+/// A warning as the command line prints it: [`Warning::labelled`], and for the warnings
+/// whose cure is a flag, the flag (the libraries name none).
+pub fn warning_line(w: &Warning) -> String {
+    let line = w.labelled();
+    match w {
+        Warning::NoContacts {
+            suggested_fps: Some(fps),
+            ..
+        } => format!(
+            "{line}; for an ASF/AMC motion, give its frame rate with --amc-fps {fps} (`rigport retime --speed` slows a clip in another format); or raise --speed"
+        ),
+        Warning::NoContacts { .. } => {
+            format!("{line}; see --height and --speed (rigport footlock --help)")
+        }
+        _ => line,
+    }
 }
 
 /// The exit code for an error, from the markers in its chain.
