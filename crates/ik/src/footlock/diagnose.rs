@@ -95,7 +95,7 @@ pub fn no_contact_cause(
             .rev()
             .copied()
             .find(|&r| r <= fps / factor)
-            .unwrap_or(COMMON_FPS[0]);
+            .unwrap_or(fps / factor);
         (fps / suggested, suggested)
     });
     Some(Cause {

@@ -19,20 +19,39 @@
 //!    correction is about half the source's slide; [`PinAt::First`] its touch-down
 //!    position. A contact that begins while the foot's other joint is already pinned is
 //!    pinned rigidly to it (same offset as in the source at that frame), so that a flat foot
-//!    can hold heel and toe at once.
+//!    can hold heel and toe at once. The pin is then moved (by at most 5% of the leg's
+//!    reach) to the nearest point the soft, stretched leg reaches from the hip at every
+//!    frame of the contact; the frames where it still cannot (the heel landing or lifting
+//!    with the hip far ahead) are left out of the contact, so the foot is held exactly
+//!    wherever a contact is reported.
 //! 3. **Solve.** Each frame, a foot with a pinned (or blending) joint gets an ankle target:
-//!    the ankle's pin, or the ankle moved with the toe onto the toe's pin. The analytic
-//!    two-bone job ([`crate::two_bone`]) turns hip and knee so the ankle meets it, with
-//!    the pole taken from the input knee's direction (so the knee bends where the source's
-//!    did, never flips). A target beyond the straight leg's reach lengthens thigh and shin
-//!    alike by up to [`FootlockOptions::max_stretch`] (the small bone-length change of
-//!    Kovar, Schreiner and Gleicher, "Footskate cleanup for motion capture editing", 2002;
-//!    mocap legs are often almost straight at heel strike and toe-off, so a pin a few
-//!    millimetres off needs it). The ankle keeps its input world orientation, turned just
-//!    enough to put the toe on its pin when the toe is held.
+//!    the ankle's pin, or the ankle moved with the toe onto the toe's pin (turned towards
+//!    the hip when that would be out of the leg's reach). The analytic two-bone job
+//!    ([`crate::two_bone`]) turns hip and knee so the ankle meets it, with the pole taken
+//!    from the input knee's direction (so the knee bends where the source's did, never
+//!    flips). Three limits keep the knee smooth:
+//!    - **Soft IK.** Past `1 -` [`FootlockOptions::soft`] of the leg's length the reach is
+//!      eased (`d = dₐ + d_s·(1 − e^{−(d₀ − dₐ)/d_s})`, the "soft IK" of Softimage and
+//!      Unreal), so the leg never straightens to hit a target and its knee angle changes
+//!      smoothly as a target nears full extension; thigh and shin lengthen alike to make
+//!      up the difference, by at most [`FootlockOptions::max_stretch`] (default 2%; the
+//!      small bone-length change of Kovar, Schreiner and Gleicher, "Footskate cleanup for
+//!      motion capture editing", 2002). The soft zone grows with the blend weight, so a
+//!      leg easing in starts exactly as the source's.
+//!    - **Knee speed.** The knee angle changes per frame by at most the source's change
+//!      plus [`FootlockOptions::max_knee_speed_deg`] times the frame's duration; a frame
+//!      held back there falls short of its target (counted in [`FootReport::unreached`]).
+//!
+//!    The ankle keeps its input world orientation, turned just enough to put the toe on
+//!    its pin when the toe is held.
 //! 4. **Blend.** Over [`FootlockOptions::blend`] seconds before a contact and after it, the
 //!    target eases (smoothstep) from the input position to the pin and back, so the leg does
 //!    not pop.
+//!
+//! When no foot has a contact, the clip is returned as it was with a
+//! [`Warning::NoContacts`] that says why ([`diagnose`]): no foot stays under the contact
+//! speed while on the ground, and whether the feet move too fast for a human, which
+//! suggests the clip plays at the wrong frame rate.
 //!
 //! The result is the input clip with the rotation tracks of each leg's hip, knee and ankle
 //! re-keyed at the clip's key times (and the translation tracks of knee and ankle when
@@ -566,6 +585,10 @@ pub fn footlock(
         _ => true,
     });
     out.tracks.extend(baked.tracks);
+    if plans.iter().all(|p| p.ankle.is_empty() && p.toe.is_empty()) {
+        // Nothing was locked: the input clip, not a re-keyed copy of it.
+        out = clip.clone();
+    }
 
     let feet: Vec<FootReport> = plans
         .iter()
