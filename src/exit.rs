@@ -103,11 +103,11 @@ pub fn warning_line(w: &Warning) -> String {
             suggested_fps: Some(fps),
             ..
         } => format!(
-            "{line}; for an ASF/AMC motion, give its frame rate with --amc-fps {fps} (`rigport retime --speed` slows a clip in another format); or raise --speed"
+            "{line}; for an ASF/AMC motion, give its frame rate with --amc-fps {fps} (`rigport retime --speed` slows a clip in another format)"
         ),
-        Warning::NoContacts { .. } => {
-            format!("{line}; see --height and --speed (rigport footlock --help)")
-        }
+        Warning::NoContacts { .. } => format!(
+            "{line}; the contact thresholds are `rigport footlock --height` and `--speed`"
+        ),
         _ => line,
     }
 }
