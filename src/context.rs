@@ -46,18 +46,18 @@ impl Context {
             let mut captured = captured.lock().unwrap_or_else(|e| e.into_inner());
             for w in warnings {
                 count += usize::from(!w.is_note());
-                captured.push(w.labelled());
+                captured.push(crate::exit::warning_line(w));
             }
         }
         // `warning[W003]: file:4: repaired: ...`, `note[N001]: ...` (codes: docs/WARNINGS.md).
         for w in warnings.iter().filter(|_| self.captured.is_none()) {
             if w.is_note() {
                 if !self.quiet {
-                    eprintln!("{}", w.labelled());
+                    eprintln!("{}", crate::exit::warning_line(w));
                 }
             } else {
                 count += 1;
-                eprintln!("{}", w.labelled());
+                eprintln!("{}", crate::exit::warning_line(w));
             }
         }
         if self.deny_warnings && count > 0 {

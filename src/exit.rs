@@ -3,6 +3,7 @@
 
 use rigport_ik::retarget::RetargetError;
 use rigport_import::detect::{DetectError, PinocchioFile};
+use rigport_model::Warning;
 use rigport_pipeline::PipelineError;
 
 /// An input could not be read or is invalid (the message names file and line).
@@ -110,6 +111,24 @@ fn is_partial_map(err: &PipelineError) -> bool {
         cur = e.source();
     }
     false
+}
+
+/// A warning as the command line prints it: [`Warning::labelled`], and for the warnings
+/// whose cure is a flag, the flag (the libraries name none).
+pub fn warning_line(w: &Warning) -> String {
+    let line = w.labelled();
+    match w {
+        Warning::NoContacts {
+            suggested_fps: Some(fps),
+            ..
+        } => format!(
+            "{line}; for an ASF/AMC motion, give its frame rate with --amc-fps {fps} (`rigport retime --speed` slows a clip in another format)"
+        ),
+        Warning::NoContacts { .. } => format!(
+            "{line}; the contact thresholds are `rigport footlock --height` and `--speed`"
+        ),
+        _ => line,
+    }
 }
 
 /// The exit code for an error, from the markers in its chain.

@@ -158,7 +158,7 @@ fn perpendicular(v: DVec3, u: DVec3, scale: f64) -> Option<DVec3> {
 
 /// The wanted root-to-tip distance for a target `d0` away (step 1 of the module docs), and
 /// whether it is the target's distance.
-fn soft_distance(d0: f64, l1: f64, l2: f64, soften: f64) -> (f64, bool) {
+pub(crate) fn soft_distance(d0: f64, l1: f64, l2: f64, soften: f64) -> (f64, bool) {
     let full = l1 + l2;
     let near = (l1 - l2).abs();
     let da = (1.0 - soften) * full;

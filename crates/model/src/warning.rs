@@ -50,6 +50,18 @@ pub enum Warning {
         /// What was measured, and what it suggests.
         message: String,
     },
+    /// Foot locking found no contact in a clip, so it left the clip as it was; the message
+    /// says why (no foot slows under the contact speed, or none is low then), and whether
+    /// the feet's speeds suggest the clip plays at the wrong frame rate.
+    NoContacts {
+        /// Where (the clip).
+        location: String,
+        /// Why, with the measured speeds.
+        message: String,
+        /// The frame rate the clip was likely recorded at, when its speeds say that the
+        /// stated rate is wrong (frames per second).
+        suggested_fps: Option<f32>,
+    },
     /// A fact about the input the user may want to know (e.g. which layout was detected).
     Note {
         /// Where.
@@ -61,7 +73,7 @@ pub enum Warning {
 
 /// Every warning code with its kebab-case name and meaning, in code order (the table
 /// `docs/WARNINGS.md` documents). A code never changes meaning once released.
-pub const WARNING_CODES: [(&str, &str, &str); 6] = [
+pub const WARNING_CODES: [(&str, &str, &str); 7] = [
     (
         "W001",
         "weights-renormalized",
@@ -86,6 +98,11 @@ pub const WARNING_CODES: [(&str, &str, &str); 6] = [
         "W005",
         "suspect",
         "the input reads cleanly but measures as probably wrong (e.g. weights of another mesh)",
+    ),
+    (
+        "W006",
+        "no-contacts",
+        "foot locking found no contact in a clip and left it as it was (says why)",
     ),
     (
         "N001",
@@ -133,7 +150,8 @@ impl Warning {
             Warning::Repaired { .. } => 2,
             Warning::Incomplete { .. } => 3,
             Warning::Suspect { .. } => 4,
-            Warning::Note { .. } => 5,
+            Warning::NoContacts { .. } => 5,
+            Warning::Note { .. } => 6,
         };
         WARNING_CODES[i]
     }
@@ -162,6 +180,9 @@ impl fmt::Display for Warning {
             Warning::Repaired { location, message } => write!(f, "{location}: repaired: {message}"),
             Warning::Incomplete { location, message } => write!(f, "{location}: {message}"),
             Warning::Suspect { location, message } => write!(f, "{location}: suspect: {message}"),
+            Warning::NoContacts {
+                location, message, ..
+            } => write!(f, "{location}: {message}"),
             Warning::Note { location, message } => write!(f, "{location}: {message}"),
         }
     }

@@ -2,7 +2,7 @@
 //!
 //! [`run`] is the whole pipeline; [`crate::footlock()`] is the same function.
 
-use rigport_ik::footlock::{FootlockOptions, footlock, resolve_feet, up_in_model};
+use rigport_ik::footlock::{FootlockOptions, Footlocked, footlock, resolve_feet, up_in_model};
 use serde_json::json;
 
 use crate::load::Input;
@@ -98,52 +98,8 @@ pub fn run(
         footlock(&asset.skeleton, clip, &legs, up, options)
     })
     .map_err(|e| PipelineError::step(format!("cannot lock the feet of clip {:?}", clip.name), e))?;
-    let mut rows = Vec::new();
-    let feet: Vec<_> = locked
-        .feet
-        .iter()
-        .map(|f| {
-            let contacts: Vec<_> = f
-                .contacts
-                .iter()
-                .map(|c| {
-                    json!({
-            "joint": c.joint, "start_frame": c.start_frame, "end_frame": c.end_frame,
-            "start_time": c.start_time, "end_time": c.end_time})
-                })
-                .collect();
-            let windows: Vec<_> = f
-                .contacts
-                .iter()
-                .map(|c| format!("{} {:.3}-{:.3} s", c.joint, c.start_time, c.end_time))
-                .collect();
-            rows.push(format!(
-                "| {} | {} | {:.2e} / {:.2e} | {:.2e} / {:.2e} | {:.2}% |",
-                f.label,
-                windows.join(", "),
-                f.before.max,
-                f.before.mean,
-                f.after.max,
-                f.after.mean,
-                100.0 * f.stretch
-            ));
-            json!({"label": f.label, "ankle": f.ankle, "toe": f.toe, "contacts": contacts,
-            "slide_before": {"max": f.before.max, "mean": f.before.mean},
-            "slide_after": {"max": f.after.max, "mean": f.after.mean},
-            "stretch": f.stretch, "unreached_frames": f.unreached})
-        })
-        .collect();
-    let json = json!({"clip": clip.name, "frames": locked.frames, "fps": locked.fps,
-        "height": locked.height, "feet_found_by": found_by, "feet": feet});
-    let table = format!(
-        "{} frames at {} fps, skeleton height {:.4}, feet: {found_by}; slides in heights\n\
-         | foot | contacts | slide before max / mean | after max / mean | stretch |\n\
-         | --- | --- | ---: | ---: | ---: |\n{}\n",
-        locked.frames,
-        locked.fps,
-        locked.height,
-        rows.join("\n")
-    );
+    let json = report_json(&clip.name, &locked, found_by);
+    let table = report_table(&locked, found_by);
     warnings.extend(locked.warnings);
     asset.clips[index] = locked.clip;
     let line = write_output(asset, warnings, &request.output, &input.budget, progress)?;
@@ -156,4 +112,77 @@ pub fn run(
         report.summary = Some(table);
     }
     Ok(report)
+}
+
+/// The report as JSON: the clip, and per foot its contacts (joint, frames, times, pin and
+/// the joint's slide in the source and the result, in heights), slides, stretch and knee
+/// step.
+fn report_json(clip: &str, locked: &Footlocked, found_by: &str) -> serde_json::Value {
+    let feet: Vec<_> = locked
+        .feet
+        .iter()
+        .map(|f| {
+            let contacts: Vec<_> = f
+                .contacts
+                .iter()
+                .map(|c| {
+                    json!({
+                        "joint": c.joint, "start_frame": c.start_frame, "end_frame": c.end_frame,
+                        "start_time": c.start_time, "end_time": c.end_time,
+                        "frames": c.end_frame + 1 - c.start_frame,
+                        "slide_before": c.slide_before, "slide_after": c.slide_after})
+                })
+                .collect();
+            json!({"label": f.label, "ankle": f.ankle, "toe": f.toe, "contacts": contacts,
+            "slide_before": {"max": f.before.max, "mean": f.before.mean},
+            "slide_after": {"max": f.after.max, "mean": f.after.mean},
+            "stretch": f.stretch, "unreached_frames": f.unreached,
+            "knee_step_deg": f.knee_step_deg})
+        })
+        .collect();
+    json!({"clip": clip, "frames": locked.frames, "fps": locked.fps,
+        "height": locked.height, "feet_found_by": found_by, "feet": feet})
+}
+
+/// The report as text: one line per foot (slides, stretch, knee step), then a table with
+/// one row per contact (a long clip has a hundred; a table cell would not hold them).
+fn report_table(locked: &Footlocked, found_by: &str) -> String {
+    let mut out = format!(
+        "{} frames at {} fps, skeleton height {:.4}, feet: {found_by}; slides in heights\n\
+         | foot | contacts | slide before max / mean | after max / mean | stretch | knee step beyond source |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: |\n",
+        locked.frames, locked.fps, locked.height
+    );
+    for f in &locked.feet {
+        out += &format!(
+            "| {} | {} | {:.2e} / {:.2e} | {:.2e} / {:.2e} | {:.2}% | {:.1}° |\n",
+            f.label,
+            f.contacts.len(),
+            f.before.max,
+            f.before.mean,
+            f.after.max,
+            f.after.mean,
+            100.0 * f.stretch,
+            f.knee_step_deg
+        );
+    }
+    if locked.feet.iter().any(|f| !f.contacts.is_empty()) {
+        out += "\n| foot | joint | start s | end s | frames | slide before | after |\n\
+                | --- | --- | ---: | ---: | ---: | ---: | ---: |\n";
+        for f in &locked.feet {
+            for c in &f.contacts {
+                out += &format!(
+                    "| {} | {} | {:.3} | {:.3} | {} | {:.2e} | {:.2e} |\n",
+                    f.label,
+                    c.joint,
+                    c.start_time,
+                    c.end_time,
+                    c.end_frame + 1 - c.start_frame,
+                    c.slide_before,
+                    c.slide_after
+                );
+            }
+        }
+    }
+    out
 }

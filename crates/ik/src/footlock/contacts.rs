@@ -109,16 +109,109 @@ pub enum PinAt {
     First,
 }
 
+/// The farthest a contact's pin is moved into the leg's reach, as a fraction of the reach
+/// (5%: 4 to 5 cm on an adult, several times a planted foot's slide in the corpus).
+const MAX_PIN_MOVE: f32 = 0.05;
+
+/// Where one joint can be held: per frame, the hip's position and the largest distance
+/// from it at which the soft, stretched leg still puts the joint exactly on its pin.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Reach<'a> {
+    /// The hip per frame, model space.
+    pub hips: &'a [Vec3],
+    /// The largest hip-to-joint distance held exactly (length unit).
+    pub radius: f32,
+}
+
+impl Reach<'_> {
+    fn reaches(&self, pin: Vec3, frame: usize) -> bool {
+        (pin - self.hips[frame]).length() <= self.radius
+    }
+
+    /// The point nearest `pin` within reach at every frame of `start..=end`, as near as
+    /// cyclic projections onto the balls around the hip find it (von Neumann's alternating
+    /// projections; a few sweeps suffice for the short arcs a hip draws in one contact).
+    fn project(&self, mut pin: Vec3, start: usize, end: usize) -> Vec3 {
+        let inner = self.radius * (1.0 - 1e-4);
+        for _ in 0..64 {
+            let mut moved = false;
+            for hip in &self.hips[start..=end] {
+                let d = pin - *hip;
+                if d.length() > inner {
+                    pin = *hip + d.normalize_or_zero() * inner;
+                    moved = true;
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        pin
+    }
+
+    /// `w` with its pin moved into reach over the whole window when some point is (a
+    /// small move: about the source's slide); otherwise the ends the pin is out of reach
+    /// at are left out first (the foot landing or lifting), and the pin is moved into reach
+    /// over what is left. A pin is moved at most [`MAX_PIN_MOVE`] of the reach: farther
+    /// than that the foot is not planted there.
+    fn fit(&self, w: Window) -> Vec<Window> {
+        let moved = |run: Window| {
+            let pin = self.project(run.pin, run.start, run.end);
+            ((pin - run.pin).length() <= MAX_PIN_MOVE * self.radius)
+                .then_some(Window { pin, ..run })
+        };
+        if let Some(whole) = moved(w) {
+            if (w.start..=w.end).all(|f| self.reaches(whole.pin, f)) {
+                return vec![whole];
+            }
+        }
+        self.trim(w)
+            .into_iter()
+            .filter_map(moved)
+            .flat_map(|run| self.trim(run))
+            .collect()
+    }
+
+    /// The runs of at least two frames of `w` where its pin is in reach (usually one: the
+    /// window without the frames at its ends where the foot is landing or lifting).
+    fn trim(&self, w: Window) -> Vec<Window> {
+        let mut out = Vec::new();
+        let mut run: Option<usize> = None;
+        for f in w.start..=w.end + 1 {
+            let inside = f <= w.end && self.reaches(w.pin, f);
+            match (run, inside) {
+                (None, true) => run = Some(f),
+                (Some(start), false) => {
+                    if f - 1 > start {
+                        out.push(Window {
+                            start,
+                            end: f - 1,
+                            pin: w.pin,
+                        });
+                    }
+                    run = None;
+                }
+                _ => {}
+            }
+        }
+        out
+    }
+}
+
 /// Pins for the contacts of one foot's ankle and toe, in time order. A contact that starts
 /// while the other joint is already pinned is pinned rigidly to it (`pin_other +
 /// (p_self - p_other)` at its first frame), so that a foot with both joints down can hold
-/// both exactly; otherwise [`PinAt`] decides.
+/// both exactly; otherwise [`PinAt`] decides, and the pin is moved to the nearest point
+/// the leg reaches over the whole contact. The frames where its pin is still out of reach
+/// (at a contact's ends, where the foot lands or lifts) are left out of it, splitting it
+/// if need be (`reach`: the ankle's, then the toe's).
 pub(crate) fn pin_windows(
     ankle: &[(usize, usize)],
     toe: &[(usize, usize)],
     ankle_positions: &[Vec3],
     toe_positions: Option<&[Vec3]>,
     at: PinAt,
+    reach: [Reach<'_>; 2],
 ) -> (Vec<Window>, Vec<Window>) {
     let make = |ranges: &[(usize, usize)]| -> Vec<Window> {
         ranges
@@ -130,7 +223,7 @@ pub(crate) fn pin_windows(
             })
             .collect()
     };
-    let mut sides = [make(ankle), make(toe)];
+    let sides = [make(ankle), make(toe)];
     let positions = [Some(ankle_positions), toe_positions];
     // Visit every window by start frame (ankle first on ties).
     let mut order: Vec<(usize, usize, usize)> = sides
@@ -139,29 +232,33 @@ pub(crate) fn pin_windows(
         .flat_map(|(s, ws)| ws.iter().enumerate().map(move |(i, w)| (w.start, s, i)))
         .collect();
     order.sort_unstable();
-    let mut done = [vec![false; sides[0].len()], vec![false; sides[1].len()]];
+    let mut done: [Vec<Window>; 2] = [Vec::new(), Vec::new()];
     for (start, s, i) in order {
         let Some(own) = positions[s] else { continue };
         let w = sides[s][i];
         let other = 1 - s;
         let anchor = positions[other].and_then(|p_other| {
-            sides[other]
+            done[other]
                 .iter()
-                .zip(&done[other])
-                .find(|(o, d)| **d && o.contains(start))
-                .map(|(o, _)| o.pin + (own[start] - p_other[start]))
+                .find(|o| o.contains(start))
+                .map(|o| o.pin + (own[start] - p_other[start]))
         });
-        let pin = anchor.unwrap_or_else(|| match at {
-            PinAt::First => own[w.start],
-            PinAt::Mean => {
-                let sum: Vec3 = own[w.start..=w.end].iter().copied().sum();
-                sum / (w.end + 1 - w.start) as f32
-            }
-        });
-        sides[s][i].pin = pin;
-        done[s][i] = true;
+        let Some(pin) = anchor else {
+            let pin = match at {
+                PinAt::First => own[w.start],
+                PinAt::Mean => {
+                    let sum: Vec3 = own[w.start..=w.end].iter().copied().sum();
+                    sum / (w.end + 1 - w.start) as f32
+                }
+            };
+            done[s].extend(reach[s].fit(Window { pin, ..w }));
+            continue;
+        };
+        done[s].extend(reach[s].trim(Window { pin, ..w }));
     }
-    let [a, t] = sides;
+    let [mut a, mut t] = done;
+    a.sort_by_key(|w| w.start);
+    t.sort_by_key(|w| w.start);
     (a, t)
 }
 
@@ -246,12 +343,62 @@ mod tests {
             .iter()
             .map(|p| *p + Vec3::new(2.0, 0.0, 0.0))
             .collect();
-        let (a, t) = pin_windows(&[(0, 4)], &[(2, 8)], &ankle, Some(&toe), PinAt::Mean);
+        let hips = [Vec3::ZERO; 10];
+        let far = Reach {
+            hips: &hips,
+            radius: 100.0,
+        };
+        let (a, t) = pin_windows(
+            &[(0, 4)],
+            &[(2, 8)],
+            &ankle,
+            Some(&toe),
+            PinAt::Mean,
+            [far; 2],
+        );
         assert_eq!(a[0].pin, Vec3::new(2.0, 0.0, 0.0));
         // The toe contact starts inside the ankle's: 2 ahead of the ankle's pin.
         assert_eq!(t[0].pin, Vec3::new(4.0, 0.0, 0.0));
-        let (a, _) = pin_windows(&[(3, 4)], &[], &ankle, None, PinAt::First);
+        let (a, _) = pin_windows(&[(3, 4)], &[], &ankle, None, PinAt::First, [far; 2]);
         assert_eq!(a[0].pin, Vec3::new(3.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn pins_move_into_reach_and_unreachable_ends_are_trimmed() {
+        // The hip walks +x by 1 a frame, 2 above the ground; the ankle stays at 0 (reach
+        // 2.5: reachable from the hip at x in [-1.5, 1.5]).
+        let hips: Vec<Vec3> = (0..10)
+            .map(|f| Vec3::new(f as f32 - 4.0, 2.0, 0.0))
+            .collect();
+        let ankle = vec![Vec3::ZERO; 10];
+        let reach = Reach {
+            hips: &hips,
+            radius: 2.5,
+        };
+        // Frames 3..=5 (hip at -1, 0, 1): the mean pin is reachable throughout.
+        let (a, _) = pin_windows(&[(3, 5)], &[], &ankle, None, PinAt::Mean, [reach; 2]);
+        assert_eq!((a[0].start, a[0].end, a[0].pin), (3, 5, Vec3::ZERO));
+        // Frames 0..=9: the hip passes from -4 to 5; the frames where the pin is out of
+        // reach are left out.
+        let (a, _) = pin_windows(&[(0, 9)], &[], &ankle, None, PinAt::Mean, [reach; 2]);
+        assert_eq!((a[0].start, a[0].end, a[0].pin), (3, 5, Vec3::ZERO));
+        // A pin just out of reach moves into it: the ankle 2.6 below a standing hip.
+        let low = vec![Vec3::new(0.0, -0.6, 0.0); 10];
+        let still = [Vec3::new(0.0, 2.0, 0.0); 10];
+        let reach_still = Reach {
+            hips: &still,
+            radius: 2.5,
+        };
+        let (a, _) = pin_windows(&[(3, 5)], &[], &low, None, PinAt::Mean, [reach_still; 2]);
+        assert_eq!((a[0].start, a[0].end), (3, 5));
+        assert!((a[0].pin - still[0]).length() <= 2.5);
+        // A window with no two frames in reach is dropped.
+        let near = Reach {
+            hips: &hips,
+            radius: 1.0,
+        };
+        let (a, _) = pin_windows(&[(0, 9)], &[], &ankle, None, PinAt::Mean, [near; 2]);
+        assert!(a.is_empty(), "{a:?}");
     }
 
     #[test]

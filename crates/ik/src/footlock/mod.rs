@@ -19,20 +19,39 @@
 //!    correction is about half the source's slide; [`PinAt::First`] its touch-down
 //!    position. A contact that begins while the foot's other joint is already pinned is
 //!    pinned rigidly to it (same offset as in the source at that frame), so that a flat foot
-//!    can hold heel and toe at once.
+//!    can hold heel and toe at once. The pin is then moved (by at most 5% of the leg's
+//!    reach) to the nearest point the soft, stretched leg reaches from the hip at every
+//!    frame of the contact; the frames where it still cannot (the heel landing or lifting
+//!    with the hip far ahead) are left out of the contact, so the foot is held exactly
+//!    wherever a contact is reported.
 //! 3. **Solve.** Each frame, a foot with a pinned (or blending) joint gets an ankle target:
-//!    the ankle's pin, or the ankle moved with the toe onto the toe's pin. The analytic
-//!    two-bone job ([`crate::two_bone`]) turns hip and knee so the ankle meets it, with
-//!    the pole taken from the input knee's direction (so the knee bends where the source's
-//!    did, never flips). A target beyond the straight leg's reach lengthens thigh and shin
-//!    alike by up to [`FootlockOptions::max_stretch`] (the small bone-length change of
-//!    Kovar, Schreiner and Gleicher, "Footskate cleanup for motion capture editing", 2002;
-//!    mocap legs are often almost straight at heel strike and toe-off, so a pin a few
-//!    millimetres off needs it). The ankle keeps its input world orientation, turned just
-//!    enough to put the toe on its pin when the toe is held.
+//!    the ankle's pin, or the ankle moved with the toe onto the toe's pin (turned towards
+//!    the hip when that would be out of the leg's reach). The analytic two-bone job
+//!    ([`crate::two_bone`]) turns hip and knee so the ankle meets it, with the pole taken
+//!    from the input knee's direction (so the knee bends where the source's did, never
+//!    flips). Three limits keep the knee smooth:
+//!    - **Soft IK.** Past `1 -` [`FootlockOptions::soft`] of the leg's length the reach is
+//!      eased (`d = dₐ + d_s·(1 − e^{−(d₀ − dₐ)/d_s})`, the "soft IK" of Softimage and
+//!      Unreal), so the leg never straightens to hit a target and its knee angle changes
+//!      smoothly as a target nears full extension; thigh and shin lengthen alike to make
+//!      up the difference, by at most [`FootlockOptions::max_stretch`] (default 2%; the
+//!      small bone-length change of Kovar, Schreiner and Gleicher, "Footskate cleanup for
+//!      motion capture editing", 2002). The soft zone grows with the blend weight, so a
+//!      leg easing in starts exactly as the source's.
+//!    - **Knee speed.** The knee angle changes per frame by at most the source's change
+//!      plus [`FootlockOptions::max_knee_speed_deg`] times the frame's duration; a frame
+//!      held back there falls short of its target (counted in [`FootReport::unreached`]).
+//!
+//!    The ankle keeps its input world orientation, turned just enough to put the toe on
+//!    its pin when the toe is held.
 //! 4. **Blend.** Over [`FootlockOptions::blend`] seconds before a contact and after it, the
 //!    target eases (smoothstep) from the input position to the pin and back, so the leg does
 //!    not pop.
+//!
+//! When no foot has a contact, the clip is returned as it was with a
+//! [`Warning::NoContacts`] that says why ([`diagnose`]): no foot stays under the contact
+//! speed while on the ground, and whether the feet move too fast for a human, which
+//! suggests the clip plays at the wrong frame rate.
 //!
 //! The result is the input clip with the rotation tracks of each leg's hip, knee and ankle
 //! re-keyed at the clip's key times (and the translation tracks of knee and ankle when
@@ -84,6 +103,7 @@
 //! ```
 
 mod contacts;
+pub mod diagnose;
 mod solve;
 #[cfg(test)]
 mod tests;
@@ -141,9 +161,16 @@ pub struct FootlockOptions {
     /// Where a contact's pin is.
     pub pin_at: PinAt,
     /// How much a leg may lengthen (fraction of its length, thigh and shin alike) when a
-    /// pin lies beyond the straight leg's reach; 0 keeps bone lengths and leaves such
-    /// frames short of their pins.
+    /// pin lies beyond the soft leg's reach; 0 keeps bone lengths and leaves such frames
+    /// short of their pins.
     pub max_stretch: f32,
+    /// Soft IK: the fraction of the leg's length, short of full extension, from which its
+    /// reach is eased (`0..1`; 0 lets the leg snap straight). The leg never straightens to
+    /// hit a target; the stretch makes up the difference.
+    pub soft: f32,
+    /// The most the knee angle may change per second beyond the source's own change,
+    /// degrees per second (1200: 10° a frame at 120 fps).
+    pub max_knee_speed_deg: f32,
 }
 
 impl Default for FootlockOptions {
@@ -153,8 +180,11 @@ impl Default for FootlockOptions {
     /// toe-off passes that within a few frames) and moves slower than 0.2 heights per
     /// second (0.34 m/s; a swinging foot moves at 2-5 m/s, a planted one at 120 fps shows
     /// 0.02-0.1 heights per second of marker noise); hysteresis 1.5; contacts of at least
-    /// 0.03 s (a running stance lasts about 0.1 s); blends over 0.1 s; mean pins; legs may
-    /// grow by up to 10% (the corpus needs at most 6.6%).
+    /// 0.03 s (a running stance lasts about 0.1 s); blends over 0.1 s; mean pins, moved
+    /// into the leg's reach; legs may grow by up to 2% (a bone-length change the eye does
+    /// not catch) and soften over the last 2% of their length (the knee stays under about
+    /// 171°); the knee turns at most 1200°/s (10° a frame at 120 fps) faster than the
+    /// source's.
     fn default() -> Self {
         Self {
             height: 0.01,
@@ -163,7 +193,9 @@ impl Default for FootlockOptions {
             min_contact: 0.03,
             blend: 0.1,
             pin_at: PinAt::Mean,
-            max_stretch: 0.1,
+            max_stretch: 0.02,
+            soft: 0.02,
+            max_knee_speed_deg: 1200.0,
         }
     }
 }
@@ -248,6 +280,11 @@ pub struct Contact {
     pub end_time: f32,
     /// Where the joint is held, model space (the asset's length unit).
     pub pin: Vec3,
+    /// The joint's largest distance, over the contact, from its position at the contact's
+    /// first frame in the input clip, skeleton heights.
+    pub slide_before: f32,
+    /// ... and in the locked clip.
+    pub slide_after: f32,
 }
 
 /// How far a foot's joints move during their contacts, in skeleton heights.
@@ -278,9 +315,12 @@ pub struct FootReport {
     /// The most the leg was lengthened to reach a pin (fraction of its length; see
     /// [`FootlockOptions::max_stretch`]).
     pub stretch: f32,
-    /// Frames whose ankle target lay beyond even the stretched leg (the solve then leaves
-    /// the leg straight, pointing at it).
+    /// Frames inside contacts whose target the leg did not reach (beyond even the
+    /// stretched leg, or the knee's speed limit held it back).
     pub unreached: usize,
+    /// The largest change of the knee angle in one frame beyond the source's change in
+    /// that frame, degrees.
+    pub knee_step_deg: f32,
 }
 
 /// A foot-locked clip and its report.
@@ -296,8 +336,9 @@ pub struct Footlocked {
     pub fps: f32,
     /// The skeleton height (asset length unit) the thresholds and slides are relative to.
     pub height: f32,
-    /// A note per foot without contacts; an [`Warning::Incomplete`] per foot with frames
-    /// short of their targets.
+    /// A [`Warning::NoContacts`] when no foot has a contact (with why); a note per foot
+    /// without contacts when others have some; an [`Warning::Incomplete`] per foot with
+    /// frames short of their targets.
     pub warnings: Vec<Warning>,
 }
 
@@ -333,7 +374,7 @@ impl FootlockOptions {
     /// # Errors
     /// [`FootlockError::Option`] naming the first bad field.
     pub fn validate(&self) -> Result<(), FootlockError> {
-        let checks: [(&'static str, f32, bool, &'static str); 6] = [
+        let checks: [(&'static str, f32, bool, &'static str); 8] = [
             ("height", self.height, self.height > 0.0, "expected > 0"),
             ("speed", self.speed, self.speed > 0.0, "expected > 0"),
             (
@@ -354,6 +395,18 @@ impl FootlockOptions {
                 self.max_stretch,
                 self.max_stretch >= 0.0,
                 "expected >= 0",
+            ),
+            (
+                "soft",
+                self.soft,
+                (0.0..1.0).contains(&self.soft),
+                "expected in [0, 1)",
+            ),
+            (
+                "max_knee_speed_deg",
+                self.max_knee_speed_deg,
+                self.max_knee_speed_deg > 0.0,
+                "expected > 0",
             ),
         ];
         for (name, value, ok, expected) in checks {
@@ -445,24 +498,58 @@ pub fn footlock(
         min_frames: frames_of(options.min_contact).max(2),
     };
     let blend = frames_of(options.blend).max(1);
-    let windows_of = |p: &[Vec3]| {
+    let mut speeds = Vec::new();
+    let mut windows_of = |p: &[Vec3]| {
         let heights: Vec<f32> = p.iter().map(|x| x.dot(up)).collect();
         let ground = contacts::local_ground(&heights, frames_of(GROUND_WINDOW));
-        contacts::detect(&heights, &contacts::speeds(p, &times), &ground, &thresholds)
+        let v = contacts::speeds(p, &times);
+        let per_height: Vec<f32> = v.iter().map(|x| x / height).collect();
+        let low: Vec<bool> = heights
+            .iter()
+            .zip(&ground)
+            .map(|(h, g)| h - g <= thresholds.height_on)
+            .collect();
+        speeds.push(diagnose::FootSpeeds::of(
+            &per_height,
+            &low,
+            thresholds.min_frames,
+        ));
+        contacts::detect(&heights, &v, &ground, &thresholds)
     };
+    let limits = solve::Limits {
+        soft: options.soft,
+        max_stretch: options.max_stretch,
+        knee_speed_rad: options.max_knee_speed_deg.to_radians(),
+    };
+    let reach = limits.reach_limit();
     // Per leg: ankle and toe positions, contact windows with pins.
     let mut plans = Vec::with_capacity(legs.len());
     for leg in legs {
         let ankle = column(&before, joints, leg.ankle);
         let toe = leg.toe.map(|t| column(&before, joints, t));
         let ankle_ranges = windows_of(&ankle);
-        let toe_ranges = toe.as_deref().map(windows_of).unwrap_or_default();
+        let toe_ranges = toe.as_deref().map(&mut windows_of).unwrap_or_default();
+        let hips = column(&before, joints, leg.hip);
+        let knees = column(&before, joints, leg.knee);
+        let leg_length = (knees[0] - hips[0]).length() + (ankle[0] - knees[0]).length();
+        let foot = toe.as_ref().map_or(0.0, |t| (t[0] - ankle[0]).length());
+        let radius = reach * leg_length;
         let (aw, tw) = contacts::pin_windows(
             &ankle_ranges,
             &toe_ranges,
             &ankle,
             toe.as_deref(),
             options.pin_at,
+            [
+                contacts::Reach {
+                    hips: &hips,
+                    radius,
+                },
+                contacts::Reach {
+                    hips: &hips,
+                    radius: radius + foot,
+                },
+            ],
         );
         plans.push(solve::LegPlan {
             leg: leg.clone(),
@@ -472,7 +559,7 @@ pub fn footlock(
     }
 
     let mut locked = source.clone();
-    let mut solver = solve::Solver::new(skeleton, &before, &plans, joints, options.max_stretch)?;
+    let mut solver = solve::Solver::new(skeleton, &before, &times, &plans, limits);
     for (f, local) in locked.chunks_exact_mut(joints).enumerate() {
         solver.frame(f, blend, local, &mut model)?;
     }
@@ -498,24 +585,35 @@ pub fn footlock(
         _ => true,
     });
     out.tracks.extend(baked.tracks);
+    if plans.iter().all(|p| p.ankle.is_empty() && p.toe.is_empty()) {
+        // Nothing was locked: the input clip, not a re-keyed copy of it.
+        out = clip.clone();
+    }
 
     let feet: Vec<FootReport> = plans
         .iter()
-        .zip(solver.stretch.iter().zip(&solver.unreached))
-        .map(|(plan, (&stretch, &unreached))| FootReport {
-            stretch,
-            unreached,
+        .enumerate()
+        .map(|(i, plan)| FootReport {
+            stretch: solver.stretch[i],
+            unreached: solver.unreached[i],
+            knee_step_deg: solver.knee_step[i].to_degrees(),
             ..report(skeleton, plan, &times, &before, &after, joints, height)
         })
         .collect();
     let mut warnings = Vec::new();
+    let none = feet.iter().all(|f| f.contacts.is_empty());
+    if none {
+        warnings.push(no_contacts(&clip.name, &speeds, fps, options));
+    }
     for foot in &feet {
         let location = format!("clip {:?}, foot {} ({})", clip.name, foot.label, foot.ankle);
         if foot.contacts.is_empty() {
-            warnings.push(Warning::Note {
-                location,
-                message: "no contact found; left as it was".into(),
-            });
+            if !none {
+                warnings.push(Warning::Note {
+                    location,
+                    message: "no contact found; left as it was".into(),
+                });
+            }
         } else if foot.unreached > 0 {
             warnings.push(Warning::Incomplete {
                 location,
@@ -557,7 +655,9 @@ fn report(
             .chain(leg.toe.map(|t| (t, &plan.toe[..])))
             .collect();
     for (j, windows) in joints_and_windows {
+        let (src, out) = (column(before, joints, j), column(after, joints, j));
         for w in windows {
+            let one = std::slice::from_ref(w);
             contacts.push(Contact {
                 joint: name(j),
                 start_frame: w.start,
@@ -565,10 +665,12 @@ fn report(
                 start_time: times[w.start],
                 end_time: times[w.end],
                 pin: w.pin,
+                slide_before: contacts::slide(one, &src).0 / height,
+                slide_after: contacts::slide(one, &out).0 / height,
             });
         }
-        for (slide, positions) in slides.iter_mut().zip([before, after]) {
-            let (max, sum, n) = contacts::slide(windows, &column(positions, joints, j));
+        for (slide, positions) in slides.iter_mut().zip([&src, &out]) {
+            let (max, sum, n) = contacts::slide(windows, positions);
             slide.0 = slide.0.max(max);
             slide.1 += sum;
             slide.2 += n;
@@ -591,5 +693,43 @@ fn report(
         after: to_slide(slides[1]),
         stretch: 0.0,
         unreached: 0,
+        knee_step_deg: 0.0,
+    }
+}
+
+/// The warning for a clip in which no foot has a contact, saying why.
+fn no_contacts(
+    clip: &str,
+    speeds: &[diagnose::FootSpeeds],
+    fps: f32,
+    options: &FootlockOptions,
+) -> Warning {
+    let location = format!("clip {clip:?}");
+    match diagnose::no_contact_cause(speeds, fps, options) {
+        None => Warning::NoContacts {
+            location,
+            message: "no foot contact found: the feet slow down while on the ground, but not for long enough; the legs are left as they were".into(),
+            suggested_fps: None,
+        },
+        Some(cause) => {
+            let mut message = format!(
+                "no foot contact found: no foot stays under the contact speed of {} heights/s for {} s while on the ground (the slowest does {:.3}); the feet's median speed is {:.1} m/s taking the skeleton as {} m tall; the legs are left as they were",
+                options.speed,
+                options.min_contact,
+                cause.slowest,
+                cause.median_m_s,
+                diagnose::HUMAN_HEIGHT_M
+            );
+            if let Some((factor, fps_suggested)) = cause.rate {
+                message += &format!(
+                    "; that is faster than a human's feet move most of the time, so the clip likely plays about {factor:.1}x too fast: it may have been recorded at {fps_suggested} fps, not {fps:.0}"
+                );
+            }
+            Warning::NoContacts {
+                location,
+                message,
+                suggested_fps: cause.rate.map(|(_, r)| r),
+            }
+        }
     }
 }

@@ -309,3 +309,136 @@ fn legs_change_only_near_contacts_and_blend_without_popping() {
     // Without the blend the foot would jump the whole gap in one frame.
     assert!(step_of(&pa) < gap + step_of(&pb));
 }
+
+/// Model-space (hip, knee, ankle) positions of the drifting leg per key time of `clip`.
+fn leg_positions(skeleton: &Skeleton, clip: &Clip) -> Vec<[Vec3; 3]> {
+    let compiled = CompiledClip::new(clip, skeleton).unwrap();
+    let frames = sample_frames(&compiled, &rest_locals(skeleton), &compiled.key_times()).unwrap();
+    frames
+        .chunks_exact(skeleton.len())
+        .map(|l| {
+            let m = rigport_eval::Pose { local: l.to_vec() }
+                .model_matrices(skeleton)
+                .unwrap();
+            [1, 2, 3].map(|j| m[j].w_axis.truncate())
+        })
+        .collect()
+}
+
+#[test]
+fn a_leg_pulled_past_its_reach_stays_bent_and_stretches_within_the_limit() {
+    // The hips drift 0.3 forward in a second while the foot is planted: the leg (0.9 long,
+    // nearly straight) would have to grow by several percent to hold the foot at the end.
+    let (skeleton, clip) = drifting_leg(0.3);
+    let mut clip = clip;
+    // A slow drift the detector takes for a contact: plant it explicitly by lowering the
+    // speed threshold's bar (the foot moves at 0.3/0.95 heights per second).
+    let options = FootlockOptions {
+        speed: 0.5,
+        ..FootlockOptions::default()
+    };
+    clip.name = "pulled".into();
+    let (legs, _) = find_feet(&skeleton).unwrap();
+    let locked = footlock(&skeleton, &clip, &legs, Vec3::Y, &options).unwrap();
+    let foot = &locked.feet[0];
+    assert!(!foot.contacts.is_empty(), "{foot:?}");
+    assert!(foot.stretch <= options.max_stretch + 1e-6, "{foot:?}");
+    let (src, out) = (
+        leg_positions(&skeleton, &clip),
+        leg_positions(&skeleton, &locked.clip),
+    );
+    let angle = |[h, k, a]: [Vec3; 3]| solve::knee_angle(h, k, a).to_degrees();
+    let lengths = |[h, k, a]: [Vec3; 3]| (k - h).length() + (a - k).length();
+    let limit_deg = options.max_knee_speed_deg / 30.0;
+    for f in 0..src.len() {
+        // Never straight (the source is at 167°: the knee is 0.05 off the line over 0.9).
+        assert!(angle(out[f]) < 179.0, "frame {f}: {}°", angle(out[f]));
+        assert!(lengths(out[f]) <= lengths(src[f]) * (1.0 + options.max_stretch) + 1e-5);
+        if f > 0 {
+            let step = (angle(out[f]) - angle(out[f - 1])) - (angle(src[f]) - angle(src[f - 1]));
+            assert!(step.abs() <= limit_deg + 1e-3, "frame {f}: {step}°");
+        }
+    }
+    // Wherever a contact is reported, the ankle is held.
+    for c in foot.contacts.iter().filter(|c| c.joint == "LeftFoot") {
+        for f in c.start_frame..=c.end_frame {
+            assert!((out[f][2] - c.pin).length() < 1e-5, "frame {f}");
+        }
+    }
+    assert!(foot.after.max < 1e-5, "{foot:?}");
+}
+
+#[test]
+fn the_knee_turns_no_faster_than_the_limit_beyond_the_source() {
+    // A pin far from the source ankle pulls the knee hard as the leg eases in: with a
+    // tight limit the turn per frame is capped (and frames held back are counted).
+    let (skeleton, drift) = drifting_leg(0.06);
+    let clip = step(&skeleton, &drift);
+    let (legs, _) = find_feet(&skeleton).unwrap();
+    let options = FootlockOptions {
+        max_knee_speed_deg: 30.0,
+        ..FootlockOptions::default()
+    };
+    let locked = footlock(&skeleton, &clip, &legs, Vec3::Y, &options).unwrap();
+    assert!(
+        locked.feet[0].knee_step_deg <= 1.0 + 1e-3,
+        "{:?}",
+        locked.feet[0]
+    );
+    let (src, out) = (
+        leg_positions(&skeleton, &clip),
+        leg_positions(&skeleton, &locked.clip),
+    );
+    let angle = |[h, k, a]: [Vec3; 3]| solve::knee_angle(h, k, a).to_degrees();
+    for f in 1..src.len() {
+        let step = (angle(out[f]) - angle(out[f - 1])) - (angle(src[f]) - angle(src[f - 1]));
+        assert!(step.abs() <= 1.0 + 1e-2, "frame {f}: {step}°");
+    }
+}
+
+#[test]
+fn a_clip_without_contacts_says_why_and_suggests_a_rate() {
+    // The hips run forward at 10 units a second (10.5 heights/s): no foot is ever slow,
+    // and 18 m/s is no human's foot: the clip plays too fast.
+    let (skeleton, clip) = drifting_leg(10.0);
+    let (legs, _) = find_feet(&skeleton).unwrap();
+    let locked = footlock(
+        &skeleton,
+        &clip,
+        &legs,
+        Vec3::Y,
+        &FootlockOptions::default(),
+    )
+    .unwrap();
+    assert!(locked.feet[0].contacts.is_empty());
+    assert_eq!(locked.clip, clip);
+    let [Warning::NoContacts {
+        message,
+        suggested_fps: Some(fps),
+        ..
+    }] = &locked.warnings[..]
+    else {
+        panic!("{:?}", locked.warnings)
+    };
+    assert!(
+        message.contains("no foot stays under the contact speed"),
+        "{message}"
+    );
+    assert!(message.contains("too fast"), "{message}");
+    assert!(*fps < 30.0, "{fps}");
+    assert_eq!(locked.warnings[0].code(), "W006");
+
+    // Slow but never on the ground: a foot raised and lowered that never rests.
+    let speeds = [
+        diagnose::FootSpeeds::of(&[0.1, 0.1, 0.1, 0.1], &[false, true, false, true], 2),
+        diagnose::FootSpeeds::of(&[0.1, 0.05, 0.1, 0.1], &[true, true, true, false], 2),
+    ];
+    assert_eq!(speeds[0].slowest_low, f32::INFINITY);
+    assert_eq!((speeds[1].slowest_low, speeds[1].median), (0.1, 0.1));
+    let options = FootlockOptions::default();
+    assert_eq!(diagnose::no_contact_cause(&speeds, 120.0, &options), None);
+    let fast = [diagnose::FootSpeeds::of(&[4.0; 8], &[true; 8], 2)];
+    let cause = diagnose::no_contact_cause(&fast, 120.0, &options).unwrap();
+    // 6.8 m/s, 1.36x a plausible median: recorded at 60 fps at most.
+    assert_eq!(cause.rate, Some((2.0, 60.0)));
+}
