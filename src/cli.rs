@@ -46,6 +46,16 @@ fn parse_memory_size(text: &str) -> Result<u64, String> {
 }
 
 /// The subcommands.
+/// What `eval` writes (its `--help` shows it after the POSE.json format).
+const EVAL_OUTPUT: &str =
+    "The .npz holds positions, rest_positions (V x 3, source vertex order), joint_names, \
+    joint_world and skin_matrices (J x 4 x 4, column vectors: p' = M p), \
+    influence_joints and influence_weights (V x K, zero-padded), skinning ([\"lbs\"] or \
+    [\"dqs\"]).\n\n\
+    Without --pose, a rig with clips plays one (--clip, default the first) and the arrays \
+    that change get a leading frame axis: times (F, seconds), positions (F x V x 3), \
+    joint_world and skin_matrices (F x J x 4 x 4).";
+
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Convert a rig to glTF (.glb, or .gltf + .bin).
@@ -59,29 +69,14 @@ pub enum Command {
     Inspect(InspectArgs),
     /// Pose a rig, or play one of its clips, and dump the skinned result as .npz for numpy.
     #[command(
-        after_help = "POSE.json maps joint names to a rotation applied in the joint's rest frame \
-        (local = rest_local * delta):\n  \
-        {\"bone_5\": {\"quat\": [x, y, z, w]}, \"bone_7\": {\"euler_deg\": [x, y, z], \"order\": \"xyz\"}}\n\
-        \"xyz\" lists the axes in the order they are applied: R = Rz * Ry * Rx.\n\n\
-        The .npz holds positions, rest_positions (V x 3, source vertex order), joint_names, \
-        joint_world and skin_matrices (J x 4 x 4, column vectors: p' = M p), \
-        influence_joints and influence_weights (V x K, zero-padded), skinning ([\"lbs\"] or \
-        [\"dqs\"]).\n\n\
-        Without --pose, a rig with clips plays one (--clip, default the first) and the arrays \
-        that change get a leading frame axis: times (F, seconds), positions (F x V x 3), \
-        joint_world and skin_matrices (F x J x 4 x 4)."
+        after_help = format!(
+            "{}\n\n{EVAL_OUTPUT}",
+            rigport_import::json::pose::FORMAT
+        )
     )]
     Eval(EvalArgs),
     /// Keyframe a rig from a JSON file of poses and write it with the clip.
-    #[command(after_help = "KEYS.json:\n  \
-        {\"name\": \"wave\", \"fps\": 30, \"keys\": [\n    \
-        {\"time\": 0.0, \"pose\": {}},\n    \
-        {\"time\": 0.5, \"pose\": {\"bone_5\": {\"euler_deg\": [0, 0, 45], \"order\": \"xyz\"}}, \"translation\": [0, 0.1, 0]},\n    \
-        {\"frame\": 30, \"pose\": {\"bone_5\": {\"quat\": [0, 0, 0, 1]}}}]}\n\
-        Each key is a whole pose: joints it does not list are at rest. Pose entries are those of \
-        `rigport eval --pose`. \"time\" is in seconds; \"frame\" needs \"fps\". \"translation\" moves \
-        the root from its rest position (root motion, the rig's length unit). Between keys, \
-        rotations are slerped and translations lerped (glTF LINEAR).")]
+    #[command(after_help = rigport_import::json::keys::FORMAT)]
     Animate(AnimateArgs),
     /// Re-time a clip (resample, speed, warp curve, reverse, trim), baked to linear keys.
     Retime(RetimeArgs),
@@ -96,20 +91,7 @@ pub enum Command {
     /// Play clips one after another with crossfades, optionally as a seamless loop.
     Sequence(SequenceArgs),
     /// Solve IK handles moving over time, one pose per frame, baked into a clip.
-    #[command(after_help = "HANDLES.json:\n  \
-        {\"fps\": 30, \"handles\": [{\"joint\": \"bone_12\", \"relative\": false, \"offset\": [0, 0.1, 0], \"weight\": 1,\n    \
-        \"keys\": [{\"time\": 0, \"position\": [x, y, z]}, {\"time\": 2, \"position\": [x, y, z]}]}]}\n\
-        Targets are model-space positions in the rig's length unit (\"relative\": offsets from the \
-        effector's rest position), linear between keys. \"offset\" (optional) is the effector point \
-        in the joint's frame, e.g. a bone's tip. Every ancestor of a handle may rotate; each frame \
-        starts from the previous frame's solution.\n\
-        Chain-aware fields (any of them: only the handles' chains move, each frame starts from the \
-        input pose, the root is locked unless \"root_motion\": \"free\"): per handle \"root\", \
-        \"pin\": true (no keys; \"orient\": true keeps the rotation too), \"solver\": \"two_bone\" \
-        with \"pole\" [x,y,z] (also per key), \"twist_deg\", \"soften\" 0-1 and \"weight\" 0-1; per key \
-        \"rotation\" [x,y,z,w] (model space); top level \"base\": \"<clip>\", \"root_motion\", \
-        \"limits\": {\"joint\": {\"x\": [min_deg, max_deg], \"order\": \"xyz\"}} (rest frame; ASF \
-        dof/limits apply too). Limits are clamps of Euler angles relative to rest.")]
+    #[command(after_help = rigport_import::json::handles::FORMAT)]
     Ik(IkArgs),
     /// Hold mocap feet still while they touch the ground (two-bone IK on the legs).
     #[command(

@@ -3,7 +3,7 @@
 
 use anyhow::{Context as _, Result};
 use rigport_anim::retime::{Retime, WarpCurve};
-use rigport_pipeline::retime::{Change, RetimeOptions};
+use rigport_pipeline::retime::{parse_trim, Change, RetimeOptions};
 
 use crate::args::{frame_rate, positive, InputArgs, OutputArgs};
 use crate::context::Context;
@@ -31,28 +31,14 @@ pub struct RetimeArgs {
     #[arg(long)]
     pub reverse: bool,
     /// Keep only START..END seconds (times shift to start at 0).
-    #[arg(long, value_name = "START..END", value_parser = seconds_range)]
-    pub trim: Option<(f32, f32)>,
+    #[arg(long, value_name = "START..END", value_parser = parse_trim)]
+    pub trim: Option<Change>,
     /// The clip to retime (default: the first).
     #[arg(long, value_name = "NAME")]
     pub clip: Option<String>,
     /// Where to write.
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-/// `--trim START..END` in seconds.
-fn seconds_range(text: &str) -> Result<(f32, f32), String> {
-    let parse = |s: &str| -> Result<f32, String> {
-        match s.trim().parse::<f32>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(format!("{s:?} is not a number of seconds")),
-        }
-    };
-    let (a, b) = text
-        .split_once("..")
-        .ok_or_else(|| "expected START..END, e.g. 0.5..2".to_string())?;
-    Ok((parse(a)?, parse(b)?))
 }
 
 /// Runs `retime`.
@@ -71,8 +57,10 @@ pub fn run(ctx: &Context, args: &RetimeArgs) -> Result<()> {
         Change::Retime(Retime::Reverse)
     } else {
         // --trim (clap requires one of the group).
-        let (start, end) = args.trim.unwrap_or_default();
-        Change::Trim { start, end }
+        args.trim.clone().unwrap_or(Change::Trim {
+            start: 0.0,
+            end: 0.0,
+        })
     };
     let options = RetimeOptions {
         clip: args.clip.clone(),

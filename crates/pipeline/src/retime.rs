@@ -36,6 +36,31 @@ pub enum Change {
     },
 }
 
+/// `START..END` seconds (`0.5..2`) as a [`Change::Trim`]; the message says what is wrong.
+///
+/// ```
+/// use rigport_pipeline::retime::{parse_trim, Change};
+///
+/// assert_eq!(parse_trim("0.5..2"), Ok(Change::Trim { start: 0.5, end: 2.0 }));
+/// assert!(parse_trim("0.5").is_err() && parse_trim("a..2").is_err());
+/// ```
+///
+/// # Errors
+/// No `..`, or a side that is not a finite number.
+pub fn parse_trim(text: &str) -> Result<Change, String> {
+    let seconds = |s: &str| match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("{s:?} is not a number of seconds")),
+    };
+    let (a, b) = text
+        .split_once("..")
+        .ok_or_else(|| "expected START..END, e.g. 0.5..2".to_string())?;
+    Ok(Change::Trim {
+        start: seconds(a)?,
+        end: seconds(b)?,
+    })
+}
+
 /// What `retime` changes and writes.
 ///
 /// ```

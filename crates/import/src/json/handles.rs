@@ -21,6 +21,22 @@
 //!   ..., "order": "xyz"}}` (Euler angles of the joint's rotation relative to its rest
 //!   rotation; an axis not given is free).
 
+/// The HANDLES.json format as a user writes it (the CLI's `ik` help shows it).
+pub const FORMAT: &str = "HANDLES.json:\n  \
+    {\"fps\": 30, \"handles\": [{\"joint\": \"bone_12\", \"relative\": false, \"offset\": [0, 0.1, 0], \"weight\": 1,\n    \
+    \"keys\": [{\"time\": 0, \"position\": [x, y, z]}, {\"time\": 2, \"position\": [x, y, z]}]}]}\n\
+    Targets are model-space positions in the rig's length unit (\"relative\": offsets from the \
+    effector's rest position), linear between keys. \"offset\" (optional) is the effector point \
+    in the joint's frame, e.g. a bone's tip. Every ancestor of a handle may rotate; each frame \
+    starts from the previous frame's solution.\n\
+    Chain-aware fields (any of them: only the handles' chains move, each frame starts from the \
+    input pose, the root is locked unless \"root_motion\": \"free\"): per handle \"root\", \
+    \"pin\": true (no keys; \"orient\": true keeps the rotation too), \"solver\": \"two_bone\" \
+    with \"pole\" [x,y,z] (also per key), \"twist_deg\", \"soften\" 0-1 and \"weight\" 0-1; per key \
+    \"rotation\" [x,y,z,w] (model space); top level \"base\": \"<clip>\", \"root_motion\", \
+    \"limits\": {\"joint\": {\"x\": [min_deg, max_deg], \"order\": \"xyz\"}} (rest frame; ASF \
+    dof/limits apply too). Limits are clamps of Euler angles relative to rest.";
+
 use std::collections::BTreeMap;
 use std::path::Path;
 

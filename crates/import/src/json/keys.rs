@@ -9,6 +9,17 @@
 //! Each key gives `time` (seconds) or `frame` (with the top-level `fps`), a pose as in
 //! [`super::pose`] (unlisted joints at rest) and optionally a translation of the first root.
 
+/// The KEYS.json format as a user writes it (the CLI's `animate` help shows it).
+pub const FORMAT: &str = "KEYS.json:\n  \
+    {\"name\": \"wave\", \"fps\": 30, \"keys\": [\n    \
+    {\"time\": 0.0, \"pose\": {}},\n    \
+    {\"time\": 0.5, \"pose\": {\"bone_5\": {\"euler_deg\": [0, 0, 45], \"order\": \"xyz\"}}, \"translation\": [0, 0.1, 0]},\n    \
+    {\"frame\": 30, \"pose\": {\"bone_5\": {\"quat\": [0, 0, 0, 1]}}}]}\n\
+    Each key is a whole pose: joints it does not list are at rest. Pose entries are those of a \
+    POSE.json. \"time\" is in seconds; \"frame\" needs \"fps\". \"translation\" moves \
+    the root from its rest position (root motion, the rig's length unit). Between keys, \
+    rotations are slerped and translations lerped (glTF LINEAR).";
+
 use std::path::Path;
 
 use rigport_model::glam::Vec3;

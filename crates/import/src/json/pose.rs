@@ -7,6 +7,12 @@
 //! Each entry gives exactly one of `quat` (`[x, y, z, w]`, normalized here) or `euler_deg`
 //! (degrees, applied in `order`, default `xyz`; see `rigport_model::conventions`).
 
+/// The POSE.json format as a user writes it (the CLI's `eval` help shows it).
+pub const FORMAT: &str = "POSE.json maps joint names to a rotation applied in the joint's rest frame \
+    (local = rest_local * delta):\n  \
+    {\"bone_5\": {\"quat\": [x, y, z, w]}, \"bone_7\": {\"euler_deg\": [x, y, z], \"order\": \"xyz\"}}\n\
+    \"xyz\" lists the axes in the order they are applied: R = Rz * Ry * Rx.";
+
 use std::path::Path;
 
 use rigport_model::conventions::EulerOrder;
