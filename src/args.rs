@@ -112,34 +112,29 @@ impl OutputArgs {
     }
 }
 
+/// A finite number that `ok` accepts, else "expected `expected`".
+fn number(text: &str, ok: fn(f32) -> bool, expected: &str) -> Result<f32, String> {
+    let v = text.trim().parse::<f32>().ok();
+    v.filter(|v| v.is_finite() && ok(*v))
+        .ok_or_else(|| format!("expected {expected}"))
+}
+
 /// A frame rate (`--fps`, `--amc-fps`): a positive, finite number of frames per second.
 pub fn frame_rate(text: &str) -> Result<f32, String> {
-    match text.trim().parse::<f32>() {
-        Ok(fps) if fps.is_finite() && fps > 0.0 => Ok(fps),
-        _ => Err("expected a positive frame rate".into()),
-    }
+    number(text, |v| v > 0.0, "a positive frame rate")
 }
 
 /// A distance that may be 0 (`--reduce-tolerance`, `--threshold`).
 pub fn distance(text: &str) -> Result<f32, String> {
-    match text.trim().parse::<f32>() {
-        Ok(d) if d.is_finite() && d >= 0.0 => Ok(d),
-        _ => Err("expected a distance >= 0".into()),
-    }
+    number(text, |v| v >= 0.0, "a distance >= 0")
 }
 
 /// A number that may be 0 (`--lambda`).
 pub fn non_negative(text: &str) -> Result<f32, String> {
-    match text.trim().parse::<f32>() {
-        Ok(d) if d.is_finite() && d >= 0.0 => Ok(d),
-        _ => Err("expected a number >= 0".into()),
-    }
+    number(text, |v| v >= 0.0, "a number >= 0")
 }
 
 /// A positive distance or factor (`--tolerance`, `--speed`).
 pub fn positive(text: &str) -> Result<f32, String> {
-    match text.trim().parse::<f32>() {
-        Ok(d) if d.is_finite() && d > 0.0 => Ok(d),
-        _ => Err("expected a positive number".into()),
-    }
+    number(text, |v| v > 0.0, "a positive number")
 }

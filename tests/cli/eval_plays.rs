@@ -154,3 +154,42 @@ fn eval_plays_the_demo_usd_and_its_blend_shapes_as_usdskel_does() {
         assert!(dev <= 1e-6, "{}: {dev:e}", file.display());
     }
 }
+
+/// A cloth bake (the corpus arm with its cloth grid): `rigport eval` of the `.usda` (the
+/// garment as time-sampled points) equals UsdSkel, and of the `.glb` (morph targets)
+/// equals three.js, at every frame.
+#[test]
+fn eval_plays_cloth_bakes_as_usdskel_and_three_do() {
+    let Some(arm) = common::corpus("6_usd/ustc_cg_24_hw10__USTC-CG/arm_with_cloth.usda") else {
+        return;
+    };
+    let dir = common::scratch();
+    let (usda, glb) = (dir.path().join("arm.usda"), dir.path().join("arm.glb"));
+    for out in [&usda, &glb] {
+        rigport_ok(&[
+            "cloth",
+            "-q",
+            arm.to_str().unwrap(),
+            "--garment",
+            "Grid",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+    }
+    let (times, ours) = eval(&usda, "Anim", "24", dir.path());
+    if let Some(py) = python() {
+        let usd = usdskel_points(&py, &usda, &times, None);
+        let dev = deviation(&usd, &ours.numbers);
+        eprintln!("cloth .usda: rigport eval vs UsdSkel: {dev:.2e} of the diagonal");
+        assert!(dev <= 1e-6, "rigport eval and UsdSkel differ by {dev:e}");
+    }
+    let (times, from_glb) = eval(&glb, "Anim", "24", dir.path());
+    let secs: Vec<String> = times.iter().map(|t| format!("{t}")).collect();
+    let Some((report, three)) = three_eval(&glb, &["--clip", "Anim", "--times", &secs.join(",")])
+    else {
+        return;
+    };
+    let dev = deviation(&three.numbers, &in_three_order(&glb, &report, &from_glb));
+    eprintln!("cloth .glb: rigport eval vs three.js: {dev:.2e} of the diagonal");
+    assert!(dev <= 1e-6, "rigport eval and three.js differ by {dev:e}");
+}
