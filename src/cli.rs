@@ -46,16 +46,6 @@ fn parse_memory_size(text: &str) -> Result<u64, String> {
 }
 
 /// The subcommands.
-/// What `eval` writes (its `--help` shows it after the POSE.json format).
-const EVAL_OUTPUT: &str =
-    "The .npz holds positions, rest_positions (V x 3, source vertex order), joint_names, \
-    joint_world and skin_matrices (J x 4 x 4, column vectors: p' = M p), \
-    influence_joints and influence_weights (V x K, zero-padded), skinning ([\"lbs\"] or \
-    [\"dqs\"]).\n\n\
-    Without --pose, a rig with clips plays one (--clip, default the first) and the arrays \
-    that change get a leading frame axis: times (F, seconds), positions (F x V x 3), \
-    joint_world and skin_matrices (F x J x 4 x 4).";
-
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Convert a rig to glTF (.glb, or .gltf + .bin).
@@ -70,8 +60,9 @@ pub enum Command {
     /// Pose a rig, or play one of its clips, and dump the skinned result as .npz for numpy.
     #[command(
         after_help = format!(
-            "{}\n\n{EVAL_OUTPUT}",
-            rigport_import::json::pose::FORMAT
+            "{}\n\n{}",
+            rigport_import::json::pose::FORMAT,
+            rigport_export::npz::EVAL_DUMP_FORMAT
         )
     )]
     Eval(EvalArgs),

@@ -5,6 +5,16 @@
 //! header dict padded with spaces to a multiple of 64 bytes and ending in `\n`, then the raw
 //! C-order data (numpy's `lib/format.py` documents it).
 
+/// The arrays of an eval dump as a user reads them (the CLI's `eval` help shows it).
+pub const EVAL_DUMP_FORMAT: &str =
+    "The .npz holds positions, rest_positions (V x 3, source vertex order), joint_names, \
+    joint_world and skin_matrices (J x 4 x 4, column vectors: p' = M p), \
+    influence_joints and influence_weights (V x K, zero-padded), skinning ([\"lbs\"] or \
+    [\"dqs\"]).\n\n\
+    Without a pose file, a rig with clips plays one (the first unless one is named) and the \
+    arrays that change get a leading frame axis: times (F, seconds), positions \
+    (F x V x 3), joint_world and skin_matrices (F x J x 4 x 4).";
+
 use std::cell::Cell;
 use std::io::{self, Cursor, Seek, Write};
 
