@@ -10,6 +10,7 @@ use rigport_pipeline::bake::BakeOptions;
 
 use crate::args::{distance, frame_rate, InputArgs};
 use crate::context::Context;
+use crate::exit::UsageError;
 
 /// `rigport bake` arguments.
 #[derive(Debug, clap::Args)]
@@ -51,6 +52,14 @@ pub struct BakeArgs {
 
 /// Runs `bake`.
 pub fn run(ctx: &Context, args: &BakeArgs) -> Result<()> {
+    // The pipeline refuses a USD output too; here the refusal says which flag does it.
+    if rigport_model::OutputFormat::of_path(&args.output).is_ok_and(|f| f.is_usd()) {
+        return Err(UsageError(format!(
+            "{}: bake writes glTF (.glb/.gltf); a .usda declares DQS directly (`rigport convert --skinning dqs`)",
+            args.output.display()
+        ))
+        .into());
+    }
     let options = BakeOptions {
         skinning: args.skinning,
         clip: args.clip.clone(),
