@@ -24,44 +24,12 @@ pub fn set_shared(max_memory: Option<u64>, workers: usize) {
         n => n,
     };
     let whole = rigport_pipeline::memory::process_budget(max_memory, "--max-memory");
-    let _ = BUDGET.set(shared(whole, workers));
+    // Once per process: the origin outlives every message that quotes it.
+    let origin = format!("{}, shared by the batch's --jobs items in flight", whole.origin);
+    let _ = BUDGET.set(whole.shared_by(workers, Box::leak(origin.into_boxed_str())));
 }
 
 /// This run's budget.
 pub fn budget() -> MemoryBudget {
     *BUDGET.get_or_init(|| rigport_pipeline::memory::DEFAULT)
-}
-
-/// `budget` shared by `workers` items in flight at once (`rigport batch --jobs`): each
-/// item gets an equal part, so that together they stay within the whole.
-fn shared(budget: MemoryBudget, workers: usize) -> MemoryBudget {
-    let workers = workers.max(1) as u64;
-    if workers == 1 {
-        return budget;
-    }
-    let origin = match budget.origin {
-        "--max-memory" => "--max-memory, shared by the batch's --jobs items in flight",
-        o if o.starts_with("default: 3/4") => {
-            "default: 3/4 of the memory this process may use, shared by the batch's --jobs items in flight"
-        }
-        _ => "default, shared by the batch's --jobs items in flight",
-    };
-    MemoryBudget {
-        limit: budget.limit / workers,
-        origin,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_shared_budget_splits_and_says_so() {
-        let whole = rigport_pipeline::memory::process_budget(Some(2_000_000_000), "--max-memory");
-        let part = shared(whole, 4);
-        assert_eq!(part.limit, 500_000_000);
-        assert!(part.origin.contains("--max-memory") && part.origin.contains("shared"));
-        assert_eq!(shared(whole, 1), whole);
-    }
 }

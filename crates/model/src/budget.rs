@@ -24,6 +24,19 @@ impl MemoryBudget {
         origin: "no limit",
     };
 
+    /// This budget shared by `workers` jobs in flight at once: each gets an equal part, so
+    /// that together they stay within the whole; `origin` says so in messages. One worker
+    /// (or none) keeps the whole budget and its origin.
+    pub fn shared_by(self, workers: usize, origin: &'static str) -> Self {
+        match workers as u64 {
+            0 | 1 => self,
+            n => Self {
+                limit: self.limit / n,
+                origin,
+            },
+        }
+    }
+
     /// `Ok` when `needed` bytes fit the limit; otherwise an [`OverBudget`] naming `what`.
     ///
     /// # Errors
@@ -114,6 +127,17 @@ pub fn mul(a: usize, b: usize) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_shared_budget_splits_and_says_so() {
+        let whole = MemoryBudget {
+            limit: 2_000_000_000,
+            origin: "given",
+        };
+        let part = whole.shared_by(4, "given, shared by 4");
+        assert_eq!((part.limit, part.origin), (500_000_000, "given, shared by 4"));
+        assert_eq!(whole.shared_by(1, "unused"), whole);
+    }
 
     #[test]
     fn sizes_parse_with_decimal_and_binary_units() {
