@@ -41,6 +41,14 @@ pub enum Warning {
         /// What is missing and what the result lacks.
         message: String,
     },
+    /// A simulation went past its stability limits and its result was kept anyway, as
+    /// asked (e.g. cloth whose stretch or speed diverged).
+    Unstable {
+        /// Where (the simulation).
+        location: String,
+        /// Which limit, from which frame, by how much.
+        message: String,
+    },
     /// A fact about the input the user may want to know (e.g. which layout was detected).
     Note {
         /// Where.
@@ -52,7 +60,7 @@ pub enum Warning {
 
 /// Every warning code with its kebab-case name and meaning, in code order (the table
 /// `docs/WARNINGS.md` documents). A code never changes meaning once released.
-pub const WARNING_CODES: [(&str, &str, &str); 5] = [
+pub const WARNING_CODES: [(&str, &str, &str); 6] = [
     (
         "W001",
         "weights-renormalized",
@@ -72,6 +80,11 @@ pub const WARNING_CODES: [(&str, &str, &str); 5] = [
         "W004",
         "incomplete",
         "part of what the input should hold is absent, and the result lacks it",
+    ),
+    (
+        "W005",
+        "unstable",
+        "a simulation went past its stability limits and the result was kept",
     ),
     (
         "N001",
@@ -118,7 +131,8 @@ impl Warning {
             Warning::InfluencesDropped { .. } => 1,
             Warning::Repaired { .. } => 2,
             Warning::Incomplete { .. } => 3,
-            Warning::Note { .. } => 4,
+            Warning::Unstable { .. } => 4,
+            Warning::Note { .. } => 5,
         };
         WARNING_CODES[i]
     }
@@ -146,6 +160,7 @@ impl fmt::Display for Warning {
             ),
             Warning::Repaired { location, message } => write!(f, "{location}: repaired: {message}"),
             Warning::Incomplete { location, message } => write!(f, "{location}: {message}"),
+            Warning::Unstable { location, message } => write!(f, "{location}: {message}"),
             Warning::Note { location, message } => write!(f, "{location}: {message}"),
         }
     }
