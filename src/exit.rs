@@ -1,6 +1,7 @@
 //! Exit codes, documented in `rigport --help`, and pipeline errors worded for the command
 //! line (the libraries name no flag).
 
+use rigport_deform::cloth::ClothError;
 use rigport_import::detect::{DetectError, PinocchioFile};
 use rigport_pipeline::PipelineError;
 
@@ -58,6 +59,18 @@ pub struct DeniedWarnings {
 pub fn command_line(err: PipelineError) -> anyhow::Error {
     let detect = match err {
         PipelineError::Denied(d) => return DeniedWarnings { count: d.count }.into(),
+        PipelineError::Step { ref source, .. }
+            if matches!(
+                source.downcast_ref::<ClothError>(),
+                Some(ClothError::Unstable { .. })
+            ) =>
+        {
+            return anyhow::Error::new(err).context(
+                "the cloth simulation is unstable (limits: `rigport cloth --help`); \
+                 more substeps usually cure it, and --allow-unstable keeps the result with a \
+                 warning",
+            )
+        }
         PipelineError::Detect(ref detect) => detect,
         PipelineError::Budget(over) => {
             return anyhow::anyhow!(

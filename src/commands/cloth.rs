@@ -17,8 +17,22 @@ use crate::context::Context;
 course's arm_with_cloth.usda, whose primvars:ControlPoints mark the pinned vertices) or an \
 .obj in the rig's model space. Each pinned vertex is bound at rest to the nearest point of \
 the skinned body and follows it exactly; the others are simulated (XPBD: inextensible edges, \
-bending, gravity down the scene's up axis, damping, substeps) and collide with capsules \
-fitted to the bones. glTF gets the garment as its own mesh animated by morph targets (one \
+bending, gravity down the scene's up axis, damping, substeps) and collide with the skinned \
+body surface (the nearest triangle of the posed body, found through a bounding-volume tree, \
+with capsules fitted to the bones as the coarse phase), kept --thickness away from it. \
+Before the clip's first frame a pre-roll (--preroll) moves the body from its rest pose to the \
+first pose and holds it while the garment settles (velocities zeroed at each peak of its \
+kinetic energy). The report gives the settle residual (how fast the garment still moved over \
+the last pre-roll frame), and per frame (--json) the edge stretch, kinetic energy, \
+speed and how many garment vertices are inside the body, how deep.
+
+A diverging simulation is an error (exit 1, naming the frame). The limits, checked at every \
+frame: edge stretch 50%; a vertex faster than twice the body's fastest skin point plus 20 \
+body diagonals per second; a kinetic energy per unit mass above ½ (twice the body's fastest \
+skin point + 5 diagonals/s)² (the body's speed fading over 0.5 s). --allow-unstable keeps \
+the result with a warning (W005) instead.
+
+glTF gets the garment as its own mesh animated by morph targets (one \
 per frame, or --targets K shared ones) and a weights track; USD gets its points as time \
 samples beside the UsdSkel body. Only the simulated clip is written."
 )]
@@ -56,6 +70,17 @@ pub struct ClothArgs {
     /// Collision thickness in model units (default: 1% of the body's diagonal).
     #[arg(long, value_name = "D")]
     pub thickness: Option<f32>,
+    /// Seconds of pre-roll settling the garment into the clip's first pose (default 2: the
+    /// body blends to the first pose over 0.5 s, then holds; 0: none).
+    #[arg(long, value_name = "S")]
+    pub preroll: Option<f32>,
+    /// Keep a simulation that went past the stability limits (a warning, W005) instead of
+    /// failing.
+    #[arg(long)]
+    pub allow_unstable: bool,
+    /// Print the report as JSON on stdout, with every frame's measurements.
+    #[arg(long)]
+    pub json: bool,
     /// Compress the per-frame targets to K shared ones (PCA), as `bake --correctives`.
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
     pub targets: Option<u32>,
@@ -77,6 +102,9 @@ pub fn run(ctx: &Context, args: &ClothArgs) -> Result<()> {
         seconds: args.seconds,
         substeps: args.substeps,
         thickness: args.thickness,
+        preroll: args.preroll,
+        allow_unstable: args.allow_unstable,
+        json: args.json,
         targets: args.targets,
         output: args.output.clone(),
     };
