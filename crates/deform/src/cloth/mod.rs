@@ -235,7 +235,7 @@ pub struct ClothOptions<'a> {
     pub collisions: bool,
     /// Seconds of pre-roll before the clip's first frame (default [`PREROLL`]): the body
     /// blends from its rest pose to the clip's first pose, then holds it, while the
-    /// garment settles ([`preroll`]). 0 starts the garment on the first pose directly.
+    /// garment settles ([`PREROLL_BLEND`]). 0 starts the garment on the first pose directly.
     pub preroll: Option<f32>,
     /// Keep going past the stability limits ([`Measure`]) with a warning instead of
     /// failing with [`ClothError::Unstable`] (default false).
