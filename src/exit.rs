@@ -66,9 +66,10 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
             ) =>
         {
             return anyhow::Error::new(err).context(
-                "the cloth simulation is unstable (limits: `rigport cloth --help`); \
-                 more substeps usually cure it, and --allow-unstable keeps the result with a \
-                 warning",
+                "the cloth simulation is unstable (limits: `rigport cloth --help`; more \
+                 --substeps cure a time step too large, not a body that jumps, such as a \
+                 looped clip going back to its start; --allow-unstable keeps the result with a \
+                 warning)",
             )
         }
         PipelineError::Detect(ref detect) => detect,
