@@ -1,6 +1,7 @@
 //! Exit codes, documented in `rigport --help`, and pipeline errors worded for the command
 //! line (the libraries name no flag).
 
+use rigport_deform::cloth::ClothError;
 use rigport_ik::retarget::RetargetError;
 use rigport_import::detect::{DetectError, PinocchioFile};
 use rigport_model::Warning;
@@ -60,6 +61,19 @@ pub struct DeniedWarnings {
 pub fn command_line(err: PipelineError) -> anyhow::Error {
     let detect = match err {
         PipelineError::Denied(d) => return DeniedWarnings { count: d.count }.into(),
+        PipelineError::Step { ref source, .. }
+            if matches!(
+                source.downcast_ref::<ClothError>(),
+                Some(ClothError::Unstable { .. })
+            ) =>
+        {
+            return anyhow::Error::new(err).context(
+                "the cloth simulation is unstable (limits: `rigport cloth --help`; more \
+                 --substeps cure a time step too large, not a body that jumps, such as a \
+                 looped clip going back to its start; --allow-unstable keeps the result with a \
+                 warning)",
+            )
+        }
         PipelineError::Detect(ref detect) => detect,
         PipelineError::Budget(over) => {
             return anyhow::anyhow!(

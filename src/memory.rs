@@ -25,7 +25,10 @@ pub fn set_shared(max_memory: Option<u64>, workers: usize) {
     };
     let whole = rigport_pipeline::memory::process_budget(max_memory, "--max-memory");
     // Once per process: the origin outlives every message that quotes it.
-    let origin = format!("{}, shared by the batch's --jobs items in flight", whole.origin);
+    let origin = format!(
+        "{}, shared by the batch's --jobs items in flight",
+        whole.origin
+    );
     let _ = BUDGET.set(whole.shared_by(workers, Box::leak(origin.into_boxed_str())));
 }
 

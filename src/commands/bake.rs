@@ -15,11 +15,7 @@ use crate::exit::UsageError;
 /// `rigport bake` arguments.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "For every sampled frame and skinned vertex, with M the vertex's blended \
-    LBS matrix (of the influences the glTF holds), the frame's target holds \
-    M^-1 * p_dqs - p_rest, so a viewer's LBS of the morphed vertex lands on the DQS result. \
-    Morph weights are animated (LINEAR, one key per frame) so that exactly frame k's target \
-    is active at its time."
+    after_help = include_str!("../../docs/help/bake.txt")
 )]
 pub struct BakeArgs {
     /// The rig, with at least one clip.

@@ -13,14 +13,7 @@ use crate::context::Context;
 /// `rigport cloth` arguments.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "The garment is a mesh of the input by name (e.g. the `Grid` of the USTC \
-course's arm_with_cloth.usda, whose primvars:ControlPoints mark the pinned vertices) or an \
-.obj in the rig's model space. Each pinned vertex is bound at rest to the nearest point of \
-the skinned body and follows it exactly; the others are simulated (XPBD: inextensible edges, \
-bending, gravity down the scene's up axis, damping, substeps) and collide with capsules \
-fitted to the bones. glTF gets the garment as its own mesh animated by morph targets (one \
-per frame, or --targets K shared ones) and a weights track; USD gets its points as time \
-samples beside the UsdSkel body. Only the simulated clip is written."
+    after_help = include_str!("../../docs/help/cloth.txt")
 )]
 pub struct ClothArgs {
     /// The rig, with at least one clip.
@@ -56,6 +49,17 @@ pub struct ClothArgs {
     /// Collision thickness in model units (default: 1% of the body's diagonal).
     #[arg(long, value_name = "D")]
     pub thickness: Option<f32>,
+    /// Seconds of pre-roll settling the garment into the clip's first pose (default 2: the
+    /// body blends to the first pose over 0.5 s, then holds; 0: none).
+    #[arg(long, value_name = "S")]
+    pub preroll: Option<f32>,
+    /// Keep a simulation that went past the stability limits (a warning, W007) instead of
+    /// failing.
+    #[arg(long)]
+    pub allow_unstable: bool,
+    /// Print the report as JSON on stdout, with every frame's measurements.
+    #[arg(long)]
+    pub json: bool,
     /// Compress the per-frame targets to K shared ones (PCA), as `bake --correctives`.
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
     pub targets: Option<u32>,
@@ -77,6 +81,9 @@ pub fn run(ctx: &Context, args: &ClothArgs) -> Result<()> {
         seconds: args.seconds,
         substeps: args.substeps,
         thickness: args.thickness,
+        preroll: args.preroll,
+        allow_unstable: args.allow_unstable,
+        json: args.json,
         targets: args.targets,
         output: args.output.clone(),
     };

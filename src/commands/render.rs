@@ -17,20 +17,7 @@ use crate::context::Context;
 /// `rigport render` arguments.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "A .png output is a contact sheet: a grid of up to 16 frames evenly \
-chosen from the sampled ones. A .gif output is a looping animation of every sampled frame \
-(default 25 fps; the frame delay follows --fps, at least 0.02 s); .apng likewise, in full \
-colour. All frames share one camera \
-framed on the bounds of all of them. A rig without clips renders its rest pose.
-
---handles HANDLES.json (the file `rigport ik` takes; see `rigport ik --help`) draws each \
-handle's target at each frame's time as a magenta crosshair over the mesh and skeleton; \
-`relative` positions are offsets from the effector's rest position, as for `rigport ik`. \
-The targets take part in the framing, so one away from the body is in the picture too.
-
---camera perspective frames the same bounds with a 35 deg (vertical) pinhole camera on the \
-view axis through their centre, as far away as needed for their nearest face to be drawn \
-at the orthographic scale, so everything fits inside the margin."
+    after_help = include_str!("../../docs/help/render.txt")
 )]
 pub struct RenderArgs {
     /// The rig.

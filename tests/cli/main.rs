@@ -12,6 +12,7 @@
 mod bad_input;
 mod batch;
 mod cloth;
+mod cloth_trust;
 mod common;
 mod csci520;
 mod demo;

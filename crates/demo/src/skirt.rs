@@ -11,7 +11,8 @@ use rigport_model::{Asset, Mesh, Warning};
 use crate::{Demo, DemoError};
 
 /// The clip the demo's skirt is simulated on: the body bobs down twice while the arm
-/// waves, and the skirt, made flared, falls and swings into its hanging shape.
+/// waves; the skirt, made flared, has fallen into its hanging shape during the pre-roll
+/// and swings with the body.
 pub const CLIP: &str = "wave";
 
 /// Rings of the demo's skirt (waist to hem).

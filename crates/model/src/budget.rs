@@ -135,7 +135,10 @@ mod tests {
             origin: "given",
         };
         let part = whole.shared_by(4, "given, shared by 4");
-        assert_eq!((part.limit, part.origin), (500_000_000, "given, shared by 4"));
+        assert_eq!(
+            (part.limit, part.origin),
+            (500_000_000, "given, shared by 4")
+        );
         assert_eq!(whole.shared_by(1, "unused"), whole);
     }
 

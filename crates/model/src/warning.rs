@@ -62,6 +62,14 @@ pub enum Warning {
         /// stated rate is wrong (frames per second).
         suggested_fps: Option<f32>,
     },
+    /// A simulation went past its stability limits and its result was kept anyway, as
+    /// asked (e.g. cloth whose stretch or speed diverged).
+    Unstable {
+        /// Where (the simulation).
+        location: String,
+        /// Which limit, from which frame, by how much.
+        message: String,
+    },
     /// A fact about the input the user may want to know (e.g. which layout was detected).
     Note {
         /// Where.
@@ -73,7 +81,7 @@ pub enum Warning {
 
 /// Every warning code with its kebab-case name and meaning, in code order (the table
 /// `docs/WARNINGS.md` documents). A code never changes meaning once released.
-pub const WARNING_CODES: [(&str, &str, &str); 7] = [
+pub const WARNING_CODES: [(&str, &str, &str); 8] = [
     (
         "W001",
         "weights-renormalized",
@@ -103,6 +111,11 @@ pub const WARNING_CODES: [(&str, &str, &str); 7] = [
         "W006",
         "no-contacts",
         "foot locking found no contact in a clip and left it as it was (says why)",
+    ),
+    (
+        "W007",
+        "unstable",
+        "a simulation went past its stability limits and the result was kept",
     ),
     (
         "N001",
@@ -151,7 +164,8 @@ impl Warning {
             Warning::Incomplete { .. } => 3,
             Warning::Suspect { .. } => 4,
             Warning::NoContacts { .. } => 5,
-            Warning::Note { .. } => 6,
+            Warning::Unstable { .. } => 6,
+            Warning::Note { .. } => 7,
         };
         WARNING_CODES[i]
     }
@@ -183,6 +197,7 @@ impl fmt::Display for Warning {
             Warning::NoContacts {
                 location, message, ..
             } => write!(f, "{location}: {message}"),
+            Warning::Unstable { location, message } => write!(f, "{location}: {message}"),
             Warning::Note { location, message } => write!(f, "{location}: {message}"),
         }
     }

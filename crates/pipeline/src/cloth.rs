@@ -5,9 +5,12 @@
 
 use std::path::PathBuf;
 
-use rigport_deform::cloth::asset::{self, GarmentSource};
-use rigport_deform::cloth::{ClothOptions, PinSelection};
+use rigport_deform::cloth::asset::{self, ClothReport, GarmentSource};
+use rigport_deform::cloth::{
+    ClothOptions, PinSelection, UNSTABLE_MEAN_SPEED, UNSTABLE_SPEED, UNSTABLE_STRETCH,
+};
 use rigport_model::Warning;
+use serde_json::json;
 
 use crate::load::Input;
 use crate::outputs::check_request;
@@ -50,6 +53,13 @@ pub struct ClothRequest {
     pub substeps: Option<u32>,
     /// Collision thickness.
     pub thickness: Option<f32>,
+    /// Seconds of pre-roll (the library's default when `None`).
+    pub preroll: Option<f32>,
+    /// Keep a simulation past its stability limits, with a warning, instead of failing.
+    pub allow_unstable: bool,
+    /// The report as JSON (with every frame's measurements) as the product, instead of
+    /// the text summary.
+    pub json: bool,
     /// Shared morph targets (PCA) instead of one per frame.
     pub targets: Option<u32>,
     /// The output file.
@@ -118,6 +128,8 @@ pub fn run(
         seconds: request.seconds,
         substeps: request.substeps,
         thickness: request.thickness,
+        preroll: request.preroll,
+        allow_unstable: request.allow_unstable,
         ..ClothOptions::default()
     };
     let report = asset::run(
@@ -150,6 +162,42 @@ pub fn run(
         &input.budget,
         progress,
     )?);
-    done.log.push(report.to_string());
+    if request.json {
+        let text = serde_json::to_string_pretty(&report_json(&report))
+            .map_err(|e| PipelineError::step("cannot write the report as JSON", e))?;
+        done.output = Some(text + "\n");
+    } else {
+        done.log.push(report.to_string());
+    }
     Ok(done)
+}
+
+/// The report as JSON: the run, the limits, the worst values and every frame's.
+fn report_json(r: &ClothReport) -> serde_json::Value {
+    let frames: Vec<_> = r
+        .stats
+        .iter()
+        .zip(&r.times)
+        .map(|(s, t)| {
+            json!({"time": t, "max_stretch": s.max_stretch, "kinetic_energy": s.kinetic_energy,
+                "max_speed": s.max_speed, "penetration_depth": s.body_depth,
+                "penetration_count": s.body_inside, "capsule_depth": s.max_depth})
+        })
+        .collect();
+    let first = r.stats.first().copied().unwrap_or_default();
+    json!({
+        "garment": r.garment, "particles": r.particles, "pins": r.pins,
+        "capsules": r.capsules, "fps": r.fps, "substeps": r.substeps,
+        "thickness": r.thickness, "diagonal": r.diagonal, "preroll": r.preroll,
+        "settle_residual": r.settle_residual,
+        "frame_0": {"max_stretch": first.max_stretch, "kinetic_energy": first.kinetic_energy,
+            "max_speed": first.max_speed, "penetration_depth": first.body_depth},
+        "limits": {"max_stretch": UNSTABLE_STRETCH, "speed_diagonals_per_second": UNSTABLE_SPEED,
+            "mean_speed_diagonals_per_second": UNSTABLE_MEAN_SPEED},
+        "worst": {"max_stretch": r.worst.max_stretch, "kinetic_energy": r.worst.kinetic_energy,
+            "max_speed": r.worst.max_speed, "penetration_depth": r.worst.body_depth,
+            "penetration_count": r.worst.body_inside},
+        "targets": r.targets, "max_target_error": r.max_target_error,
+        "frames": frames,
+    })
 }

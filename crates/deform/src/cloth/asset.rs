@@ -43,17 +43,40 @@ pub struct ClothReport {
     pub diagonal: f32,
     /// The worst frame measurements.
     pub worst: FrameStats,
+    /// Seconds of pre-roll simulated before frame 0.
+    pub preroll: f32,
+    /// How fast the garment still moved at the end of the pre-roll (units/s;
+    /// [`super::Simulation::settle_residual`]).
+    pub settle_residual: f32,
+    /// Output frame times, seconds.
+    pub times: Vec<f32>,
+    /// Every output frame's measurements.
+    pub stats: Vec<FrameStats>,
     /// Morph targets written.
     pub targets: usize,
     /// Largest distance between a simulated position and what the targets give.
     pub max_target_error: f32,
 }
 
+impl ClothReport {
+    /// The frame where `f` is largest, and its value (frame 0, 0 without frames).
+    pub fn worst_frame(&self, f: impl Fn(&FrameStats) -> f32) -> (usize, f32) {
+        self.stats
+            .iter()
+            .enumerate()
+            .fold((0, 0.0), |a, (i, s)| if f(s) > a.1 { (i, f(s)) } else { a })
+    }
+}
+
 impl fmt::Display for ClothReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let first = self.stats.first().copied().unwrap_or_default();
+        let (fd, depth) = self.worst_frame(|s| s.body_depth);
+        let (fi, inside) = self.worst_frame(|s| s.body_inside as f32);
+        let touched = self.stats.iter().filter(|s| s.body_inside > 0).count();
         write!(
             f,
-            "cloth {:?}: {} particles ({} pinned), {} capsules, {} frames at {} fps x {} substeps; max edge stretch {:.2}%, max kinetic energy {:.4} (per unit mass), max penetration {:.2e}, deepest vertex {:.2e} inside a capsule (thickness {:.4}); {} morph targets (max error {:.2e})",
+            "cloth {:?}: {} particles ({} pinned), {} capsules, {} frames at {} fps x {} substeps after a {} s pre-roll (settle residual {:.3e} units/s; edge stretch {:.2}% at frame 0); max edge stretch {:.2}%, max kinetic energy {:.4} (per unit mass), max vertex speed {:.4} units/s; inside the body surface: {} vertices at most (frame {fi}), on {touched} of {} frames, deepest {:.2e} (frame {fd}; thickness {:.4}); deepest vertex {:.2e} inside a capsule; {} morph targets (max error {:.2e})",
             self.garment,
             self.particles,
             self.pins,
@@ -61,11 +84,17 @@ impl fmt::Display for ClothReport {
             self.frames,
             self.fps,
             self.substeps,
+            self.preroll,
+            self.settle_residual,
+            100.0 * first.max_stretch,
             100.0 * self.worst.max_stretch,
             self.worst.kinetic_energy,
-            self.worst.max_penetration,
-            self.worst.max_depth,
+            self.worst.max_speed,
+            inside as u32,
+            self.frames,
+            depth,
             self.thickness,
+            self.worst.max_depth,
             self.targets,
             self.max_target_error,
         )
@@ -162,6 +191,10 @@ pub fn run(
         thickness: sim.thickness,
         diagonal: sim.diagonal,
         worst: sim.worst(),
+        preroll: sim.preroll,
+        settle_residual: sim.settle_residual,
+        times: sim.times.clone(),
+        stats: sim.stats.clone(),
         targets: bake.targets,
         max_target_error: bake.max_error,
     })

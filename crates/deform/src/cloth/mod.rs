@@ -1,5 +1,5 @@
 //! Cloth on the animated body: a garment simulated with XPBD against a skinned character,
-//! pinned vertices following the skin, colliding with capsules fitted to the bones.
+//! pinned vertices following the skin, colliding with the skinned body surface.
 //!
 //! - [`Garment`]: particles (one per source vertex of the garment mesh), triangles and pins
 //!   ([`PinSelection`]: a per-vertex value such as the USTC course's `ControlPoints`, a
@@ -10,9 +10,19 @@
 //!   ([`attach::SurfacePoint`], a triangle and barycentric weights) and steps the
 //!   XPBD solver (`solver`) serially: substeps per frame, stretch and bending constraints,
 //!   gravity along the scene's down axis, damping, pins moved to their bound points
-//!   (interpolated linearly between frames) and capsule collisions
-//!   ([`collide::fit_capsules`]) with a thickness as the last step of every substep.
-//!   Same inputs, same bytes, whatever the thread count.
+//!   (interpolated linearly between frames) and collisions with a thickness as the last
+//!   step of every substep: capsules fitted to the bones ([`collide::fit_capsules`], the
+//!   coarse phase, which also catches a particle deep in the body) and then the posed body
+//!   surface itself (`surface`: an AABB tree over the skinned triangles, the nearest
+//!   triangle and which side of it the particle is on). Same inputs, same bytes, whatever
+//!   the thread count.
+//! - A pre-roll ([`ClothOptions::preroll`], `preroll`) settles the garment before frame 0:
+//!   the body blends from its rest pose (the garment's) to the clip's first pose and holds
+//!   it, so frame 0 does not pop.
+//! - Every output frame is measured ([`FrameStats`]: stretch, kinetic energy, speed,
+//!   depth below the body surface); past a stability limit ([`Measure`]) the simulation
+//!   fails with [`ClothError::Unstable`] naming the frame, or, with
+//!   [`ClothOptions::allow_unstable`], goes on with a warning.
 //! - [`add_garment`]: the result as morph targets on the garment mesh (one per frame, or a
 //!   compressed basis as the DQS bake does) and a morph-weight track on the clip, which the
 //!   glTF writer stores as sparse targets and the USD writer as `points` time samples.
@@ -60,21 +70,26 @@ pub mod asset;
 pub mod attach;
 pub mod collide;
 mod garment;
+mod limits;
 mod output;
+mod preroll;
+mod simulation;
 mod solver;
+mod surface;
 
-use glam::{DVec3, Vec3};
-use rayon::prelude::*;
-use rigport_model::{Asset, NoSuchClip, Transform, UpAxis, Warning};
+use glam::Vec3;
+use rigport_model::{NoSuchClip, Transform};
 
 pub use garment::{scene_height, Garment, PinSelection, CONTROL_POINTS};
+pub use limits::{Measure, BODY_MEMORY, UNSTABLE_MEAN_SPEED, UNSTABLE_SPEED, UNSTABLE_STRETCH};
 pub use output::{add_garment, GarmentBake};
+pub use preroll::{PREROLL, PREROLL_BLEND};
+pub use simulation::{default_gravity, simulate};
 
-use attach::{nearest_point, SurfacePoint};
-use collide::{fit_capsules, BoneCapsule, Capsule};
-use rigport_eval::sample::{CompiledClip, FrameGrid, SampleError, SampleJob};
-use rigport_eval::{EvalError, Pose, Rig, RigOutput};
-use solver::{Params, Solver};
+use attach::SurfacePoint;
+use collide::BoneCapsule;
+use rigport_eval::sample::SampleError;
+use rigport_eval::EvalError;
 
 /// Standard gravity, m/s².
 pub const GRAVITY: f64 = 9.80665;
@@ -86,10 +101,10 @@ pub const SUBSTEPS_PER_SECOND: f32 = 1200.0;
 
 /// Rounds of constraint projection that settle the starting shape after the first
 /// collision push ([`solver::Solver::relax`]).
-const RELAX_ITERATIONS: u32 = 200;
+pub(crate) const RELAX_ITERATIONS: u32 = 200;
 
 /// Frames simulated per parallel skinning batch (bounds memory on long clips).
-const BATCH: usize = 64;
+pub(crate) const BATCH: usize = 64;
 
 /// Why a simulation could not run.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -157,6 +172,21 @@ pub enum ClothError {
     /// No clip at all.
     #[error("no clip to simulate; the rig has none")]
     NoClip,
+    /// The simulation went past a stability limit ([`Measure`]) at an output frame, and
+    /// [`ClothOptions::allow_unstable`] was not set.
+    #[error("the simulation diverged at frame {frame} (time {time} s): {measure} reached {value}, past the limit of {limit}")]
+    Unstable {
+        /// The first output frame past a limit.
+        frame: usize,
+        /// Its time, seconds.
+        time: f32,
+        /// What went past its limit.
+        measure: Measure,
+        /// Its value at that frame (units of the measure: a fraction, units²/s², units/s).
+        value: f32,
+        /// The limit at that frame.
+        limit: f32,
+    },
     /// The simulation produced a non-finite position (reported, never written).
     #[error("the simulation diverged at frame {frame} (time {time} s): a position is not finite")]
     Diverged {
@@ -200,8 +230,16 @@ pub struct ClothOptions<'a> {
     pub bend_compliance: f32,
     /// Collision thickness (default: 1% of the body's bounding-box diagonal).
     pub thickness: Option<f32>,
-    /// Collide with capsules fitted to the bones (default true).
+    /// Collide with the skinned body surface, and with capsules fitted to the bones
+    /// (default true).
     pub collisions: bool,
+    /// Seconds of pre-roll before the clip's first frame (default [`PREROLL`]): the body
+    /// blends from its rest pose to the clip's first pose, then holds it, while the
+    /// garment settles ([`PREROLL_BLEND`]). 0 starts the garment on the first pose directly.
+    pub preroll: Option<f32>,
+    /// Keep going past the stability limits ([`Measure`]) with a warning instead of
+    /// failing with [`ClothError::Unstable`] (default false).
+    pub allow_unstable: bool,
 }
 
 impl Default for ClothOptions<'_> {
@@ -218,6 +256,8 @@ impl Default for ClothOptions<'_> {
             bend_compliance: 1e-3,
             thickness: None,
             collisions: true,
+            preroll: None,
+            allow_unstable: false,
         }
     }
 }
@@ -229,14 +269,28 @@ pub struct FrameStats {
     pub max_stretch: f32,
     /// Kinetic energy per unit mass, `½ mean |v|²` over free particles (units²/s²).
     pub kinetic_energy: f32,
+    /// The fastest free particle's speed, units/s.
+    pub max_speed: f32,
     /// How far the deepest colliding particle (free, not one edge from a pin) is inside a
-    /// capsule grown by the thickness (0 when none is).
+    /// capsule grown by the thickness (0 when none is). With the body surface as collider
+    /// the capsules are not grown (they only keep particles out of the body's core), so
+    /// this can reach the thickness.
     pub max_penetration: f32,
     /// How far the deepest garment vertex of any kind (pinned and next to a pin included)
-    /// is inside a capsule itself, not grown (0 when none is): the issue's "no garment
-    /// vertex inside a collider by more than the thickness".
+    /// is inside a capsule itself, not grown (0 when none is).
     pub max_depth: f32,
+    /// How far the deepest garment vertex of any kind is below the skinned body surface
+    /// (0 when none is): the issue's "no vertex inside the body deeper than the
+    /// thickness".
+    pub body_depth: f32,
+    /// How many garment vertices are below the skinned body surface (by more than
+    /// [`ON_SURFACE`] of the body's diagonal: pins sit on it).
+    pub body_inside: u32,
 }
+
+/// How far below the body surface, as a fraction of the body's diagonal, a garment vertex
+/// still counts as on it (`f32` rounding of a pin evaluated on the skin).
+pub const ON_SURFACE: f32 = 1e-5;
 
 /// A finished simulation.
 #[derive(Clone, Debug, PartialEq)]
@@ -262,6 +316,12 @@ pub struct Simulation {
     pub substeps: u32,
     /// The body's bind-pose bounding-box diagonal.
     pub diagonal: f32,
+    /// Seconds of pre-roll simulated before frame 0.
+    pub preroll: f32,
+    /// How fast the garment still moved at the end of the pre-roll: its largest
+    /// displacement over the last pre-roll frame divided by that frame's span (units/s; 0
+    /// without a pre-roll).
+    pub settle_residual: f32,
     /// When the clip looped: the local joint transforms at every frame (`frames × joints`),
     /// for baking a clip that covers the whole simulation.
     pub looped_poses: Option<Vec<Transform>>,
@@ -282,427 +342,13 @@ impl Simulation {
             .fold(FrameStats::default(), |a, s| FrameStats {
                 max_stretch: a.max_stretch.max(s.max_stretch),
                 kinetic_energy: a.kinetic_energy.max(s.kinetic_energy),
+                max_speed: a.max_speed.max(s.max_speed),
                 max_penetration: a.max_penetration.max(s.max_penetration),
                 max_depth: a.max_depth.max(s.max_depth),
+                body_depth: a.body_depth.max(s.body_depth),
+                body_inside: a.body_inside.max(s.body_inside),
             })
     }
-}
-
-/// The skinned meshes of an asset as one surface: bind positions and triangles.
-struct Body {
-    meshes: Vec<usize>,
-    bind: Vec<Vec3>,
-    triangles: Vec<[u32; 3]>,
-}
-
-impl Body {
-    fn new(asset: &Asset, rig: &Rig<'_>) -> Self {
-        let mut body = Body {
-            meshes: Vec::new(),
-            bind: Vec::new(),
-            triangles: Vec::new(),
-        };
-        for (mi, mesh) in asset.meshes.iter().enumerate() {
-            if rig.skin_of_mesh(mi).is_none() {
-                continue;
-            }
-            let base = body.bind.len() as u32;
-            body.meshes.push(mi);
-            body.bind.extend_from_slice(&mesh.positions);
-            body.triangles
-                .extend(mesh.triangles.iter().map(|t| t.map(|i| i + base)));
-        }
-        body
-    }
-
-    fn gather(&self, out: &RigOutput, dst: &mut Vec<Vec3>) {
-        dst.clear();
-        for &mi in &self.meshes {
-            dst.extend_from_slice(out.positions.get(mi).map_or(&[][..], Vec::as_slice));
-        }
-    }
-}
-
-/// Pin targets and capsules of one frame.
-struct FrameBody {
-    pins: Vec<Vec3>,
-    capsules: Vec<Capsule>,
-}
-
-/// Gravity in model space: [`GRAVITY`] m/s² down the scene's up axis, in model units.
-pub fn default_gravity(asset: &Asset) -> Vec3 {
-    let up = match asset.frame.up_axis {
-        UpAxis::Z => DVec3::Z,
-        _ => DVec3::Y,
-    };
-    let mpu = asset
-        .meters_per_unit
-        .filter(|m| m.is_finite() && *m > 0.0)
-        .unwrap_or(1.0);
-    let scene = -up * (GRAVITY / mpu);
-    let m = glam::DMat3::from_mat4(asset.frame.model_to_scene);
-    let inv = m.inverse();
-    let g = if inv.is_finite() { inv * scene } else { scene };
-    g.as_vec3()
-}
-
-fn check_options(opts: &ClothOptions<'_>) -> Result<(), ClothError> {
-    let bad = |name, value: f32, expected| ClothError::BadOption {
-        name,
-        value,
-        expected,
-    };
-    let positive = "a positive finite number";
-    let non_negative = "a finite number, 0 or more";
-    for (name, v) in [("fps", opts.fps), ("seconds", opts.seconds)] {
-        if let Some(v) = v {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(bad(name, v, positive));
-            }
-        }
-    }
-    for (name, v) in [
-        ("damping", Some(opts.damping)),
-        ("stretch compliance", Some(opts.stretch_compliance)),
-        ("bend compliance", Some(opts.bend_compliance)),
-        ("thickness", opts.thickness),
-    ] {
-        if let Some(v) = v {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(bad(name, v, non_negative));
-            }
-        }
-    }
-    if let Some(s) = opts.substeps {
-        if s == 0 || s > 10_000 {
-            return Err(bad("substeps", s as f32, "1 to 10000"));
-        }
-    }
-    if opts.iterations == 0 || opts.iterations > 1000 {
-        return Err(bad("iterations", opts.iterations as f32, "1 to 1000"));
-    }
-    if let Some(g) = opts.gravity {
-        if !g.is_finite() {
-            return Err(ClothError::NonFinite {
-                what: "gravity".into(),
-            });
-        }
-    }
-    Ok(())
-}
-
-/// Simulates `garment` on the skinned meshes of `asset` playing one clip (see the module
-/// docs). Lossy or suspicious inputs (pins far from the skin, a garment starting inside a
-/// collider) go into `warnings`; `progress(done, total)` is called after every frame.
-///
-/// # Errors
-/// Bad options or garment ([`ClothError::BadOption`], [`ClothError::NonFinite`],
-/// [`ClothError::NoPins`], ...), no skinned mesh, no such clip, a clip that does not fit
-/// the skeleton, and [`ClothError::Diverged`] rather than a non-finite position.
-pub fn simulate(
-    asset: &Asset,
-    garment: &Garment,
-    opts: &ClothOptions<'_>,
-    warnings: &mut Vec<Warning>,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<Simulation, ClothError> {
-    check_options(opts)?;
-    let n = garment.positions.len();
-    if garment.triangles.is_empty() {
-        return Err(ClothError::EmptyGarment {
-            garment: String::new(),
-        });
-    }
-    if garment.positions.iter().any(|p| !p.is_finite()) {
-        return Err(ClothError::NonFinite {
-            what: "garment positions".into(),
-        });
-    }
-    if let Some(&bad) = garment
-        .triangles
-        .iter()
-        .flatten()
-        .find(|&&i| i as usize >= n)
-    {
-        return Err(ClothError::PinVertex {
-            garment: "triangle".into(),
-            vertex: bad,
-            count: n,
-        });
-    }
-    let mut pinned = garment.pinned.clone();
-    pinned.sort_unstable();
-    pinned.dedup();
-    if pinned.is_empty() {
-        return Err(ClothError::NoPins {
-            garment: String::new(),
-        });
-    }
-    if let Some(&bad) = pinned.iter().find(|&&i| i as usize >= n) {
-        return Err(ClothError::PinVertex {
-            garment: String::new(),
-            vertex: bad,
-            count: n,
-        });
-    }
-
-    let clip_index = asset.clip_index(opts.clip)?.ok_or(ClothError::NoClip)?;
-    let compiled = CompiledClip::new(&asset.clips[clip_index], &asset.skeleton)?;
-    let rig = Rig::new(asset)?;
-    let body = Body::new(asset, &rig);
-    if body.triangles.is_empty() {
-        return Err(ClothError::NoBody);
-    }
-    let diagonal = {
-        let lo = body
-            .bind
-            .iter()
-            .fold(Vec3::splat(f32::INFINITY), |a, p| a.min(*p));
-        let hi = body
-            .bind
-            .iter()
-            .fold(Vec3::splat(f32::NEG_INFINITY), |a, p| a.max(*p));
-        (hi - lo).length()
-    };
-    if !diagonal.is_finite() {
-        return Err(ClothError::NonFinite {
-            what: "body positions".into(),
-        });
-    }
-    let thickness = opts.thickness.unwrap_or(0.01 * diagonal);
-
-    // Frame times.
-    let fps = opts
-        .fps
-        .or_else(|| compiled.fps().filter(|&f| f >= 24.0))
-        .unwrap_or(30.0);
-    let start = compiled.start();
-    let duration = compiled.duration();
-    let (times, looping) = match opts.seconds {
-        Some(s) if s > duration => (FrameGrid::new(start, start + s, fps)?.into_times(), true),
-        Some(s) => (FrameGrid::new(start, start + s, fps)?.into_times(), false),
-        None => (
-            FrameGrid::new(start, compiled.end(), fps)?.into_times(),
-            false,
-        ),
-    };
-    // The grid ends on the clip's end even off the grid; an end within a thousandth of a
-    // frame of the last grid time (f32 noise) is the same frame.
-    let mut times = times;
-    if let [.., a, b] = times.as_slice() {
-        if (b - a) * fps < 1e-3 {
-            times.pop();
-        }
-    }
-    let clip_time = |t: f32| {
-        if looping && duration > 0.0 {
-            start + (t - start).rem_euclid(duration)
-        } else {
-            t
-        }
-    };
-    let substeps = opts
-        .substeps
-        .unwrap_or_else(|| (SUBSTEPS_PER_SECOND / fps).ceil().clamp(1.0, 10_000.0) as u32);
-    let gravity = opts.gravity.unwrap_or_else(|| default_gravity(asset));
-    let params = Params {
-        gravity: gravity.as_dvec3(),
-        damping: f64::from(opts.damping),
-        stretch_compliance: f64::from(opts.stretch_compliance),
-        bend_compliance: f64::from(opts.bend_compliance),
-        thickness: f64::from(thickness),
-        iterations: opts.iterations,
-    };
-
-    // Bind each pin to the nearest point of the body at bind time.
-    let mut pins = Vec::with_capacity(pinned.len());
-    let mut far = Vec::new();
-    for &p in &pinned {
-        let at = garment.positions[p as usize];
-        let (sp, d) = nearest_point(at, &body.bind, &body.triangles).ok_or(ClothError::NoBody)?;
-        if d > thickness {
-            far.push((p, d));
-        }
-        pins.push((p, sp));
-    }
-    if !far.is_empty() {
-        let worst = far.iter().map(|f| f.1).fold(0.0f32, f32::max);
-        warnings.push(Warning::Repaired {
-            location: "garment".into(),
-            message: format!(
-                "{} pinned vertices are farther than the thickness ({thickness:.4}) from the body (up to {worst:.4}); they move onto the nearest skin point",
-                far.len()
-            ),
-        });
-    }
-    let capsules = if opts.collisions {
-        fit_capsules(asset, None, diagonal)
-    } else {
-        Vec::new()
-    };
-    {
-        let rest = asset.skeleton.model_rest_matrices();
-        let placed: Vec<Capsule> = capsules.iter().map(|c| Capsule::place(c, &rest)).collect();
-        let mut inside = 0usize;
-        let mut deepest = 0.0f32;
-        for (i, p) in garment.positions.iter().enumerate() {
-            if pinned.binary_search(&(i as u32)).is_ok() {
-                continue;
-            }
-            let d = placed
-                .iter()
-                .map(|c| c.depth(p.as_dvec3(), 0.0) as f32)
-                .fold(f32::NEG_INFINITY, f32::max);
-            if d > thickness {
-                inside += 1;
-                deepest = deepest.max(d);
-            }
-        }
-        if inside > 0 {
-            warnings.push(Warning::Repaired {
-                location: "garment".into(),
-                message: format!(
-                    "{inside} garment vertices start inside the body's collision capsules (up to {deepest:.4} deep); the first substep pushes them out"
-                ),
-            });
-        }
-    }
-
-    // Per frame: sample, pose, skin (in parallel), then the pin targets and capsules.
-    let rest = Pose::rest(&asset.skeleton);
-    let joints = asset.skeleton.len();
-    let eval_frame = |t: f32| -> Result<(FrameBody, Vec<Transform>), ClothError> {
-        let mut pose = rest.clone();
-        SampleJob {
-            clip: &compiled,
-            time: clip_time(t),
-            rest: &rest.local,
-            output: &mut pose.local,
-        }
-        .run()?;
-        let mut out = RigOutput::default();
-        rig.evaluate(&pose, &mut out)?;
-        let mut skinned = Vec::with_capacity(body.bind.len());
-        body.gather(&out, &mut skinned);
-        let pins = pins.iter().map(|(_, sp)| sp.eval(&skinned)).collect();
-        let capsules = capsules
-            .iter()
-            .map(|c| Capsule::place(c, &out.joint_model))
-            .collect();
-        Ok((FrameBody { pins, capsules }, pose.local))
-    };
-
-    let mut solver = Solver::new(&garment.positions, &garment.triangles, &pinned);
-    let frames = times.len();
-    let mut positions = Vec::with_capacity(frames * n);
-    let mut stats = Vec::with_capacity(frames);
-    let mut looped_poses = looping.then(|| Vec::with_capacity(frames * joints));
-    let mut previous: Option<FrameBody> = None;
-    let mut pin_targets = vec![DVec3::ZERO; pins.len()];
-    let mut caps = vec![Capsule::default(); capsules.len()];
-    for (batch_index, batch) in times.chunks(BATCH).enumerate() {
-        let evaluated: Vec<(FrameBody, Vec<Transform>)> = batch
-            .par_iter()
-            .map(|&t| eval_frame(t))
-            .collect::<Result<_, _>>()?;
-        for (k, (fb, local)) in evaluated.into_iter().enumerate() {
-            let f = batch_index * BATCH + k;
-            match &previous {
-                None => {
-                    // Frame 0: the garment at rest, pins on the skin, pushed out of the body
-                    // and relaxed.
-                    for (&p, &t) in solver.pinned().to_vec().iter().zip(&fb.pins) {
-                        solver.x[p as usize] = t.as_dvec3();
-                    }
-                    solver.relax(&fb.capsules, params.thickness, RELAX_ITERATIONS);
-                }
-                Some(prev) => {
-                    // The frame's own span: the last frame may end off the grid.
-                    let span = f64::from(times[f]) - f64::from(times[f - 1]);
-                    let h = span / f64::from(substeps);
-                    for s in 1..=substeps {
-                        let a = f64::from(s) / f64::from(substeps);
-                        for ((dst, p0), p1) in pin_targets.iter_mut().zip(&prev.pins).zip(&fb.pins)
-                        {
-                            *dst = p0.as_dvec3().lerp(p1.as_dvec3(), a);
-                        }
-                        for ((dst, c0), c1) in caps.iter_mut().zip(&prev.capsules).zip(&fb.capsules)
-                        {
-                            *dst = Capsule {
-                                a: c0.a.lerp(c1.a, a),
-                                b: c0.b.lerp(c1.b, a),
-                                radius: c1.radius,
-                            };
-                        }
-                        if s == substeps {
-                            // Land exactly on the frame's skin.
-                            for (dst, p) in pin_targets.iter_mut().zip(&fb.pins) {
-                                *dst = p.as_dvec3();
-                            }
-                            caps.copy_from_slice(&fb.capsules);
-                        }
-                        solver.substep(h, &params, &pin_targets, &caps);
-                    }
-                }
-            }
-            if solver.x.iter().any(|p| !p.is_finite()) {
-                return Err(ClothError::Diverged {
-                    frame: f,
-                    time: times[f],
-                });
-            }
-            stats.push(measure(&solver, &fb.capsules, params.thickness));
-            positions.extend(solver.x.iter().map(|p| p.as_vec3()));
-            if let Some(lp) = &mut looped_poses {
-                lp.extend_from_slice(&local);
-            }
-            previous = Some(fb);
-            progress(f + 1, frames);
-        }
-    }
-    Ok(Simulation {
-        clip: clip_index,
-        times,
-        particles: n,
-        positions,
-        pins,
-        capsules,
-        stats,
-        thickness,
-        substeps,
-        diagonal,
-        looped_poses,
-    })
-}
-
-/// The frame's stretch, kinetic energy and penetration.
-fn measure(solver: &Solver, capsules: &[Capsule], thickness: f64) -> FrameStats {
-    let mut s = FrameStats::default();
-    for c in &solver.stretch {
-        if c.rest > 0.0 {
-            let len = (solver.x[c.i as usize] - solver.x[c.j as usize]).length();
-            s.max_stretch = s.max_stretch.max(((len - c.rest) / c.rest) as f32);
-        }
-    }
-    let mut ke = 0.0f64;
-    let mut free = 0usize;
-    for (i, (x, v)) in solver.x.iter().zip(&solver.v).enumerate() {
-        for c in capsules {
-            s.max_depth = s.max_depth.max(c.depth(*x, 0.0) as f32);
-        }
-        if !solver.is_free(i) {
-            continue;
-        }
-        free += 1;
-        ke += v.length_squared();
-        if solver.collides(i) {
-            for c in capsules {
-                s.max_penetration = s.max_penetration.max(c.depth(*x, thickness) as f32);
-            }
-        }
-    }
-    s.kinetic_energy = (0.5 * ke / free.max(1) as f64) as f32;
-    s
 }
 
 #[cfg(test)]

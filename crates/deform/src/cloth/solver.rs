@@ -15,6 +15,20 @@ use std::collections::BTreeMap;
 use glam::DVec3 as Vec3;
 
 use super::collide::Capsule;
+use super::surface::{Posed, Surface};
+
+/// What the garment collides with during one substep.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Collider<'a> {
+    /// The capsules (the coarse phase: they also catch a particle too deep in the body
+    /// for the surface search to reach).
+    pub(crate) capsules: &'a [Capsule],
+    /// The skinned body surface at the substep's time, when collisions are on.
+    pub(crate) surface: Option<(&'a Surface, Posed<'a>)>,
+    /// How far beyond the thickness a particle may be and still be pushed out of the
+    /// surface (how deep below it the surface search reaches).
+    pub(crate) reach: f32,
+}
 
 /// A distance constraint between particles `i` and `j`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +66,9 @@ pub(crate) struct Solver {
     contact: Vec<Vec3>,
     /// Per particle: whether it collides (free and not next to a pin).
     collides: Vec<bool>,
+    /// Per particle: the shortest path along the garment's edges to a pin (rest lengths;
+    /// infinite when no pin is connected).
+    from_pin: Vec<f64>,
 }
 
 /// Two particle indices, the smaller first.
@@ -128,6 +145,7 @@ impl Solver {
         for f in &mut fallback {
             *f = f.try_normalize().unwrap_or(Vec3::Y);
         }
+        let from_pin = distances_from(&pinned, &edges, &positions);
         let stretch = edges.into_iter().map(dist).collect();
         let bend = bends.into_iter().map(dist).collect();
         Self {
@@ -141,6 +159,7 @@ impl Solver {
             fallback,
             contact: vec![Vec3::ZERO; n],
             collides,
+            from_pin,
         }
     }
 
@@ -166,7 +185,7 @@ impl Solver {
         h: f64,
         params: &Params,
         pin_targets: &[Vec3],
-        capsules: &[Capsule],
+        collider: &Collider<'_>,
     ) {
         let damp = (-params.damping * h).exp();
         for i in 0..self.x.len() {
@@ -194,7 +213,7 @@ impl Solver {
         for i in 0..self.x.len() {
             self.v[i] = (self.x[i] - self.prev[i]) * inv_h;
         }
-        self.collide(capsules, params.thickness);
+        self.collide(collider, params.thickness);
         for (v, n) in self.v.iter_mut().zip(&self.contact) {
             let vn = v.dot(*n);
             if vn < 0.0 {
@@ -207,28 +226,40 @@ impl Solver {
     /// the stretch and bending projections (fully stiff) and the collision push, so a
     /// garment pushed out of the body at the start spreads the push over its edges instead
     /// of starting stretched. Velocities stay zero.
-    pub(crate) fn relax(&mut self, capsules: &[Capsule], thickness: f64, iterations: u32) {
-        self.collide(capsules, thickness);
+    pub(crate) fn relax(&mut self, collider: &Collider<'_>, thickness: f64, iterations: u32) {
+        self.collide(collider, thickness);
         for _ in 0..iterations {
             project(&mut self.x, &self.inv_mass, &self.stretch, 0.0);
-            self.collide(capsules, thickness);
+            self.collide(collider, thickness);
         }
         self.prev.copy_from_slice(&self.x);
         self.v.iter_mut().for_each(|v| *v = Vec3::ZERO);
     }
 
-    /// Pushes free particles out of every capsule grown by `thickness`; repeated (at most
-    /// 8 passes) while a push moved a particle into another capsule.
-    pub(crate) fn collide(&mut self, capsules: &[Capsule], thickness: f64) {
+    /// Pushes free particles out of every capsule grown by `thickness` (repeated, at most
+    /// 8 passes, while a push moved a particle into another capsule), then out of the body
+    /// surface: to `thickness` above it, or onto it for particles one edge from a pin (a
+    /// pin sits on the skin, so its neighbour cannot keep a thickness away while the edge
+    /// between them is inextensible).
+    pub(crate) fn collide(&mut self, collider: &Collider<'_>, thickness: f64) {
         for i in 0..self.x.len() {
             self.contact[i] = Vec3::ZERO;
-            if !self.collides[i] {
+            if self.inv_mass[i] <= 0.0 {
                 continue;
             }
-            for _ in 0..8 {
+            let passes = if self.collides[i] { 8 } else { 0 };
+            // With the surface, the capsules only keep particles out of the body's core
+            // (they sit inside the skin): grown by the thickness, two limbs' capsules
+            // overlap where cloth is pinched between them and would throw it to and fro.
+            let grow = if collider.surface.is_some() {
+                0.0
+            } else {
+                thickness
+            };
+            for _ in 0..passes {
                 let mut moved = false;
-                for c in capsules {
-                    if c.push_out(&mut self.x[i], thickness, self.fallback[i]) {
+                for c in collider.capsules {
+                    if c.push_out(&mut self.x[i], grow, self.fallback[i]) {
                         moved = true;
                         self.contact[i] = (self.x[i] - c.axis_point(self.x[i]))
                             .try_normalize()
@@ -239,7 +270,109 @@ impl Solver {
                     break;
                 }
             }
+            if let Some((surface, posed)) = &collider.surface {
+                let gap = if self.collides[i] {
+                    thickness.min(GAP_PER_LENGTH * self.from_pin[i])
+                } else {
+                    0.0
+                };
+                self.collide_surface(i, surface, posed, gap, collider);
+            }
         }
+    }
+
+    /// Moves particle `i` to `gap` outside the surface when it is closer (or inside, at
+    /// most `reach` below the gap). A particle pinched between two parts of the body
+    /// closer than twice the gap (cloth between an arm and a hip) goes half way between
+    /// them instead: pushed out of one into the other's gap, it would be pushed back the
+    /// next substep, and a particle jumping to and fro by centimetres every substep pumps
+    /// energy into its neighbours.
+    fn collide_surface(
+        &mut self,
+        i: usize,
+        surface: &Surface,
+        posed: &Posed<'_>,
+        gap: f64,
+        collider: &Collider<'_>,
+    ) {
+        let query = |p: glam::Vec3, max: f32| surface.nearest(posed, p, max);
+        let Some(hit) = query(self.x[i].as_vec3(), gap as f32 + collider.reach) else {
+            return;
+        };
+        if f64::from(hit.signed) >= gap {
+            return;
+        }
+        let out = hit.out.as_dvec3();
+        // Slightly beyond the gap, so rounding cannot leave the point inside.
+        let target = hit.point.as_dvec3() + out * (gap * (1.0 + 1e-6));
+        self.contact[i] = out;
+        if gap > 0.0 {
+            if let Some(other) = query(target.as_vec3(), gap as f32) {
+                if f64::from(other.signed) < gap && other.out.dot(hit.out) < 0.0 {
+                    self.x[i] = (hit.point.as_dvec3() + other.point.as_dvec3()) * 0.5;
+                    return;
+                }
+            }
+        }
+        self.x[i] = target;
+    }
+}
+
+/// How far from the body surface a particle is kept, per unit of its distance along the
+/// garment from the nearest pin, at most (the thickness caps it). A pin sits on the skin;
+/// a particle two edges from it, held a full thickness off a body that bulges under it
+/// (a hip as the thigh swings), asks more than its inextensible edges can give, and the
+/// push and the edges then fight every substep, pumping energy into the garment.
+const GAP_PER_LENGTH: f64 = 0.25;
+
+/// Shortest paths along `edges` (lengths at `positions`) from any of `sources`
+/// (Dijkstra; infinite where none reaches).
+fn distances_from(sources: &[u32], edges: &[Pair], positions: &[Vec3]) -> Vec<f64> {
+    let n = positions.len();
+    let mut adjacent: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+    for &(i, j) in edges {
+        let (i, j) = (i as usize, j as usize);
+        let d = (positions[i] - positions[j]).length();
+        adjacent[i].push((j, d));
+        adjacent[j].push((i, d));
+    }
+    let mut dist = vec![f64::INFINITY; n];
+    let mut heap = std::collections::BinaryHeap::new();
+    for &s in sources {
+        if let Some(d) = dist.get_mut(s as usize) {
+            *d = 0.0;
+            heap.push(std::cmp::Reverse((Ordered(0.0), s as usize)));
+        }
+    }
+    while let Some(std::cmp::Reverse((Ordered(d), i))) = heap.pop() {
+        if d > dist[i] {
+            continue;
+        }
+        for &(j, w) in &adjacent[i] {
+            if d + w < dist[j] {
+                dist[j] = d + w;
+                heap.push(std::cmp::Reverse((Ordered(d + w), j)));
+            }
+        }
+    }
+    dist
+}
+
+/// An `f64` ordered by `total_cmp`, for the heap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Ordered(f64);
+
+impl Eq for Ordered {}
+
+impl PartialOrd for Ordered {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Ordered {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
     }
 }
 
@@ -290,8 +423,13 @@ mod tests {
             thickness: 0.0,
             iterations: 1,
         };
+        let none = Collider {
+            capsules: &[],
+            surface: None,
+            reach: 0.0,
+        };
         for _ in 0..600 {
-            s.substep(1.0 / 600.0, &params, &[Vec3::ZERO], &[]);
+            s.substep(1.0 / 600.0, &params, &[Vec3::ZERO], &none);
         }
         assert_eq!(s.x[0], Vec3::ZERO);
         for c in &s.stretch {

@@ -8,6 +8,9 @@ use rigport_model::{
 };
 
 use super::*;
+use rigport_eval::sample::{CompiledClip, SampleJob};
+use rigport_eval::{Pose, Rig, RigOutput};
+use rigport_model::UpAxis;
 
 /// A Z-up arm like the USTC course's: joints at z = 0, 2, 4; a 1 x 1 x 4 box skinned
 /// rigidly (bottom half to the shoulder, top half to the elbow); the elbow bends 90
@@ -172,8 +175,11 @@ fn same_bytes_on_any_thread_count() {
             simulate(
                 &asset,
                 &flag(),
+                // Looped, the elbow snaps back from 69 degrees to straight in one frame
+                // and throws the flag past the speed limit: kept, as asked.
                 &ClothOptions {
                     seconds: Some(2.5),
+                    allow_unstable: true,
                     ..ClothOptions::default()
                 },
                 &mut Vec::new(),
@@ -247,7 +253,47 @@ fn bad_input_gets_typed_errors() {
             .any(|w| w.to_string().contains("start inside")),
         "{warnings:?}"
     );
-    assert!(sim.worst().max_penetration <= 1e-5 * sim.diagonal);
+    assert_eq!(sim.worst().body_inside, 0, "{:?}", sim.worst());
+}
+
+#[test]
+fn a_looped_snap_is_unstable_with_the_frame_and_limit_as_data() {
+    let asset = arm();
+    let opts = ClothOptions {
+        seconds: Some(2.5),
+        ..ClothOptions::default()
+    };
+    let err = simulate(&asset, &flag(), &opts, &mut Vec::new(), |_, _| {}).unwrap_err();
+    let ClothError::Unstable {
+        frame,
+        measure,
+        value,
+        limit,
+        ..
+    } = err
+    else {
+        panic!("{err:?}");
+    };
+    // The clip ends at 1 s (frame 30) and starts over: the flag flies just after.
+    assert!((30..=40).contains(&frame), "{err}");
+    assert!(value > limit, "{err}");
+    assert_eq!(measure, Measure::Speed, "{err}");
+    // Kept on request, with a coded warning naming the same frame.
+    let mut warnings = Vec::new();
+    let kept = ClothOptions {
+        allow_unstable: true,
+        ..opts
+    };
+    simulate(&asset, &flag(), &kept, &mut warnings, |_, _| {}).expect("kept");
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_eq!(warnings[0].code(), "W007");
+    assert!(
+        warnings[0]
+            .to_string()
+            .contains(&format!("first at frame {frame} ")),
+        "{}",
+        warnings[0]
+    );
 }
 
 #[test]
