@@ -325,6 +325,25 @@ impl<'l> Importer<'l, '_> {
             Some(name) => self.primvar::<2>(&prim, name, Interp::Constant)?,
             None => None,
         };
+        // One UV set is imported; further texCoord2 primvars are a loss, said with a code.
+        let other_uvs: Vec<&str> = prim
+            .props
+            .iter()
+            .filter(|(n, p)| {
+                n.starts_with("primvars:")
+                    && !n.ends_with(":indices")
+                    && Some(*n) != uv_name.as_deref()
+                    && p.type_name.is_some_and(|t| t.starts_with("texCoord2"))
+            })
+            .map(|(n, _)| *n)
+            .collect();
+        if !other_uvs.is_empty() {
+            let list = other_uvs.join(", ");
+            self.incomplete(
+                &path,
+                format!("only one UV set is imported; {list} left out"),
+            );
+        }
         if let Some(pv) = &normals {
             self.check_primvar(&path, normals_name, pv, n_faces, n_points, n_corners)?;
         }

@@ -711,3 +711,30 @@ def Xform "Root"
         "the motion is kept: {text:?}"
     );
 }
+
+#[test]
+fn a_second_uv_set_left_out_is_a_coded_warning() {
+    let text = r#"#usda 1.0
+def Mesh "M"
+{
+    int[] faceVertexCounts = [3]
+    int[] faceVertexIndices = [0, 1, 2]
+    point3f[] points = [(1, 1, 0), (0, 0, 0), (0, 1, 0)]
+    texCoord2f[] primvars:st = [(0, 0), (1, 0), (0, 1)] (
+        interpolation = "vertex"
+    )
+    texCoord2f[] primvars:st1 = [(0, 0), (1, 1), (1, 0)] (
+        interpolation = "vertex"
+    )
+}
+"#;
+    let imported = ok(text, "uvs.usda");
+    assert!(imported.asset.meshes[0].uvs.is_some());
+    let lost: Vec<_> = imported
+        .warnings
+        .iter()
+        .filter(|w| w.to_string().contains("primvars:st1"))
+        .collect();
+    assert_eq!(lost.len(), 1, "{:?}", imported.warnings);
+    assert_eq!(lost[0].code(), "W004");
+}
