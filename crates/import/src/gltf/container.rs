@@ -247,16 +247,37 @@ pub(super) fn parse_document(
         .iter()
         .any(|prefix| value.is_some_and(|v| v.starts_with(prefix)));
         if error == SchemaError::Unsupported && material_only {
-            warnings.push(Warning::Note {
+            warnings.push(Warning::Incomplete {
                 location: Location::json(path, json_pointer(at_path)).to_string(),
                 message: format!(
-                    "required extension {} only affects materials; ignored",
+                    "required extension {} only affects materials; not imported, the \
+                     materials are read without it",
                     value.unwrap_or_default()
                 ),
             });
         } else {
             kept.push((at, error));
         }
+    }
+    // Extensions a file uses without requiring them: rigport reads none of them but the
+    // quantized accessors the reader decodes, so each is a loss, said once.
+    let unread: Vec<&str> = root
+        .extensions_used
+        .iter()
+        .map(String::as_str)
+        .filter(|e| {
+            *e != "KHR_mesh_quantization" && !root.extensions_required.iter().any(|r| r == e)
+        })
+        .collect();
+    if !unread.is_empty() {
+        warnings.push(Warning::Incomplete {
+            location: Location::json(path, "/extensionsUsed".to_string()).to_string(),
+            message: format!(
+                "extensions not imported (what they add to materials, lights or geometry is \
+                 left out): {}",
+                unread.join(", ")
+            ),
+        });
     }
     if let Some((first_path, first)) = kept.first() {
         let (at_path, value) = split_path_value(first_path.as_str());

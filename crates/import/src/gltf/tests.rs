@@ -882,3 +882,19 @@ fn corpus_validator_negative_tests_never_panic() {
         }
     }
 }
+
+#[test]
+fn extensions_used_but_not_read_are_a_coded_warning() {
+    let imported = import_edited("skin_basic.gltf", |j| {
+        j["extensionsUsed"] = vec!["KHR_materials_emissive_strength", "KHR_lights_punctual"].into();
+    })
+    .unwrap();
+    let lost: Vec<_> = imported
+        .warnings
+        .iter()
+        .filter(|w| w.to_string().contains("extensions not imported"))
+        .collect();
+    assert_eq!(lost.len(), 1, "{:?}", imported.warnings);
+    assert_eq!(lost[0].code(), "W004");
+    assert!(lost[0].to_string().contains("KHR_lights_punctual"));
+}
