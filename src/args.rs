@@ -6,7 +6,10 @@ use std::path::PathBuf;
 
 use clap::Args;
 use rigport_model::{InfluencesFit, SkinningMethod, UpAxis};
+use std::str::FromStr as _;
+
 use rigport_pipeline::load::{Input, Inputs};
+use rigport_pipeline::units::InputUnits;
 use rigport_pipeline::write::{Output, WriteOptions};
 
 /// Where a rig comes from.
@@ -38,6 +41,14 @@ pub struct InputArgs {
     /// bone gets a small skinned shape so viewers show the motion.
     #[arg(long)]
     pub no_bone_mesh: bool,
+    /// The unit of inputs that state none (BVH, OBJ/Pinocchio, CSCI 520): m, cm, mm, in, ft,
+    /// metres per unit, or auto (centimetres for a human skeleton 100-250 units tall).
+    /// Default: metres, with a warning for a skeleton too tall for them.
+    #[arg(long, value_name = "UNIT", value_parser = InputUnits::from_str)]
+    pub input_units: Option<InputUnits>,
+    /// Apply --input-units even to a file that states its own unit (ASF, USD, glTF).
+    #[arg(long, requires = "input_units")]
+    pub force_units: bool,
 }
 
 impl InputArgs {
@@ -54,6 +65,8 @@ impl InputArgs {
             },
             bone_mesh: !self.no_bone_mesh,
             budget: crate::memory::budget(),
+            units: self.input_units,
+            force_units: self.force_units,
         }
     }
 }

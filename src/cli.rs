@@ -49,11 +49,7 @@ fn parse_memory_size(text: &str) -> Result<u64, String> {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Convert a rig to glTF (.glb, or .gltf + .bin).
-    #[command(after_help = "Examples:\n  \
-        rigport convert --mesh Model1.obj --skeleton skeleton.out --attachment attachment.out -o model1.glb\n  \
-        rigport convert Model1.obj skeleton.out attachment.out -o model1.gltf\n  \
-        rigport convert path/to/rig_folder -o rig.glb\n  \
-        rigport convert CesiumMan.glb -o cesium.gltf")]
+    #[command(after_help = include_str!("../docs/help/convert.txt"))]
     Convert(ConvertArgs),
     /// Describe rigs: joints with parents, meshes, influence histogram, clips.
     Inspect(InspectArgs),
@@ -75,8 +71,7 @@ pub enum Command {
     /// roles both skeletons' structure shows or --map, rotations transferred relative to
     /// each rest pose, hips scaled.
     #[command(
-        after_help = "MAP.json: {\"joints\": {\"SOURCE\": \"TARGET\" or [\"TARGET\", ...]}, \"pelvis\": {\"source\": \"S\", \"target\": \"T\"}} (pelvis optional).\n\
-        A map (built in or given) that leaves a leg, an arm, the spine or the head of the motion driving nothing, or puts a limb on a limb of another role, exits 1 naming the joints; --allow-partial writes the result with warning W004."
+        after_help = include_str!("../docs/help/retarget.txt")
     )]
     Retarget(RetargetArgs),
     /// Play clips one after another with crossfades, optionally as a seamless loop.
@@ -86,10 +81,7 @@ pub enum Command {
     Ik(IkArgs),
     /// Hold mocap feet still while they touch the ground (two-bone IK on the legs).
     #[command(
-        after_help = "Feet are found by name (CMU ASF lfoot/ltoes, cgspeed BVH and Mixamo \
-        LeftFoot/LeftToeBase, Bandai Namco Foot_L/Toes_L, Pinocchio's human template) unless \
-        --foot names them. Only the legs' hip, knee and ankle rotations change. Slides are in \
-        skeleton heights: per contact frame, the joint's distance from its touch-down position."
+        after_help = include_str!("../docs/help/footlock.txt")
     )]
     Footlock(FootlockArgs),
     /// Bake a skinning result (DQS) into a glTF every viewer plays back exactly.
@@ -103,9 +95,7 @@ pub enum Command {
     /// Run many items from a JSON Lines manifest (or every asset of a folder), in-process
     /// on --jobs threads; shards, resume and a per-item report (docs/scale.md).
     #[command(
-        after_help = "Manifest line: {\"id\": \"kick\", \"command\": \"convert\", \"inputs\": [\"kick.bvh\"], \"options\": [\"--fps\", \"30\"], \"outputs\": [\"kick.glb\"]}\n\
-        Exit codes: 0 every item done or skipped; 1 some items had bad input (the others finished; \
-        do not retry); 2 usage; 3 an output could not be written (retry)."
+        after_help = include_str!("../docs/help/batch.txt")
     )]
     Batch(BatchArgs),
     /// Merge batch reports (the shards of one run) and print the summary table.

@@ -41,23 +41,19 @@ impl Context {
     /// is any warning. Notes ([`Warning::Note`]: facts, nothing lost or repaired) never
     /// fail.
     fn show(&self, warnings: &[Warning]) -> Result<(), Denied> {
-        let mut count = 0;
-        if let Some(captured) = &self.captured {
-            let mut captured = captured.lock().unwrap_or_else(|e| e.into_inner());
-            for w in warnings {
-                count += usize::from(!w.is_note());
-                captured.push(crate::exit::warning_line(w));
-            }
-        }
+        let count = warnings.iter().filter(|w| !w.is_note()).count();
         // `warning[W003]: file:4: repaired: ...`, `note[N001]: ...` (codes: docs/WARNINGS.md).
-        for w in warnings.iter().filter(|_| self.captured.is_none()) {
-            if w.is_note() {
-                if !self.quiet {
-                    eprintln!("{}", crate::exit::warning_line(w));
-                }
-            } else {
-                count += 1;
-                eprintln!("{}", crate::exit::warning_line(w));
+        for line in warnings
+            .iter()
+            .map(|w| (w.is_note(), crate::exit::warning_line(w)))
+        {
+            match &self.captured {
+                Some(captured) => captured
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .push(line.1),
+                None if !line.0 || !self.quiet => eprintln!("{}", line.1),
+                None => {}
             }
         }
         if self.deny_warnings && count > 0 {

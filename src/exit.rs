@@ -74,6 +74,12 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
                  warning)",
             )
         }
+        PipelineError::Units(conflict) => {
+            return UsageError(format!(
+                "{conflict}; pass --force-units to use the units given anyway"
+            ))
+            .into()
+        }
         PipelineError::Detect(ref detect) => detect,
         PipelineError::Budget(over) => {
             return anyhow::anyhow!(
@@ -141,6 +147,11 @@ pub fn warning_line(w: &Warning) -> String {
         Warning::NoContacts { .. } => format!(
             "{line}; the contact thresholds are `rigport footlock --height` and `--speed`"
         ),
+        // The one guess is centimetres (`rigport_pipeline::units`).
+        Warning::UnitsUnknown { guess, .. } => match guess {
+            Some(_) => format!("{line}; pass --input-units cm (or --input-units auto)"),
+            None => format!("{line}; give the unit with --input-units"),
+        },
         _ => line,
     }
 }

@@ -36,6 +36,7 @@ mod render;
 mod retarget;
 mod skinning;
 mod three;
+mod units;
 mod usd;
 mod usd_blendshapes;
 mod usd_frames;

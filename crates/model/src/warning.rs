@@ -70,6 +70,17 @@ pub enum Warning {
         /// Which limit, from which frame, by how much.
         message: String,
     },
+    /// A skeleton stands implausibly tall for metres and its file states no unit: it is
+    /// read as metres, and is probably in another unit.
+    UnitsUnknown {
+        /// The input.
+        location: String,
+        /// How tall the skeleton stands, in the file's units.
+        height: f32,
+        /// The unit it is almost certainly in (metres per unit), when its shape says so (a
+        /// human 100 to 250 units tall: centimetres).
+        guess: Option<f64>,
+    },
     /// A fact about the input the user may want to know (e.g. which layout was detected).
     Note {
         /// Where.
@@ -81,7 +92,7 @@ pub enum Warning {
 
 /// Every warning code with its kebab-case name and meaning, in code order (the table
 /// `docs/WARNINGS.md` documents). A code never changes meaning once released.
-pub const WARNING_CODES: [(&str, &str, &str); 8] = [
+pub const WARNING_CODES: [(&str, &str, &str); 9] = [
     (
         "W001",
         "weights-renormalized",
@@ -116,6 +127,11 @@ pub const WARNING_CODES: [(&str, &str, &str); 8] = [
         "W007",
         "unstable",
         "a simulation went past its stability limits and the result was kept",
+    ),
+    (
+        "W008",
+        "units-unknown",
+        "a skeleton stands too tall for metres and its file states no unit",
     ),
     (
         "N001",
@@ -165,7 +181,8 @@ impl Warning {
             Warning::Suspect { .. } => 4,
             Warning::NoContacts { .. } => 5,
             Warning::Unstable { .. } => 6,
-            Warning::Note { .. } => 7,
+            Warning::UnitsUnknown { .. } => 7,
+            Warning::Note { .. } => 8,
         };
         WARNING_CODES[i]
     }
@@ -198,6 +215,25 @@ impl fmt::Display for Warning {
                 location, message, ..
             } => write!(f, "{location}: {message}"),
             Warning::Unstable { location, message } => write!(f, "{location}: {message}"),
+            Warning::UnitsUnknown {
+                location,
+                height,
+                guess,
+            } => {
+                write!(
+                    f,
+                    "{location}: the skeleton stands {height:.1} units tall and the file states no \
+                     unit: read as metres, it is {height:.1} m tall"
+                )?;
+                match guess {
+                    Some(g) => write!(
+                        f,
+                        "; as a human figure it is almost certainly in units of {g} m ({:.2} m tall)",
+                        f64::from(*height) * g
+                    ),
+                    None => Ok(()),
+                }
+            }
             Warning::Note { location, message } => write!(f, "{location}: {message}"),
         }
     }

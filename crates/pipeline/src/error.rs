@@ -71,6 +71,9 @@ pub enum PipelineError {
     /// An influence refit failed.
     #[error(transparent)]
     Refit(#[from] rigport_deform::refit::asset::RefitError),
+    /// Units given for an input contradict the unit its file states (a usage error).
+    #[error(transparent)]
+    Units(#[from] crate::units::UnitsConflict),
     /// The inputs are readable but do not make what was asked (the message says why).
     #[error("{0}")]
     Invalid(String),
@@ -95,7 +98,7 @@ impl PipelineError {
     /// assert!(convert(&input, &options, &Silent).unwrap_err().is_usage());
     /// ```
     pub fn is_usage(&self) -> bool {
-        matches!(self, Self::Usage(_))
+        matches!(self, Self::Usage(_) | Self::Units(_))
     }
 
     /// A job's own error, shown as it is.

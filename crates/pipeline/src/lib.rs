@@ -18,6 +18,8 @@
 //!   memory check, the influence fit (`truncate` or `refit`) and the writer chosen by the
 //!   output's extension;
 //! - [`memory`]: this process's memory budget;
+//! - [`units`]: the units of inputs that state none, and the warning for a skeleton too
+//!   tall for metres;
 //! - private to the crate: the output checks made before any work (an output must not be
 //!   an input, a special file or a `.gltf` link), the `.npz` dump `eval` writes, and what
 //!   `inspect` lists.
@@ -60,6 +62,7 @@ mod report;
 pub mod retarget;
 pub mod retime;
 pub mod sequence;
+pub mod units;
 pub mod write;
 
 pub use animate::run as animate;

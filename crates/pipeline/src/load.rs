@@ -38,6 +38,11 @@ pub struct Input {
     pub bone_mesh: bool,
     /// The memory budget.
     pub budget: MemoryBudget,
+    /// The unit of inputs that state none (BVH, OBJ/Pinocchio, CSCI 520); `None`: metres,
+    /// with a warning for a skeleton too tall for them ([`crate::units`]).
+    pub units: Option<crate::units::InputUnits>,
+    /// Apply `units` even over a unit the file states.
+    pub force_units: bool,
 }
 
 impl Input {
@@ -53,6 +58,8 @@ impl Input {
             files: Inputs::new(paths),
             bone_mesh: true,
             budget: MemoryBudget::UNLIMITED,
+            units: None,
+            force_units: false,
         }
     }
 
@@ -69,7 +76,9 @@ impl Input {
     /// # Errors
     /// As [`load`].
     pub(crate) fn load(&self, plan: &Source) -> Result<Imported, PipelineError> {
-        load(plan, self.bone_mesh, &self.budget)
+        let mut imported = load(plan, self.bone_mesh, &self.budget)?;
+        crate::units::apply(&mut imported, self.units, self.force_units, &plan.label())?;
+        Ok(imported)
     }
 
     /// Resolves and imports exactly one asset, as a step of `progress`.

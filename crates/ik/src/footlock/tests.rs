@@ -361,7 +361,12 @@ fn a_leg_pulled_past_its_reach_stays_bent_and_stretches_within_the_limit() {
     }
     // Wherever a contact is reported, the ankle is held.
     for c in foot.contacts.iter().filter(|c| c.joint == "LeftFoot") {
-        for (f, frame) in out.iter().enumerate().take(c.end_frame + 1).skip(c.start_frame) {
+        for (f, frame) in out
+            .iter()
+            .enumerate()
+            .take(c.end_frame + 1)
+            .skip(c.start_frame)
+        {
             assert!((frame[2] - c.pin).length() < 1e-5, "frame {f}");
         }
     }
