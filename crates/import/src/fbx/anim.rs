@@ -33,15 +33,16 @@ pub(super) fn bake(scene: &ufbx::Scene, path: &Path) -> Result<Vec<Baked>, Impor
         .anim_stacks
         .iter()
         .map(|stack| {
-            let anim = ufbx::bake_anim(scene, &stack.anim, ufbx::BakeOpts::default()).map_err(|e| {
-                ImportError::invalid(
-                    Location::file(path),
-                    format!(
-                        "animation stack {:?} cannot be evaluated: {}",
-                        &*stack.element.name, &*e.description
-                    ),
-                )
-            })?;
+            let anim =
+                ufbx::bake_anim(scene, &stack.anim, ufbx::BakeOpts::default()).map_err(|e| {
+                    ImportError::invalid(
+                        Location::file(path),
+                        format!(
+                            "animation stack {:?} cannot be evaluated: {}",
+                            &*stack.element.name, &*e.description
+                        ),
+                    )
+                })?;
             Ok(Baked {
                 name: stack.element.name.to_string(),
                 anim,
@@ -76,7 +77,9 @@ pub(super) fn clips(baked: &[Baked], skel: &Skel, built: &Built) -> Vec<Clip> {
                     [v.x, v.y, v.z].to_vec()
                 });
                 push(&mut tracks, TrackTarget::Translation(joint), t);
-                let r = keys(&node.rotation_keys, start, |k| quat(&k.value).to_array().to_vec());
+                let r = keys(&node.rotation_keys, start, |k| {
+                    quat(&k.value).to_array().to_vec()
+                });
                 push(&mut tracks, TrackTarget::Rotation(joint), r);
                 let s = keys(&node.scale_keys, start, |k| {
                     let v = vec3(&k.value);
@@ -157,7 +160,10 @@ fn morph_tracks(anim: &ufbx::BakedAnim, start: f64, built: &Built, tracks: &mut 
         if animated.is_empty() {
             continue;
         }
-        let mut times: Vec<f64> = animated.iter().flat_map(|k| k.iter().map(|k| k.time)).collect();
+        let mut times: Vec<f64> = animated
+            .iter()
+            .flat_map(|k| k.iter().map(|k| k.time))
+            .collect();
         times.sort_by(f64::total_cmp);
         times.dedup();
         let statics = &built.meshes[mesh.0 as usize].morph_weights;
@@ -177,6 +183,10 @@ fn morph_tracks(anim: &ufbx::BakedAnim, start: f64, built: &Built, tracks: &mut 
                 values.push(w);
             }
         }
-        push(tracks, TrackTarget::MorphWeights(*mesh), (out_times, values));
+        push(
+            tracks,
+            TrackTarget::MorphWeights(*mesh),
+            (out_times, values),
+        );
     }
 }

@@ -81,7 +81,10 @@ pub(super) fn error(e: &ufbx::Error, bytes: &[u8], path: &Path) -> ImportError {
     } else if let Some((line, what)) = ascii_truncation(bytes) {
         return ImportError::new(Location::line(path, line), Problem::Truncated(what));
     }
-    ImportError::invalid(Location::file(path), format!("not a readable FBX file: {message}"))
+    ImportError::invalid(
+        Location::file(path),
+        format!("not a readable FBX file: {message}"),
+    )
 }
 
 /// Where a binary FBX file stores its version (after the magic, a 0x1A and a 0x00).
@@ -165,7 +168,11 @@ fn ascii_truncation(bytes: &[u8]) -> Option<(usize, String)> {
             _ => {}
         }
     }
-    let last = if bytes.last() == Some(&b'\n') { line - 1 } else { line };
+    let last = if bytes.last() == Some(&b'\n') {
+        line - 1
+    } else {
+        line
+    };
     let innermost = *open.last()?;
     Some((
         last.max(1),

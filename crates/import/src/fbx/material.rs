@@ -96,13 +96,19 @@ fn load_texture(
     } else {
         let folder = path.parent().unwrap_or(Path::new(""));
         let mut candidates: Vec<PathBuf> = Vec::new();
-        for s in [&texture.absolute_filename, &texture.relative_filename, &texture.filename] {
+        for s in [
+            &texture.absolute_filename,
+            &texture.relative_filename,
+            &texture.filename,
+        ] {
             if !s.is_empty() {
                 let p = PathBuf::from(s.replace('\\', "/"));
                 candidates.push(if p.is_absolute() { p } else { folder.join(p) });
             }
         }
-        if let Some(n) = file_name(&texture.filename).or_else(|| file_name(&texture.relative_filename)) {
+        if let Some(n) =
+            file_name(&texture.filename).or_else(|| file_name(&texture.relative_filename))
+        {
             candidates.push(folder.join(n));
         }
         let found = candidates

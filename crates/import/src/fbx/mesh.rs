@@ -85,11 +85,7 @@ pub(super) fn build(
             } else {
                 mesh.element.name.to_string()
             };
-            let name = if several {
-                format!("{base}_{k}")
-            } else {
-                base
-            };
+            let name = if several { format!("{base}_{k}") } else { base };
             let mut m = geometry(mesh, faces, &to_space_f, &normal_m);
             m.name = unique(&name, "mesh", &mut used);
             m.node_name = node.element.name.to_string();
@@ -136,27 +132,41 @@ fn geometry(mesh: &ufbx::Mesh, faces: &[u32], to_space: &Mat4, normal_m: &Mat4) 
     let mut normal_values = Vec::new();
     let mut seen: HashMap<Vec<u32>, u32> = HashMap::new();
     let mut corner_vertex = |corner: usize, out: &mut Mesh, uvs: &mut Vec<Vec<Vec2>>| -> u32 {
-        let point = mesh.vertex_position.indices.get(corner).copied().unwrap_or(0);
+        let point = mesh
+            .vertex_position
+            .indices
+            .get(corner)
+            .copied()
+            .unwrap_or(0);
         let mut key = vec![point];
         key.extend(normals.map(|n| n.indices.get(corner).copied().unwrap_or(0)));
-        key.extend(uv_sets.iter().map(|s| s.indices.get(corner).copied().unwrap_or(0)));
+        key.extend(
+            uv_sets
+                .iter()
+                .map(|s| s.indices.get(corner).copied().unwrap_or(0)),
+        );
         if let Some(&v) = seen.get(&key) {
             return v;
         }
         let v = out.positions.len() as u32;
         let p = mesh.vertex_position.values.get(point as usize);
-        out.positions
-            .push(p.map_or(Vec3::ZERO, |p| to_space.transform_point3(super::skeleton::vec3(p))));
+        out.positions.push(p.map_or(Vec3::ZERO, |p| {
+            to_space.transform_point3(super::skeleton::vec3(p))
+        }));
         out.source_vertex.push(point);
         if let Some(n) = normals {
-            let value = n.values.get(key[1] as usize).map_or(Vec3::Y, super::skeleton::vec3);
+            let value = n
+                .values
+                .get(key[1] as usize)
+                .map_or(Vec3::Y, super::skeleton::vec3);
             normal_values.push(normal_m.transform_vector3(value).normalize_or(Vec3::Y));
         }
         for (set, (values, uv)) in uv_sets.iter().zip(uvs.iter_mut()).enumerate() {
             let index = key[1 + usize::from(normals.is_some()) + set] as usize;
-            let t = values.values.get(index).map_or(Vec2::ZERO, |t| {
-                Vec2::new(t.x as f32, 1.0 - t.y as f32)
-            });
+            let t = values
+                .values
+                .get(index)
+                .map_or(Vec2::ZERO, |t| Vec2::new(t.x as f32, 1.0 - t.y as f32));
             uv.push(t);
         }
         seen.insert(key, v);
@@ -273,9 +283,15 @@ fn blend_shapes(
                 ));
             }
             let mut by_point: HashMap<u32, Vec3> = HashMap::new();
-            for (point, offset) in shape.offset_vertices.iter().zip(shape.position_offsets.iter())
+            for (point, offset) in shape
+                .offset_vertices
+                .iter()
+                .zip(shape.position_offsets.iter())
             {
-                by_point.insert(*point, to_space.transform_vector3(super::skeleton::vec3(offset)));
+                by_point.insert(
+                    *point,
+                    to_space.transform_vector3(super::skeleton::vec3(offset)),
+                );
             }
             let position_deltas = m
                 .source_vertex
