@@ -16,6 +16,8 @@
 //! | each animation stack | one [`Clip`] named after it, sampled by ufbx's `bake_anim` (see `anim.rs`) |
 //!
 //! [`Joint`]: rigport_model::Joint
+//! [`Mesh`]: rigport_model::Mesh
+//! [`Mesh::polygons`]: rigport_model::Mesh::polygons
 //! [`Clip`]: rigport_model::Clip
 //! [`SkinBinding`]: rigport_model::SkinBinding
 
