@@ -4,7 +4,7 @@
 //! | FBX (ufbx's maps) | model |
 //! |---|---|
 //! | `DiffuseColor` x `DiffuseFactor` (ufbx `pbr.base_color` x `pbr.base_factor`) | `base_color_factor` (alpha 1) |
-//! | the texture on the base colour: embedded content, else the file (absolute, relative to the FBX, or by name beside it) | `base_color_texture` (UV set by name, wrap modes) |
+//! | the texture on the base colour: embedded content, else the file (absolute, relative to the FBX, or by name beside it) | `base_color_texture` (the first UV set, wrap modes) |
 //! | anything else | metallic 0, roughness 1 (a Lambert/Phong surface) |
 //!
 //! A texture that cannot be found is left out with a [`Warning::Incomplete`].

@@ -186,6 +186,8 @@ fn geometry(mesh: &ufbx::Mesh, faces: &[u32], to_space: &Mat4, normal_m: &Mat4) 
             num_indices: face.num_indices,
         };
         let n = ufbx::triangulate_face(&mut tri, mesh, face) as usize;
+        // A polygon is kept only when its triangles are its fan from its first corner.
+        fans &= n + 2 == face.num_indices as usize;
         let first = face.index_begin;
         for t in tri.chunks_exact(3).take(n) {
             fans &= t.contains(&first);
