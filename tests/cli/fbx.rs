@@ -4,7 +4,7 @@
 //! `.glb` the Khronos glTF-Validator passes with no error and no warning; a skinned file
 //! comes out at its height in the file's unit times the file's metres per unit; an FBX with
 //! another extension is told by its bytes; broken files fail with exit 1, a location and
-//! no output.
+//! no output. The same files convert to `.usda` that usd-core's validators pass.
 
 use std::path::{Path, PathBuf};
 
@@ -44,6 +44,31 @@ fn every_corpus_fbx_converts_to_a_valid_glb() {
             glb.to_str().unwrap(),
         ]);
         assert_valid(&glb);
+    }
+}
+
+#[test]
+fn every_corpus_fbx_converts_to_a_clean_usda() {
+    // The USD writer states the file's unit (metres per unit from `UnitScaleFactor`);
+    // usd-core's validators and rigport's checks (tools/check_usd.py) pass it.
+    let Some(files) = corpus_fbx() else {
+        return;
+    };
+    let Some(python) = crate::usd::python() else {
+        return;
+    };
+    let dir = scratch();
+    for file in files {
+        let name = file.file_stem().unwrap().to_string_lossy().into_owned();
+        let usda = dir.path().join(format!("{name}.usda"));
+        rigport_ok(&[
+            "convert",
+            file.to_str().unwrap(),
+            "-o",
+            usda.to_str().unwrap(),
+        ]);
+        let (ok, text) = crate::usd::check_usd(&python, &usda, None);
+        assert!(ok, "{name}: {text}");
     }
 }
 
