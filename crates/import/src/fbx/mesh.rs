@@ -12,7 +12,6 @@ use rigport_model::{
 
 use super::incomplete;
 use super::skeleton::{mat, unique, Skel};
-use crate::ImportError;
 
 /// The meshes, their skins, and which blend channels drive each mesh's morph targets.
 pub(super) struct Built {
@@ -22,16 +21,14 @@ pub(super) struct Built {
     pub(super) channels: Vec<(MeshIndex, Vec<u32>)>,
 }
 
-/// Every mesh node's meshes (see the module table in `mod.rs`).
-///
-/// # Errors
-/// None yet: geometry ufbx accepted always maps (kept fallible for the model checks).
+/// Every mesh node's meshes (see the module table in `mod.rs`); the asset's checks run
+/// once it is assembled.
 pub(super) fn build(
     scene: &ufbx::Scene,
     skel: &Skel,
     path: &Path,
     warnings: &mut Vec<Warning>,
-) -> Result<Built, ImportError> {
+) -> Built {
     let mut out = Built {
         meshes: Vec::new(),
         skins: Vec::new(),
@@ -102,7 +99,7 @@ pub(super) fn build(
             out.meshes.push(m);
         }
     }
-    Ok(out)
+    out
 }
 
 /// The mesh's geometry-to-world matrix at bind time, from its first cluster with a bone.

@@ -63,7 +63,7 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
     let baked = anim::bake(&scene, path)?;
     let skel = skeleton::build(&scene, &anim::animated_nodes(&baked), path)?;
     let mats = material::build(&scene, path, &mut warnings);
-    let built = mesh::build(&scene, &skel, path, &mut warnings)?;
+    let built = mesh::build(&scene, &skel, path, &mut warnings);
     let clips = anim::clips(&baked, &skel, &built);
     let unit = scene.settings.unit_meters;
     let name = path
