@@ -17,6 +17,7 @@ mod common;
 mod csci520;
 mod demo;
 mod eval_plays;
+mod fbx;
 mod footlock;
 mod frame_limit;
 mod frames;

@@ -16,10 +16,10 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::{asf_amc, bvh, csci520, gltf, obj, pinocchio, usda, ImportError, Imported};
+use crate::{asf_amc, bvh, csci520, fbx, gltf, obj, pinocchio, usda, ImportError, Imported};
 
 /// What positional inputs may be.
-pub const EXPECTED: &str = ".glb, .gltf, .usda/.usdc/.usdz/.usd, a CSCI 520 skin.config, .obj with Pinocchio .out files, .bvh, or .asf with .amc files";
+pub const EXPECTED: &str = ".glb, .gltf, .usda/.usdc/.usdz/.usd, .fbx (binary or ASCII, also told by content), a CSCI 520 skin.config, .obj with Pinocchio .out files, .bvh, or .asf with .amc files";
 
 /// What one input path is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,6 +46,9 @@ pub enum Kind {
     Asf,
     /// An Acclaim motion.
     Amc,
+    /// An FBX file, binary or ASCII (by extension, or by its first bytes whatever the
+    /// extension).
+    Fbx,
 }
 
 /// One asset to import.
@@ -79,6 +82,8 @@ pub enum Source {
     Bvh(PathBuf),
     /// A USD text file with UsdSkel.
     Usda(PathBuf),
+    /// An FBX file (binary or ASCII).
+    Fbx(PathBuf),
 }
 
 impl Source {
@@ -89,7 +94,8 @@ impl Source {
             | Source::Obj(p)
             | Source::Csci520(p)
             | Source::Bvh(p)
-            | Source::Usda(p) => p.display().to_string(),
+            | Source::Usda(p)
+            | Source::Fbx(p) => p.display().to_string(),
             Source::Pinocchio { mesh, .. } => mesh.display().to_string(),
             Source::AsfAmc { asf, .. } => asf.display().to_string(),
         }
@@ -98,7 +104,11 @@ impl Source {
     /// The files the import reads (for a CSCI 520 rig: the config and the files beside it).
     pub fn files(&self) -> Vec<PathBuf> {
         match self {
-            Source::Gltf(p) | Source::Obj(p) | Source::Bvh(p) | Source::Usda(p) => vec![p.clone()],
+            Source::Gltf(p)
+            | Source::Obj(p)
+            | Source::Bvh(p)
+            | Source::Usda(p)
+            | Source::Fbx(p) => vec![p.clone()],
             Source::Csci520(config) => {
                 let mut files = vec![config.clone()];
                 if let Some(Ok(entries)) = config.parent().map(std::fs::read_dir) {
@@ -135,6 +145,7 @@ impl Source {
             Source::Csci520(p) => csci520::import(p)?.imported,
             Source::Bvh(p) => bvh::import(p)?,
             Source::Usda(p) => usda::import(p)?,
+            Source::Fbx(p) => fbx::import(p)?,
             Source::AsfAmc { asf, motions, fps } => asf_amc::import(asf, motions, *fps)?,
             Source::Pinocchio {
                 mesh,
@@ -285,17 +296,22 @@ fn extension(p: &Path) -> String {
         .to_ascii_lowercase()
 }
 
-/// What `path` is: a folder, or a file by its extension; a Pinocchio `.out` by its name
-/// (`skeleton*`, `attachment*`), else by its content.
+/// What `path` is: a folder; an FBX file by its first bytes (`Kaydara FBX Binary` or
+/// `; FBX`), whatever its extension; else a file by its extension; a Pinocchio `.out` by
+/// its name (`skeleton*`, `attachment*`), else by its content.
 ///
 /// # Errors
-/// An unreadable `.out` file, a binary USD file, no or an unknown extension.
+/// An unreadable `.out` file, no or an unknown extension.
 pub fn detect(path: &Path) -> Result<Kind, DetectError> {
     if path.is_dir() {
         return Ok(Kind::Folder);
     }
+    if starts_like_fbx(path) {
+        return Ok(Kind::Fbx);
+    }
     let shown = || path.display().to_string();
     Ok(match extension(path).as_str() {
+        "fbx" => Kind::Fbx,
         "glb" | "gltf" => Kind::Gltf,
         "config" => Kind::Csci520,
         "obj" => Kind::Obj,
@@ -313,6 +329,24 @@ pub fn detect(path: &Path) -> Result<Kind, DetectError> {
             })
         }
     })
+}
+
+/// Whether the file's first bytes are an FBX header (a file that cannot be read is not).
+fn starts_like_fbx(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 64];
+    let Ok(file) = std::fs::File::open(path) else {
+        return false;
+    };
+    let mut n = 0;
+    let mut reader = file.take(head.len() as u64);
+    while let Ok(k) = reader.read(&mut head[n..]) {
+        if k == 0 {
+            break;
+        }
+        n += k;
+    }
+    fbx::is_fbx(&head[..n])
 }
 
 /// Tells a Pinocchio `.out` file's kind by its name, else by its content.
@@ -393,6 +427,7 @@ pub fn plan(inputs: &Inputs) -> Result<Vec<Source>, DetectError> {
             Kind::Obj => objs.push(input.clone()),
             Kind::Bvh => sources.push(Source::Bvh(input.clone())),
             Kind::Usda => sources.push(Source::Usda(input.clone())),
+            Kind::Fbx => sources.push(Source::Fbx(input.clone())),
             Kind::Asf => sources.push(Source::AsfAmc {
                 asf: input.clone(),
                 motions: Vec::new(),

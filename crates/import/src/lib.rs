@@ -12,6 +12,7 @@ pub mod bvh;
 pub mod csci520;
 pub mod detect;
 mod error;
+pub mod fbx;
 pub mod gltf;
 pub mod json;
 pub mod mtl;

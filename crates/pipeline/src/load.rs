@@ -166,7 +166,8 @@ pub(crate) fn input_files(inputs: &Inputs) -> Vec<PathBuf> {
             | Source::Obj(p)
             | Source::Csci520(p)
             | Source::Bvh(p)
-            | Source::Usda(p) => files.push(p),
+            | Source::Usda(p)
+            | Source::Fbx(p) => files.push(p),
             Source::Pinocchio {
                 mesh,
                 skeleton,

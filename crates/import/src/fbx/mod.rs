@@ -1,0 +1,95 @@
+//! FBX importer (binary and ASCII, FBX 6.x-7.7) over [ufbx](https://github.com/ufbx/ufbx),
+//! to a rig [`Asset`].
+//!
+//! ufbx parses the file and evaluates what makes FBX hard (pivots, pre/post rotation,
+//! rotation order, geometric transforms, inherit types, animation layers); this module
+//! maps its evaluated scene onto the model:
+//!
+//! | FBX (as ufbx evaluates it) | model |
+//! |---|---|
+//! | `GlobalSettings` axes | converted by ufbx on load to right-handed +Y up (`target_axes`, `space_conversion = ModifyGeometry`: a signed axis permutation applied to transforms, geometry and keys), so [`Asset::frame`] is the default |
+//! | `GlobalSettings.UnitScaleFactor` | kept: [`Asset::meters_per_unit`] = ufbx's `unit_meters` (0.01 for centimetres), numbers as in the file |
+//! | bone nodes (`LimbNode`, ...), skin clusters' nodes, animated nodes, and every node between them and the scene root | one [`Joint`] each, parents first, rest = the node's evaluated local transform (segment scale compensate folded in by ufbx's `Compensate` inherit handling, helper nodes where that is not exact) |
+//! | each material part of a mesh node | one [`Mesh`]: triangles (polygons kept in [`Mesh::polygons`] when ufbx's triangulation is a fan), normals, every UV set, its material |
+//! | skin deformer | a [`SkinBinding`]: mesh points at bind time from the clusters (`geometry_to_world`), inverse bind = the clusters' `bind_to_world` inverted (the clusters win over the BindPose and the rest pose), every influence kept |
+//! | blend shape channels | morph targets (the full-weight shape; in-betweens left out with a warning) |
+//! | each animation stack | one [`Clip`] named after it, sampled by ufbx's `bake_anim` (see `anim.rs`) |
+//!
+//! [`Joint`]: rigport_model::Joint
+//! [`Mesh`]: rigport_model::Mesh
+//! [`Mesh::polygons`]: rigport_model::Mesh::polygons
+//! [`Clip`]: rigport_model::Clip
+//! [`SkinBinding`]: rigport_model::SkinBinding
+
+mod anim;
+mod load;
+mod material;
+mod mesh;
+mod skeleton;
+#[cfg(test)]
+mod tests;
+
+use std::path::Path;
+
+use rigport_model::{Asset, SceneFrame, Warning};
+
+use crate::{check_asset, read_file, ImportError, Imported, Location, Problem};
+
+pub use self::load::{is_fbx, ASCII_MAGIC, BINARY_MAGIC};
+
+/// Imports an FBX file (binary or ASCII); external textures are read relative to its
+/// folder.
+///
+/// # Errors
+/// The file cannot be read; ufbx rejects it (truncated, not FBX, unsupported version; at
+/// the file's end for a truncated file: the byte offset for binary, the line for ASCII);
+/// the evaluated scene breaks a model rule (e.g. a cyclic or empty hierarchy).
+pub fn import(path: &Path) -> Result<Imported, ImportError> {
+    let bytes = read_file(path)?;
+    import_slice(&bytes, path)
+}
+
+/// Imports FBX from bytes; `path` names the input in errors and warnings, and external
+/// textures are looked up beside it.
+///
+/// # Errors
+/// As [`import`].
+pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> {
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(ImportError::new(Location::file(path), Problem::Empty));
+    }
+    let scene = load::load(bytes, path)?;
+    let mut warnings = Vec::new();
+    let baked = anim::bake(&scene, path)?;
+    let skel = skeleton::build(&scene, &anim::animated_nodes(&baked), path)?;
+    let mats = material::build(&scene, path, &mut warnings);
+    let built = mesh::build(&scene, &skel, path, &mut warnings);
+    let clips = anim::clips(&baked, &skel, &built);
+    let unit = scene.settings.unit_meters;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let asset = Asset {
+        name,
+        skeleton: skel.skeleton,
+        meshes: built.meshes,
+        skins: built.skins,
+        clips,
+        meters_per_unit: (unit.is_finite() && unit > 0.0).then_some(unit),
+        frame: SceneFrame::default(),
+        materials: mats.materials,
+        images: mats.images,
+        ..Asset::default()
+    };
+    check_asset(&asset, || Location::file(path))?;
+    Ok(Imported { asset, warnings })
+}
+
+/// A warning at the file, about one named FBX element.
+fn incomplete(path: &Path, element: &str, message: String) -> Warning {
+    Warning::Incomplete {
+        location: format!("{}: {element}", Location::file(path)),
+        message,
+    }
+}
