@@ -73,7 +73,7 @@ pub enum PipelineError {
     Refit(#[from] rigport_deform::refit::asset::RefitError),
     /// Units given for an input contradict the unit its file states (a usage error).
     #[error(transparent)]
-    Units(#[from] crate::units::UnitsConflict),
+    Units(#[from] UnitsConflict),
     /// The inputs are readable but do not make what was asked (the message says why).
     #[error("{0}")]
     Invalid(String),
@@ -142,6 +142,34 @@ impl PipelineError {
             source: source.into(),
         }
     }
+}
+
+/// Units given that contradict the unit a file states.
+///
+/// ```
+/// use rigport_pipeline::units::InputUnits;
+/// use rigport_pipeline::{convert, convert::ConvertOptions, load::Input, progress::Silent};
+///
+/// // A glTF states metres; centimetres given contradict it.
+/// let input = Input {
+///     units: Some(InputUnits::MetersPerUnit(0.01)),
+///     ..Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()])
+/// };
+/// let dir = tempfile::tempdir()?;
+/// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(dir.path().join("a.glb")) };
+/// let err = convert(&input, &options, &Silent).unwrap_err();
+/// assert!(err.is_usage() && err.to_string().contains("states 1 m per unit"), "{err}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, thiserror::Error)]
+#[error("{file} states {stated} m per unit; the units given say {given}")]
+pub struct UnitsConflict {
+    /// The input.
+    pub file: String,
+    /// Metres per unit the file states.
+    pub stated: f64,
+    /// Metres per unit given.
+    pub given: f64,
 }
 
 /// An error with its causes, `: `-separated (as the CLI prints errors).

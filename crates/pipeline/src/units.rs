@@ -18,6 +18,7 @@ use rigport_model::glam::{DVec3, Vec3};
 use rigport_model::{Asset, UpAxis, Warning};
 
 use crate::PipelineError;
+pub use crate::error::UnitsConflict;
 
 /// Units a skeleton may stand in before a missing unit is worth a warning (a human in metres
 /// is about 1.7 units tall; 20 is no creature's height in metres that a rig shows).
@@ -74,34 +75,6 @@ impl FromStr for InputUnits {
         };
         Ok(Self::MetersPerUnit(mpu))
     }
-}
-
-/// Units given that contradict the unit a file states.
-///
-/// ```
-/// use rigport_pipeline::units::InputUnits;
-/// use rigport_pipeline::{convert, convert::ConvertOptions, load::Input, progress::Silent};
-///
-/// // A glTF states metres; centimetres given contradict it.
-/// let input = Input {
-///     units: Some(InputUnits::MetersPerUnit(0.01)),
-///     ..Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()])
-/// };
-/// let dir = tempfile::tempdir()?;
-/// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(dir.path().join("a.glb")) };
-/// let err = convert(&input, &options, &Silent).unwrap_err();
-/// assert!(err.is_usage() && err.to_string().contains("states 1 m per unit"), "{err}");
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
-#[derive(Debug, thiserror::Error)]
-#[error("{file} states {stated} m per unit; the units given say {given}")]
-pub struct UnitsConflict {
-    /// The input.
-    pub file: String,
-    /// Metres per unit the file states.
-    pub stated: f64,
-    /// Metres per unit given.
-    pub given: f64,
 }
 
 /// How tall `asset`'s skeleton stands along its scene's up axis, in its own units: in the
