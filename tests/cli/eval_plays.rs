@@ -3,43 +3,20 @@
 //! for a `.usda` and three.js for a `.glb`, at every frame, to 1e-6 of the diagonal.
 
 use std::path::Path;
-use std::process::Command;
 
 use crate::common::{self, repo, rigport_ok, NpyArray};
+use crate::frames::run_usd_world;
 use crate::three::{in_three_order, three_eval};
 use crate::usd::python;
 
 const POINT_CACHE: &str = "fixtures/usda/point_cache.usda";
 
 /// UsdSkel's points of every mesh of `stage` at `seconds`, in the first Skeleton's space
-/// (rigport's model space), frame by frame (tests/cli/usd_world.py --model-space).
+/// (rigport's model space), frame by frame, flat (tests/cli/usd_world.py --model-space).
 fn usdskel_points(py: &Path, stage: &Path, seconds: &[f64], clip: Option<&str>) -> Vec<f64> {
-    let mut cmd = Command::new(py);
-    cmd.arg(repo().join("tests/cli/usd_world.py"))
-        .arg(stage)
-        .arg(repo().join("tools"))
-        .arg(serde_json::to_string(seconds).unwrap())
-        .arg("--model-space");
-    if let Some(c) = clip {
-        cmd.args(["--clip", c]);
-    }
-    let out = cmd.output().expect("python runs");
-    assert!(
-        out.status.success(),
-        "usd_world.py {}: {}",
-        stage.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    v["frames"]
-        .as_array()
-        .unwrap()
+    run_usd_world(py, stage, Some(seconds), clip, &["--model-space"])
         .iter()
-        .flat_map(|f| f["points"].as_array().unwrap().clone())
-        .flat_map(|p| {
-            let a = p.as_array().unwrap().clone();
-            a.into_iter().map(|x| x.as_f64().unwrap())
-        })
+        .flat_map(|f| f.points.iter().flatten().copied())
         .collect()
 }
 

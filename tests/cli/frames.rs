@@ -38,11 +38,23 @@ pub fn usd_world(
     seconds: Option<&[f64]>,
     clip: Option<&str>,
 ) -> Vec<Frame> {
+    run_usd_world(py, stage, seconds, clip, &[])
+}
+
+/// Runs tests/cli/usd_world.py on `stage` with `extra` flags (`--model-space`): its frames.
+pub fn run_usd_world(
+    py: &Path,
+    stage: &Path,
+    seconds: Option<&[f64]>,
+    clip: Option<&str>,
+    extra: &[&str],
+) -> Vec<Frame> {
     let mut cmd = Command::new(py);
     cmd.arg(repo().join("tests/cli/usd_world.py"))
         .arg(stage)
         .arg(repo().join("tools"))
-        .arg(serde_json::to_string(&seconds).unwrap());
+        .arg(serde_json::to_string(&seconds).unwrap())
+        .args(extra);
     if let Some(c) = clip {
         cmd.args(["--clip", c]);
     }
