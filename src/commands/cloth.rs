@@ -12,9 +12,7 @@ use crate::context::Context;
 
 /// `rigport cloth` arguments.
 #[derive(Debug, clap::Args)]
-#[command(
-    after_help = include_str!("../../docs/help/cloth.txt")
-)]
+#[command(after_help = include_str!("../../docs/help/cloth.txt"))]
 pub struct ClothArgs {
     /// The rig, with at least one clip.
     #[command(flatten)]
@@ -49,12 +47,13 @@ pub struct ClothArgs {
     /// Collision thickness in model units (default: 1% of the body's diagonal).
     #[arg(long, value_name = "D")]
     pub thickness: Option<f32>,
-    /// Seconds of pre-roll settling the garment into the clip's first pose (default 2: the
-    /// body blends to the first pose over 0.5 s, then holds; 0: none).
+    /// Seconds of pre-roll settling the garment into the first pose and each cut (default 2).
     #[arg(long, value_name = "S")]
     pub preroll: Option<f32>,
-    /// Keep a simulation that went past the stability limits (a warning, W007) instead of
-    /// failing.
+    /// Collide with the whole body, not only the bones near the garment at rest (and up).
+    #[arg(long)]
+    pub collide_all: bool,
+    /// Keep a simulation past the stability limits (warning W007) instead of failing.
     #[arg(long)]
     pub allow_unstable: bool,
     /// Print the report as JSON on stdout, with every frame's measurements.
@@ -82,6 +81,7 @@ pub fn run(ctx: &Context, args: &ClothArgs) -> Result<()> {
         substeps: args.substeps,
         thickness: args.thickness,
         preroll: args.preroll,
+        collide_all: args.collide_all,
         allow_unstable: args.allow_unstable,
         json: args.json,
         targets: args.targets,

@@ -55,6 +55,8 @@ pub struct ClothRequest {
     pub thickness: Option<f32>,
     /// Seconds of pre-roll (the library's default when `None`).
     pub preroll: Option<f32>,
+    /// Collide with the whole body, not only the parts near the garment at rest.
+    pub collide_all: bool,
     /// Keep a simulation past its stability limits, with a warning, instead of failing.
     pub allow_unstable: bool,
     /// The report as JSON (with every frame's measurements) as the product, instead of
@@ -130,6 +132,7 @@ pub fn run(
         thickness: request.thickness,
         preroll: request.preroll,
         allow_unstable: request.allow_unstable,
+        collide_all: request.collide_all,
         ..ClothOptions::default()
     };
     let report = asset::run(
@@ -190,6 +193,7 @@ fn report_json(r: &ClothReport) -> serde_json::Value {
         "capsules": r.capsules, "fps": r.fps, "substeps": r.substeps,
         "thickness": r.thickness, "diagonal": r.diagonal, "preroll": r.preroll,
         "settle_residual": r.settle_residual,
+        "cuts": r.cuts.iter().map(|c| json!({"frame": c.frame, "jump": c.jump})).collect::<Vec<_>>(),
         "frame_0": {"max_stretch": first.max_stretch, "kinetic_energy": first.kinetic_energy,
             "max_speed": first.max_speed, "penetration_depth": first.body_depth},
         "limits": {"max_stretch": UNSTABLE_STRETCH, "speed_diagonals_per_second": UNSTABLE_SPEED,

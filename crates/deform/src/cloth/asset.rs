@@ -48,6 +48,8 @@ pub struct ClothReport {
     /// How fast the garment still moved at the end of the pre-roll (units/s;
     /// [`super::Simulation::settle_residual`]).
     pub settle_residual: f32,
+    /// The cuts the garment was settled into again ([`super::Cut`]).
+    pub cuts: Vec<super::Cut>,
     /// Output frame times, seconds.
     pub times: Vec<f32>,
     /// Every output frame's measurements.
@@ -76,7 +78,7 @@ impl fmt::Display for ClothReport {
         let touched = self.stats.iter().filter(|s| s.body_inside > 0).count();
         write!(
             f,
-            "cloth {:?}: {} particles ({} pinned), {} capsules, {} frames at {} fps x {} substeps after a {} s pre-roll (settle residual {:.3e} units/s; edge stretch {:.2}% at frame 0); max edge stretch {:.2}%, max kinetic energy {:.4} (per unit mass), max vertex speed {:.4} units/s; inside the body surface: {} vertices at most (frame {fi}), on {touched} of {} frames, deepest {:.2e} (frame {fd}; thickness {:.4}); deepest vertex {:.2e} inside a capsule; {} morph targets (max error {:.2e})",
+            "cloth {:?}: {} particles ({} pinned), {} capsules, {} frames at {} fps x {} substeps after a {} s pre-roll (settle residual {:.3e} units/s; edge stretch {:.2}% at frame 0); max edge stretch {:.2}%, max kinetic energy {:.4} (per unit mass), max vertex speed {:.4} units/s; inside the body surface: {} vertices at most (frame {fi}), on {touched} of {} frames, deepest {:.2e} (frame {fd}; thickness {:.4}); deepest vertex {:.2e} inside a capsule; {} morph targets (max error {:.2e}){}",
             self.garment,
             self.particles,
             self.pins,
@@ -97,6 +99,12 @@ impl fmt::Display for ClothReport {
             self.worst.max_depth,
             self.targets,
             self.max_target_error,
+            if self.cuts.is_empty() {
+                String::new()
+            } else {
+                let frames: Vec<String> = self.cuts.iter().map(|c| c.frame.to_string()).collect();
+                format!("; settled again at the cuts on frames {}", frames.join(", "))
+            },
         )
     }
 }
@@ -193,6 +201,7 @@ pub fn run(
         worst: sim.worst(),
         preroll: sim.preroll,
         settle_residual: sim.settle_residual,
+        cuts: sim.cuts.clone(),
         times: sim.times.clone(),
         stats: sim.stats.clone(),
         targets: bake.targets,

@@ -19,6 +19,11 @@
 //! - A pre-roll ([`ClothOptions::preroll`], `preroll`) settles the garment before frame 0:
 //!   the body blends from its rest pose (the garment's) to the clip's first pose and holds
 //!   it, so frame 0 does not pop.
+//!   Cuts in the clip ([`Cut`], `cuts`: a reference pose before the motion, a looped clip
+//!   starting over) are settled into the same way.
+//! - The garment collides with the body parts it was modelled near and the bones above
+//!   them (`region`; [`ClothOptions::collide_all`]: the whole body), and the bones' axes
+//!   are kept out of its triangles as well as its vertices out of the body (`faces`).
 //! - Every output frame is measured ([`FrameStats`]: stretch, kinetic energy, speed,
 //!   depth below the body surface); past a stability limit ([`Measure`]) the simulation
 //!   fails with [`ClothError::Unstable`] naming the frame, or, with
@@ -69,10 +74,13 @@
 pub mod asset;
 pub mod attach;
 pub mod collide;
+mod cuts;
+mod faces;
 mod garment;
 mod limits;
 mod output;
 mod preroll;
+mod region;
 mod simulation;
 mod solver;
 mod surface;
@@ -80,10 +88,12 @@ mod surface;
 use glam::Vec3;
 use rigport_model::{NoSuchClip, Transform};
 
+pub use cuts::{Cut, CUT_MIN, CUT_RATIO};
 pub use garment::{scene_height, Garment, PinSelection, CONTROL_POINTS};
 pub use limits::{Measure, BODY_MEMORY, UNSTABLE_MEAN_SPEED, UNSTABLE_SPEED, UNSTABLE_STRETCH};
 pub use output::{add_garment, GarmentBake};
 pub use preroll::{PREROLL, PREROLL_BLEND};
+pub use region::NEAR;
 pub use simulation::{default_gravity, simulate};
 
 use attach::SurfacePoint;
@@ -237,6 +247,9 @@ pub struct ClothOptions<'a> {
     /// blends from its rest pose to the clip's first pose, then holds it, while the
     /// garment settles ([`PREROLL_BLEND`]). 0 starts the garment on the first pose directly.
     pub preroll: Option<f32>,
+    /// Collide with the whole body, not only the parts near the garment at rest (within
+    /// [`NEAR`] of the body's diagonal of its bounding box; default false).
+    pub collide_all: bool,
     /// Keep going past the stability limits ([`Measure`]) with a warning instead of
     /// failing with [`ClothError::Unstable`] (default false).
     pub allow_unstable: bool,
@@ -257,6 +270,7 @@ impl Default for ClothOptions<'_> {
             thickness: None,
             collisions: true,
             preroll: None,
+            collide_all: false,
             allow_unstable: false,
         }
     }
@@ -322,6 +336,9 @@ pub struct Simulation {
     /// displacement over the last pre-roll frame divided by that frame's span (units/s; 0
     /// without a pre-roll).
     pub settle_residual: f32,
+    /// The cuts in the clip where the garment was settled again (none without a
+    /// pre-roll; see [`Cut`]).
+    pub cuts: Vec<Cut>,
     /// When the clip looped: the local joint transforms at every frame (`frames × joints`),
     /// for baking a clip that covers the whole simulation.
     pub looped_poses: Option<Vec<Transform>>,

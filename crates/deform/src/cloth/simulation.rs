@@ -8,8 +8,10 @@ use rigport_model::{Asset, Transform, UpAxis, Warning};
 
 use super::attach::nearest_point;
 use super::collide::{fit_capsules, Capsule};
+use super::cuts;
 use super::limits::{body_reference, past_limit};
 use super::preroll;
+use super::region::colliding_joints;
 use super::solver::{Collider, Params, Solver};
 use super::surface::{Posed, Surface};
 use super::{
@@ -35,6 +37,8 @@ struct Body {
     meshes: Vec<usize>,
     bind: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
+    /// Per vertex: its heaviest joint (skeleton index).
+    heaviest: Vec<Option<usize>>,
 }
 
 impl Body {
@@ -43,6 +47,7 @@ impl Body {
             meshes: Vec::new(),
             bind: Vec::new(),
             triangles: Vec::new(),
+            heaviest: Vec::new(),
         };
         for (mi, mesh) in asset.meshes.iter().enumerate() {
             if rig.skin_of_mesh(mi).is_none() {
@@ -51,6 +56,13 @@ impl Body {
             let base = body.bind.len() as u32;
             body.meshes.push(mi);
             body.bind.extend_from_slice(&mesh.positions);
+            let skin = asset.skins.iter().find(|s| s.mesh.get() == mi);
+            body.heaviest.extend((0..mesh.positions.len()).map(|v| {
+                let skin = skin?;
+                let row = skin.influences.vertex(v);
+                let best = row.iter().max_by(|a, b| a.weight.total_cmp(&b.weight))?;
+                skin.joints.get(best.joint as usize).map(|j| j.get())
+            }));
             body.triangles
                 .extend(mesh.triangles.iter().map(|t| t.map(|i| i + base)));
         }
@@ -78,10 +90,19 @@ struct FrameBody {
 /// The pose a body frame shows.
 #[derive(Clone, Copy, Debug)]
 enum Moment {
-    /// A pre-roll frame at this fraction (0..1) of the pre-roll.
-    Preroll(f32),
-    /// The clip at this output time.
-    Clip(f32),
+    /// Step `step` of the settling frames of a [`Transition`] (the pre-roll is transition
+    /// 0, each settled cut one more).
+    Settle { transition: usize, step: usize },
+    /// The clip at this output frame.
+    Clip(usize),
+}
+
+/// A settling: the body blends from one pose to another and holds it while the garment
+/// settles (see `preroll`); the garment is first carried by the roots' jump.
+struct Transition {
+    from: Vec<Transform>,
+    to: Vec<Transform>,
+    carry: Mat4,
 }
 
 /// Gravity in model space: [`GRAVITY`] m/s² down the scene's up axis, in model units.
@@ -295,11 +316,41 @@ pub fn simulate(
             ),
         });
     }
+    // The parts of the body the garment collides with (`region`).
+    let parents: Vec<Option<usize>> = asset
+        .skeleton
+        .joints()
+        .iter()
+        .map(|j| j.parent.map(|p| p.get()))
+        .collect();
+    let kept = (!opts.collide_all).then(|| {
+        colliding_joints(
+            &garment.positions,
+            &body.bind,
+            &body.heaviest,
+            &parents,
+            diagonal,
+        )
+    });
+    let collides_with = |j: Option<usize>| match (&kept, j) {
+        (None, _) => true,
+        (Some(k), Some(j)) => k.get(j).copied().unwrap_or(false),
+        (Some(_), None) => false,
+    };
     let capsules = if opts.collisions {
         fit_capsules(asset, None, diagonal)
+            .into_iter()
+            .filter(|c| collides_with(Some(c.from)))
+            .collect()
     } else {
         Vec::new()
     };
+    let collide_triangles: Vec<[u32; 3]> = body
+        .triangles
+        .iter()
+        .copied()
+        .filter(|t| t.iter().any(|&i| collides_with(body.heaviest[i as usize])))
+        .collect();
     {
         let rest = asset.skeleton.model_rest_matrices();
         let placed: Vec<Capsule> = capsules.iter().map(|c| Capsule::place(c, &rest)).collect();
@@ -328,55 +379,86 @@ pub fn simulate(
         }
     }
 
-    // The pre-roll: the first pose, the garment carried by the root's move, the frames.
+    // The pre-roll and the cuts (`cuts`): the poses each settles between, the garment
+    // carried by the root's move, the frames.
     let rest = Pose::rest(&asset.skeleton);
-    let mut first = rest.clone();
-    SampleJob {
-        clip: &compiled,
-        time: clip_time(start),
-        rest: &rest.local,
-        output: &mut first.local,
-    }
-    .run()?;
-    let carry = preroll::carry(&asset.skeleton, &rest.local, &first.local);
+    let pose_at = |t: f32| -> Result<Vec<Transform>, ClothError> {
+        let mut local = rest.local.clone();
+        SampleJob {
+            clip: &compiled,
+            time: clip_time(t),
+            rest: &rest.local,
+            output: &mut local,
+        }
+        .run()?;
+        Ok(local)
+    };
+    let first = pose_at(start)?;
+    let carry = preroll::carry(&asset.skeleton, &rest.local, &first);
     let preroll_seconds = opts.preroll.unwrap_or(PREROLL);
     let preroll_frames = if preroll_seconds > 0.0 {
         ((preroll_seconds * fps).round() as usize).max(1)
     } else {
         0
     };
-    let moments: Vec<Moment> = (0..preroll_frames)
-        .map(|k| Moment::Preroll(k as f32 / preroll_frames as f32))
-        .chain(times.iter().map(|&t| Moment::Clip(t)))
-        .collect();
+    let joint_track: Vec<Vec<Vec3>> = times
+        .par_iter()
+        .map(|&t| -> Result<Vec<Vec3>, ClothError> {
+            let pose = Pose { local: pose_at(t)? };
+            let model = pose.model_matrices(&asset.skeleton)?;
+            Ok(model.iter().map(|m| m.w_axis.truncate()).collect())
+        })
+        .collect::<Result<_, _>>()?;
+    let cuts = cuts::find(&joint_track, diagonal);
+    let mut transitions = vec![Transition {
+        from: rest.local.clone(),
+        to: first,
+        carry,
+    }];
+    let mut moments = Vec::with_capacity(preroll_frames * (1 + cuts.len()) + times.len());
+    let settle = |transition: usize| {
+        (0..preroll_frames).map(move |step| Moment::Settle { transition, step })
+    };
+    moments.extend(settle(0));
+    for (f, &t) in times.iter().enumerate() {
+        if preroll_frames > 0 && cuts.iter().any(|c| c.frame == f) {
+            let (from, to) = (rest.local.clone(), pose_at(t)?);
+            transitions.push(Transition {
+                carry: preroll::carry(&asset.skeleton, &from, &to),
+                from,
+                to,
+            });
+            moments.extend(settle(transitions.len() - 1));
+        }
+        moments.push(Moment::Clip(f));
+    }
 
     // Per frame: pose, skin (in parallel), then the pin targets, capsules and normals.
-    let surface_template = Surface::new(&body.bind, &body.triangles);
+    // The whole body (normals, measurements) and the parts the garment collides with.
+    let whole_template = Surface::new(&body.bind, &body.triangles);
+    let surface_template = Surface::new(&body.bind, &collide_triangles);
     let joints = asset.skeleton.len();
     let eval_frame = |m: Moment| -> Result<FrameBody, ClothError> {
         let mut pose = rest.clone();
         match m {
-            Moment::Preroll(u) => preroll::blend(
-                &asset.skeleton,
-                &rest.local,
-                &first.local,
-                preroll::weight(u),
-                &mut pose.local,
-            ),
-            Moment::Clip(t) => SampleJob {
-                clip: &compiled,
-                time: clip_time(t),
-                rest: &rest.local,
-                output: &mut pose.local,
+            Moment::Settle { transition, step } => {
+                let tr = &transitions[transition];
+                preroll::blend(
+                    &asset.skeleton,
+                    &tr.from,
+                    &tr.to,
+                    preroll::weight(step as f32 / preroll_frames as f32),
+                    &mut pose.local,
+                )
             }
-            .run()?,
+            Moment::Clip(f) => pose.local = pose_at(times[f])?,
         }
         let mut out = RigOutput::default();
         rig.evaluate(&pose, &mut out)?;
         let mut skinned = Vec::with_capacity(body.bind.len());
         body.gather(&out, &mut skinned);
         let mut normals = Vec::new();
-        surface_template.normals(&skinned, &mut normals);
+        whole_template.normals(&skinned, &mut normals);
         Ok(FrameBody {
             pins: pins.iter().map(|(_, sp)| sp.eval(&skinned)).collect(),
             capsules: capsules
@@ -405,6 +487,7 @@ pub fn simulate(
         caps: vec![Capsule::default(); capsules.len()],
         peak: 0.0,
     };
+    let mut whole = whole_template.clone();
     let mut settle_residual = 0.0f32;
     let preroll_span = if preroll_frames > 0 {
         f64::from(preroll_seconds) / preroll_frames as f64
@@ -415,31 +498,53 @@ pub fn simulate(
     let mut positions = Vec::with_capacity(frames * n);
     let mut stats = Vec::with_capacity(frames);
     let mut looped_poses = looping.then(|| Vec::with_capacity(frames * joints));
-    let mut previous: Option<FrameBody> = None;
+    let mut previous: Option<(Moment, FrameBody)> = None;
     // The first frame past a limit (frame, measure, value, limit) and how many were.
     let mut unstable = None;
     let mut unstable_frames = 0usize;
     let mut body_speed = 0.0f32;
-    for (batch_index, batch) in moments.chunks(BATCH).enumerate() {
+    for batch in moments.chunks(BATCH) {
         let evaluated: Vec<FrameBody> = batch
             .par_iter()
             .map(|&m| eval_frame(m))
             .collect::<Result<_, _>>()?;
         for (j, fb) in evaluated.into_iter().enumerate() {
-            let k = batch_index * BATCH + j;
-            let output = k.checked_sub(preroll_frames);
-            match &previous {
-                None => stepper.start(&mut solver, &fb, params.thickness),
-                Some(prev) => {
-                    let (span, settle) = match output {
+            let moment = batch[j];
+            let output = match moment {
+                Moment::Clip(f) => Some(f),
+                Moment::Settle { .. } => None,
+            };
+            match (&previous, moment) {
+                (None, _) => stepper.start(&mut solver, &fb, params.thickness),
+                // A cut: the garment jumps with the roots, at rest, onto the new body.
+                (
+                    Some(_),
+                    Moment::Settle {
+                        transition,
+                        step: 0,
+                    },
+                ) => {
+                    let m = transitions[transition].carry.as_dmat4();
+                    for (x, p) in solver.x.iter_mut().zip(&garment.positions) {
+                        *x = m.transform_point3(p.as_dvec3());
+                    }
+                    solver.v.iter_mut().for_each(|v| *v = DVec3::ZERO);
+                    stepper.peak = 0.0;
+                    stepper.start(&mut solver, &fb, params.thickness);
+                }
+                (Some((prev_moment, prev)), _) => {
+                    let (span, settle) = match (prev_moment, moment) {
                         // The frame's own span: the last frame may end off the grid.
-                        Some(f) if f > 0 => (f64::from(times[f]) - f64::from(times[f - 1]), false),
-                        // Pre-roll frames (the last lands on frame 0): settling once the
-                        // body holds.
-                        _ => (
+                        (Moment::Clip(_), Moment::Clip(f)) => {
+                            (f64::from(times[f]) - f64::from(times[f - 1]), false)
+                        }
+                        // Settling frames (the last lands on a clip frame): settling once
+                        // the body holds.
+                        (_, Moment::Settle { step, .. }) => (
                             preroll_span,
-                            k as f32 > PREROLL_BLEND * preroll_frames as f32,
+                            step as f32 > PREROLL_BLEND * preroll_frames as f32,
                         ),
+                        (_, Moment::Clip(_)) => (preroll_span, true),
                     };
                     let before = (output == Some(0)).then(|| solver.x.clone());
                     stepper.frame(&mut solver, prev, &fb, span, &params, settle);
@@ -470,7 +575,8 @@ pub fn simulate(
                 });
             }
             if let Some(f) = output {
-                let st = measure(&solver, &fb, &stepper.surface, params.thickness, diagonal);
+                whole.refit(&fb.skinned, &fb.skinned);
+                let st = measure(&solver, &fb, &whole, params.thickness, diagonal);
                 if let Some((measure, value, limit)) = past_limit(&st, diagonal, body_speed) {
                     if !opts.allow_unstable {
                         return Err(ClothError::Unstable {
@@ -491,7 +597,7 @@ pub fn simulate(
                 }
                 progress(f + 1, frames);
             }
-            previous = Some(fb);
+            previous = Some((moment, fb));
         }
     }
     if let Some((f, measure, value, limit)) = unstable {
@@ -516,6 +622,7 @@ pub fn simulate(
         diagonal,
         preroll: preroll_frames as f32 * preroll_span as f32,
         settle_residual,
+        cuts: if preroll_frames > 0 { cuts } else { Vec::new() },
         looped_poses,
     })
 }

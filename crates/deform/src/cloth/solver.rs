@@ -15,6 +15,7 @@ use std::collections::BTreeMap;
 use glam::DVec3 as Vec3;
 
 use super::collide::Capsule;
+use super::faces::Faces;
 use super::surface::{Posed, Surface};
 
 /// What the garment collides with during one substep.
@@ -69,6 +70,11 @@ pub(crate) struct Solver {
     /// Per particle: the shortest path along the garment's edges to a pin (rest lengths;
     /// infinite when no pin is connected).
     from_pin: Vec<f64>,
+    /// The triangles, kept off the capsules' axes (`faces`).
+    faces: Faces,
+    /// Per particle: its inverse mass in those face contacts (0 for the particles that do
+    /// not collide).
+    face_mass: Vec<f64>,
 }
 
 /// Two particle indices, the smaller first.
@@ -146,6 +152,11 @@ impl Solver {
             *f = f.try_normalize().unwrap_or(Vec3::Y);
         }
         let from_pin = distances_from(&pinned, &edges, &positions);
+        let faces = Faces::new(triangles, &positions);
+        let face_mass = collides
+            .iter()
+            .map(|&c| if c { 1.0 } else { 0.0 })
+            .collect();
         let stretch = edges.into_iter().map(dist).collect();
         let bend = bends.into_iter().map(dist).collect();
         Self {
@@ -160,6 +171,8 @@ impl Solver {
             contact: vec![Vec3::ZERO; n],
             collides,
             from_pin,
+            faces,
+            face_mass,
         }
     }
 
@@ -279,6 +292,12 @@ impl Solver {
                 self.collide_surface(i, surface, posed, gap, collider);
             }
         }
+        self.faces.push(
+            &mut self.x,
+            &self.face_mass,
+            &mut self.contact,
+            collider.capsules,
+        );
     }
 
     /// Moves particle `i` to `gap` outside the surface when it is closer (or inside, at
