@@ -83,8 +83,8 @@ pub(super) fn run(
             mesh.node_name = scene.nodes[*n].name().to_string();
             mesh.attached_to = attached_to;
             if let Some(symbol) = &part.symbol {
-                if let Some(material) = material_of(doc, *instance, symbol) {
-                    let (index, texcoord) = materials.get(doc, material, files, &mut warnings);
+                if let Some(material) = material_of(doc, *instance, symbol)? {
+                    let (index, texcoord) = materials.get(doc, material, files, &mut warnings)?;
                     mesh.material = Some(index);
                     let set = texcoord.and_then(|t| uv_set_of(*instance, symbol, &t));
                     let uv = set.and_then(|s| part.uv_sets.iter().position(|&u| u == s));
@@ -143,7 +143,7 @@ pub(super) fn run(
             asset.meshes.push(mesh);
         }
     }
-    asset.clips = clips::build(doc, &scene, &channels, &skel, &morphs, name);
+    asset.clips = clips::build(doc, &scene, &channels, &skel, &morphs, name)?;
     asset.skeleton = skel.skeleton;
     asset.materials = materials.materials;
     asset.images = materials.images;
@@ -171,22 +171,26 @@ fn placement(
 
 /// The `<material>` an instance binds `symbol` to (`<instance_material symbol target>`),
 /// else the material whose id is the symbol.
+///
+/// # Errors
+/// An `<instance_material>` whose target is no element.
 fn material_of<'a, 'i>(
     doc: &Doc<'a, 'i>,
     instance: Node<'a, 'i>,
     symbol: &str,
-) -> Option<Node<'a, 'i>> {
+) -> Result<Option<Node<'a, 'i>>, ImportError> {
     let bound = child(instance, "bind_material")
         .and_then(|b| child(b, "technique_common"))
         .and_then(|t| {
             child_elements(t).find(|m| {
                 m.tag_name().name() == "instance_material" && m.attribute("symbol") == Some(symbol)
             })
-        })
-        .and_then(|m| doc.by_id(m.attribute("target")?));
-    bound.or_else(|| {
-        doc.by_id(symbol)
-            .filter(|n| n.tag_name().name() == "material")
+        });
+    Ok(match bound {
+        Some(m) => Some(doc.link(m, "target", "material")?),
+        None => doc
+            .by_id(symbol)
+            .filter(|n| n.tag_name().name() == "material"),
     })
 }
 

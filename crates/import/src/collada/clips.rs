@@ -22,6 +22,7 @@ use super::scene::Scene;
 use super::skeleton::{unique, Skel};
 use super::transform::{self, Kind};
 use super::xml::{child, children, Doc, Node};
+use crate::ImportError;
 
 /// Samples added per second over `BEZIER`/`HERMITE` segments.
 const CURVE_RATE: f64 = 30.0;
@@ -46,6 +47,9 @@ struct Window<'a, 'i> {
 }
 
 /// Every clip (see the module doc).
+///
+/// # Errors
+/// An `<instance_animation>` naming no element.
 pub(super) fn build(
     doc: &Doc,
     scene: &Scene,
@@ -53,9 +57,9 @@ pub(super) fn build(
     skel: &Skel,
     morphs: &[MorphUse],
     file_name: &str,
-) -> Vec<Clip> {
+) -> Result<Vec<Clip>, ImportError> {
     if channels.is_empty() {
-        return Vec::new();
+        return Ok(Vec::new());
     }
     let mut windows = Vec::new();
     if let Some(library) = child(doc.root(), "library_animation_clips") {
@@ -72,8 +76,8 @@ pub(super) fn build(
                 end: num("end").filter(|e| e.is_finite()),
                 animations: Some(
                     children(clip, "instance_animation")
-                        .filter_map(|i| doc.by_id(i.attribute("url")?))
-                        .collect(),
+                        .map(|i| doc.link(i, "url", "animation"))
+                        .collect::<Result<_, _>>()?,
                 ),
             });
         }
@@ -91,7 +95,7 @@ pub(super) fn build(
         });
     }
     let mut used = HashSet::new();
-    windows
+    Ok(windows
         .iter()
         .map(|w| {
             let chosen: Vec<&Channel> = channels
@@ -106,7 +110,7 @@ pub(super) fn build(
                 tracks: tracks(scene, &chosen, skel, morphs, w),
             }
         })
-        .collect()
+        .collect())
 }
 
 fn tracks(

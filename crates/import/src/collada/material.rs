@@ -17,6 +17,7 @@ use rigport_model::{Image, ImageIndex, Material, MaterialIndex, TextureRef, Warn
 
 use super::xml::{child, child_elements, children, Doc, Node};
 use super::zae::Files;
+use crate::ImportError;
 
 /// The materials built so far, by `<material>` id.
 #[derive(Default)]
@@ -30,16 +31,19 @@ pub(super) struct Materials {
 impl Materials {
     /// The material `<material>` `node` maps to, and the `texcoord` semantic its texture
     /// reads (built on first use).
+    ///
+    /// # Errors
+    /// An `<instance_effect>` naming no element.
     pub(super) fn get(
         &mut self,
         doc: &Doc,
         node: Node,
         files: &Files,
         warnings: &mut Vec<Warning>,
-    ) -> (MaterialIndex, Option<String>) {
+    ) -> Result<(MaterialIndex, Option<String>), ImportError> {
         let id = node.attribute("id").unwrap_or("").to_string();
         if let Some(found) = self.by_id.get(&id) {
-            return found.clone();
+            return Ok(found.clone());
         }
         let name = node
             .attribute("name")
@@ -53,7 +57,10 @@ impl Materials {
             ..Material::default()
         };
         let mut texcoord = None;
-        let effect = child(node, "instance_effect").and_then(|i| doc.by_id(i.attribute("url")?));
+        let effect = match child(node, "instance_effect") {
+            Some(i) => Some(doc.link(i, "url", "effect")?),
+            None => None,
+        };
         let technique = effect
             .and_then(|e| child(e, "profile_COMMON"))
             .and_then(|p| child(p, "technique"));
@@ -101,7 +108,7 @@ impl Materials {
         let index = MaterialIndex(self.materials.len() as u32);
         self.materials.push(m);
         self.by_id.insert(id, (index, texcoord.clone()));
-        (index, texcoord)
+        Ok((index, texcoord))
     }
 
     /// The image of `<image>` `node`, read once; `None` with a warning when unreadable.

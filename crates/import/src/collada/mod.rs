@@ -67,7 +67,7 @@ pub fn import(path: &Path) -> Result<Imported, ImportError> {
 /// As [`import`].
 pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> {
     let folder = path.parent().unwrap_or(Path::new("")).to_path_buf();
-    if bytes.starts_with(zae::ZIP_MAGIC) {
+    if zae::is_zip(bytes) {
         let (member, dae) = zae::root(bytes, path)?;
         let root = match member.rfind('/') {
             Some(i) => member[..=i].to_string(),

@@ -295,7 +295,11 @@ fn a_missing_id_is_named_at_the_element_that_refers_to_it() {
         skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1").replace("source=\"#quad\"", "source=\"#geom\"");
     let e = error_of(&text);
     let line = line_of(&text, "source=\"#geom\"");
-    let column = 1 + text.lines().nth(line - 1).and_then(|l| l.find("<skin")).unwrap_or(0);
+    let column = 1 + text
+        .lines()
+        .nth(line - 1)
+        .and_then(|l| l.find("<skin"))
+        .unwrap_or(0);
     assert_eq!(
         e.location.to_string(),
         format!("t.dae:{line}:{column}: element <skin>"),

@@ -8,8 +8,11 @@ use std::path::{Path, PathBuf};
 use super::material::candidates;
 use crate::{ImportError, Location};
 
-/// The zip local-file signature a `.zae` starts with.
-pub(super) const ZIP_MAGIC: &[u8] = b"PK\x03\x04";
+/// Whether `bytes` start like a zip archive: a local file header, or the end record of an
+/// empty archive.
+pub(super) fn is_zip(bytes: &[u8]) -> bool {
+    bytes.starts_with(b"PK\x03\x04") || bytes.starts_with(b"PK\x05\x06")
+}
 
 /// The most a member may inflate to (a bound against zip bombs).
 const MAX_MEMBER_BYTES: u64 = 1 << 30;
