@@ -402,3 +402,41 @@ fn collada_is_told_by_its_root_element() {
     assert!(!is_collada(b"<svg>"));
     assert!(!is_collada(b""));
 }
+
+#[test]
+fn the_fixture_chains_skin_over_morph_with_its_material_and_clips() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/collada");
+    for file in ["skinned_quad.dae", "skinned_quad.zae"] {
+        let imported = match import(&root.join(file)) {
+            Ok(i) => i,
+            Err(e) => panic!("{e}"),
+        };
+        let asset = &imported.asset;
+        assert_eq!(asset.meters_per_unit, Some(0.01), "{file}");
+        assert_eq!(asset.frame.up_axis, UpAxis::Z);
+        let mesh = &asset.meshes[0];
+        assert_eq!(mesh.polygons, vec![4]);
+        // NORMALIZED morph: target - base, default weight from MORPH_WEIGHT.
+        assert_eq!(mesh.morph_weights, vec![0.25]);
+        assert!(close(
+            mesh.morph_targets[0].position_deltas[2],
+            Vec3::new(0.0, -5.0, 0.0)
+        ));
+        // The skin over the morph: two joints, the last vertices split half and half.
+        let skin = &asset.skins[0];
+        assert_eq!(skin.influences.vertex(2).len(), 2);
+        assert!(close(
+            skin.inv_bind[1].w_axis.truncate(),
+            Vec3::new(0.0, 0.0, -10.0)
+        ));
+        let names: Vec<&str> = asset.clips.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["bend", "spin"]);
+        // The texture is absent on purpose: a W004 warning at the <image> line.
+        assert!(imported.warnings.iter().any(|w| matches!(
+            w,
+            rigport_model::Warning::Incomplete { location, message }
+                if location.contains(":10:5: element <image>") && message.contains("checker.png")
+        )));
+        assert!(mesh.material.is_some() && asset.images.is_empty());
+    }
+}
