@@ -11,7 +11,7 @@
 //! A texture whose file cannot be read is left out with a [`Warning::Incomplete`].
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use rigport_model::{Image, ImageIndex, Material, MaterialIndex, TextureRef, Warning};
 
@@ -203,19 +203,4 @@ fn decode_uri(uri: &str) -> String {
         i += 1;
     }
     String::from_utf8_lossy(&out).replace('\\', "/")
-}
-
-/// Where a texture path is looked for: beside the file (absolute paths as they are, then
-/// by file name), or among the members of its `.zae`.
-pub(super) fn candidates(folder: &Path, relative: &str) -> Vec<PathBuf> {
-    let p = PathBuf::from(relative);
-    let mut out = vec![if p.is_absolute() {
-        p.clone()
-    } else {
-        folder.join(&p)
-    }];
-    if let Some(name) = p.file_name() {
-        out.push(folder.join(name));
-    }
-    out
 }

@@ -31,6 +31,8 @@ mod anim;
 mod assemble;
 mod clips;
 mod controller;
+#[cfg(test)]
+mod error_tests;
 mod geometry;
 mod material;
 mod scene;

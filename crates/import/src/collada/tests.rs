@@ -9,7 +9,7 @@ use rigport_model::{TrackTarget, UpAxis};
 use super::*;
 
 /// A document with `asset` inside `<asset>` and `body` after it.
-fn dae(asset: &str, body: &str) -> String {
+pub(super) fn dae(asset: &str, body: &str) -> String {
     format!(
         "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" \
          version=\"1.4.1\">\n<asset>{asset}</asset>\n{body}\n</COLLADA>\n"
@@ -17,7 +17,7 @@ fn dae(asset: &str, body: &str) -> String {
 }
 
 /// A visual scene holding `nodes`, with `libraries` before it.
-fn scene(libraries: &str, nodes: &str) -> String {
+pub(super) fn scene(libraries: &str, nodes: &str) -> String {
     dae(
         "",
         &format!(
@@ -27,14 +27,14 @@ fn scene(libraries: &str, nodes: &str) -> String {
     )
 }
 
-fn import_str(text: &str) -> Imported {
+pub(super) fn import_str(text: &str) -> Imported {
     match import_slice(text.as_bytes(), Path::new("t.dae")) {
         Ok(i) => i,
         Err(e) => panic!("{e}"),
     }
 }
 
-fn error_of(text: &str) -> ImportError {
+pub(super) fn error_of(text: &str) -> ImportError {
     match import_slice(text.as_bytes(), Path::new("t.dae")) {
         Ok(_) => panic!("imported a broken document"),
         Err(e) => e,
@@ -42,20 +42,20 @@ fn error_of(text: &str) -> ImportError {
 }
 
 /// The 1-based line of the first line of `text` holding `needle`.
-fn line_of(text: &str, needle: &str) -> usize {
+pub(super) fn line_of(text: &str, needle: &str) -> usize {
     1 + text
         .lines()
         .position(|l| l.contains(needle))
         .unwrap_or_else(|| panic!("{needle:?} not in the document"))
 }
 
-fn close(a: Vec3, b: Vec3) -> bool {
+pub(super) fn close(a: Vec3, b: Vec3) -> bool {
     (a - b).length() < 1e-5
 }
 
 /// A unit quad (4 positions, 1 normal) as a `<geometry id="quad">` whose one primitive
 /// is `primitive`.
-fn quad(primitive: &str) -> String {
+pub(super) fn quad(primitive: &str) -> String {
     format!(
         "<library_geometries><geometry id=\"quad\" name=\"Quad\"><mesh>\n\
          <source id=\"p\"><float_array id=\"pa\" count=\"12\">0 0 0 1 0 0 1 1 0 0 1 0</float_array>\n\
@@ -150,7 +150,7 @@ fn polylist_and_triangles_share_input_offsets_and_keep_polygons() {
 }
 
 /// A skin of the quad on joint `j` with `bind_shape`; every vertex fully on `j`.
-fn skinned(bind_shape: &str) -> String {
+pub(super) fn skinned(bind_shape: &str) -> String {
     let tris = "<triangles count=\"2\"><input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/>\
                 <p>0 1 2 0 2 3</p></triangles>";
     let controllers = format!(
@@ -269,127 +269,6 @@ fn animation_clips_split_the_timeline_into_named_clips() {
     let r = &asset.clips[1].tracks[1];
     let last = Quat::from_slice(&r.values[r.values.len() - 4..]);
     assert!(last.dot(Quat::from_rotation_z(-45f32.to_radians())).abs() > 1.0 - 1e-6);
-}
-
-#[test]
-fn bad_xml_is_located_at_its_line_and_column() {
-    let text = "<?xml version=\"1.0\"?>\n<COLLADA>\n  <asset>\n  </assit>\n</COLLADA>\n";
-    let e = error_of(text);
-    assert!(e.to_string().starts_with("t.dae:4:"), "{e}");
-    assert!(e.to_string().contains("not well-formed XML"), "{e}");
-}
-
-#[test]
-fn a_truncated_file_is_truncated_at_its_last_line() {
-    let text = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1");
-    let cut = &text[..text.len() / 2];
-    let lines = cut.trim_end().lines().count();
-    let e = error_of(cut);
-    assert!(matches!(e.problem, Problem::Truncated(_)), "{e}");
-    assert_eq!(e.location.line, Some(lines), "{e}");
-}
-
-#[test]
-fn a_missing_id_is_named_at_the_element_that_refers_to_it() {
-    let text =
-        skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1").replace("source=\"#quad\"", "source=\"#geom\"");
-    let e = error_of(&text);
-    let line = line_of(&text, "source=\"#geom\"");
-    let column = 1 + text
-        .lines()
-        .nth(line - 1)
-        .and_then(|l| l.find("<skin"))
-        .unwrap_or(0);
-    assert_eq!(
-        e.location.to_string(),
-        format!("t.dae:{line}:{column}: element <skin>"),
-        "{e}"
-    );
-    assert!(e.to_string().contains("\"#geom\""), "{e}");
-}
-
-#[test]
-fn wrong_counts_are_errors_at_the_array_or_accessor() {
-    let text = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
-        .replace("count=\"12\">0 0 0", "count=\"13\">0 0 0");
-    let e = error_of(&text);
-    assert_eq!(e.location.line, Some(line_of(&text, "count=\"13\"")), "{e}");
-    assert_eq!(e.location.element.as_deref(), Some("float_array"), "{e}");
-    assert!(matches!(e.problem, Problem::Count { found: 12, .. }), "{e}");
-    // An accessor that reads past its array.
-    let text = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
-        .replace("source=\"#pa\" count=\"4\"", "source=\"#pa\" count=\"5\"");
-    let e = error_of(&text);
-    assert_eq!(e.location.element.as_deref(), Some("accessor"), "{e}");
-    // Too few vertex weight rows for the geometry's vertices.
-    let text = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
-        .replace("<vcount>1 1 1 1</vcount>", "<vcount>1 1 1</vcount>");
-    let e = error_of(&text);
-    assert_eq!(e.location.element.as_deref(), Some("vcount"), "{e}");
-    // An index past its source.
-    let text = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
-        .replace("<p>0 1 2 0 2 3</p>", "<p>0 1 2 0 2 7</p>");
-    let e = error_of(&text);
-    assert!(
-        matches!(
-            e.problem,
-            Problem::IndexOutOfRange {
-                index: 7,
-                count: 4,
-                ..
-            }
-        ),
-        "{e}"
-    );
-}
-
-#[test]
-fn an_empty_or_cyclic_skeleton_is_an_error() {
-    let text = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
-        .replace(
-            "<Name_array id=\"jna\" count=\"1\">J</Name_array>",
-            "<Name_array id=\"jna\" count=\"0\"></Name_array>",
-        )
-        .replace("source=\"#jna\" count=\"1\"", "source=\"#jna\" count=\"0\"");
-    let e = error_of(&text);
-    assert_eq!(e.location.element.as_deref(), Some("joints"), "{e}");
-    assert!(e.to_string().contains("empty"), "{e}");
-    let text = dae(
-        "",
-        "<library_nodes><node id=\"a\"><instance_node url=\"#b\"/></node>\
-         <node id=\"b\"><instance_node url=\"#a\"/></node></library_nodes>\n\
-         <library_visual_scenes><visual_scene id=\"s\"><node id=\"top\"><instance_node url=\"#a\"/></node>\
-         </visual_scene></library_visual_scenes>",
-    );
-    let e = error_of(&text);
-    assert!(e.to_string().contains("cyclic"), "{e}");
-    assert_eq!(e.location.element.as_deref(), Some("instance_node"), "{e}");
-}
-
-#[test]
-fn a_document_that_is_not_collada_or_is_empty_is_refused() {
-    let e = error_of("<?xml version=\"1.0\"?>\n<svg/>\n");
-    assert!(e.to_string().contains("not <COLLADA>"), "{e}");
-    assert!(matches!(error_of(" \n").problem, Problem::Empty));
-}
-
-#[test]
-fn a_zae_without_a_dae_is_refused() {
-    use std::io::Write;
-    let mut buf = std::io::Cursor::new(Vec::new());
-    {
-        let mut zip = zip::ZipWriter::new(&mut buf);
-        let options = zip::write::SimpleFileOptions::default()
-            .compression_method(zip::CompressionMethod::Stored);
-        zip.start_file("readme.txt", options).expect("zip");
-        zip.write_all(b"no document").expect("zip");
-        zip.finish().expect("zip");
-    }
-    let e = match import_slice(buf.get_ref(), Path::new("t.zae")) {
-        Ok(_) => panic!("imported a package without a document"),
-        Err(e) => e,
-    };
-    assert!(e.to_string().contains("holds no .dae"), "{e}");
 }
 
 #[test]

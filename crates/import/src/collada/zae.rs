@@ -5,7 +5,6 @@
 use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
 
-use super::material::candidates;
 use crate::{ImportError, Location};
 
 /// Whether `bytes` start like a zip archive: a local file header, or the end record of an
@@ -153,4 +152,19 @@ pub(super) fn root(bytes: &[u8], path: &Path) -> Result<(String, Vec<u8>), Impor
         ImportError::invalid(at(), format!("cannot read {member} in the package: {e}"))
     })?;
     Ok((member, dae))
+}
+
+/// Where a texture path is looked for: beside the file (absolute paths as they are, then
+/// by file name), or among the members of its `.zae`.
+fn candidates(folder: &Path, relative: &str) -> Vec<PathBuf> {
+    let p = PathBuf::from(relative);
+    let mut out = vec![if p.is_absolute() {
+        p.clone()
+    } else {
+        folder.join(&p)
+    }];
+    if let Some(name) = p.file_name() {
+        out.push(folder.join(name));
+    }
+    out
 }
