@@ -223,3 +223,30 @@ fn broken_collada_fails_with_a_location_and_no_output() {
         "holds no .dae",
     );
 }
+
+#[test]
+fn a_zae_reads_its_root_document_and_the_texture_inside_the_package() {
+    // human.zae holds human.dae and textures/brown_eye.png; its primitives carry no
+    // material symbol, so each instance's one bound material applies.
+    let Some(file) = corpus(&format!("{DIR}/human.zae")) else {
+        return;
+    };
+    let dir = scratch();
+    let glb = dir.path().join("human.glb");
+    let stderr = rigport_ok(&[
+        "convert",
+        file.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    assert!(!stderr.contains("warning"), "{stderr}");
+    let (doc, _, images) = gltf::import(&glb).unwrap();
+    let names: Vec<&str> = doc.materials().filter_map(|m| m.name()).collect();
+    assert_eq!(names, ["DefaultSkin", "Eye_brown"]);
+    assert_eq!(images.len(), 1);
+    let eye = doc.materials().nth(1).unwrap();
+    assert!(eye.pbr_metallic_roughness().base_color_texture().is_some());
+    assert!(doc
+        .meshes()
+        .all(|m| m.primitives().all(|p| p.material().index().is_some())));
+}

@@ -82,16 +82,13 @@ pub(super) fn run(
             mesh.name = unique(&label, "mesh", &mut names);
             mesh.node_name = scene.nodes[*n].name().to_string();
             mesh.attached_to = attached_to;
-            if let Some(symbol) = &part.symbol {
-                if let Some(material) = material_of(doc, *instance, symbol)? {
-                    let (index, texcoord) = materials.get(doc, material, files, &mut warnings)?;
-                    mesh.material = Some(index);
-                    let set = texcoord.and_then(|t| uv_set_of(*instance, symbol, &t));
-                    let uv = set.and_then(|s| part.uv_sets.iter().position(|&u| u == s));
-                    if let Some(tex) = materials.materials[index.get()].base_color_texture.as_mut()
-                    {
-                        tex.tex_coord = uv.unwrap_or(0) as u32;
-                    }
+            if let Some(material) = material_of(doc, *instance, part.symbol.as_deref())? {
+                let (index, texcoord) = materials.get(doc, material, files, &mut warnings)?;
+                mesh.material = Some(index);
+                let set = texcoord.and_then(|t| uv_set_of(*instance, part.symbol.as_deref(), &t));
+                let uv = set.and_then(|s| part.uv_sets.iter().position(|&u| u == s));
+                if let Some(tex) = materials.materials[index.get()].base_color_texture.as_mut() {
+                    tex.tex_coord = uv.unwrap_or(0) as u32;
                 }
             }
             let index = MeshIndex(asset.meshes.len() as u32);
@@ -169,6 +166,21 @@ fn placement(
     }
 }
 
+/// The `<instance_material>` of an instance for `symbol`; for a primitive without a
+/// `material` symbol, the instance's only one (exporters such as MakeHuman's bind one
+/// material and leave the symbol off the primitive).
+fn instance_material<'a, 'i>(instance: Node<'a, 'i>, symbol: Option<&str>) -> Option<Node<'a, 'i>> {
+    let technique = child(instance, "bind_material").and_then(|b| child(b, "technique_common"))?;
+    let mut all = child_elements(technique).filter(|m| m.tag_name().name() == "instance_material");
+    match symbol {
+        Some(symbol) => all.find(|m| m.attribute("symbol") == Some(symbol)),
+        None => {
+            let first = all.next()?;
+            all.next().is_none().then_some(first)
+        }
+    }
+}
+
 /// The `<material>` an instance binds `symbol` to (`<instance_material symbol target>`),
 /// else the material whose id is the symbol.
 ///
@@ -177,34 +189,20 @@ fn placement(
 fn material_of<'a, 'i>(
     doc: &Doc<'a, 'i>,
     instance: Node<'a, 'i>,
-    symbol: &str,
+    symbol: Option<&str>,
 ) -> Result<Option<Node<'a, 'i>>, ImportError> {
-    let bound = child(instance, "bind_material")
-        .and_then(|b| child(b, "technique_common"))
-        .and_then(|t| {
-            child_elements(t).find(|m| {
-                m.tag_name().name() == "instance_material" && m.attribute("symbol") == Some(symbol)
-            })
-        });
-    Ok(match bound {
+    Ok(match instance_material(instance, symbol) {
         Some(m) => Some(doc.link(m, "target", "material")?),
-        None => doc
-            .by_id(symbol)
+        None => symbol
+            .and_then(|s| doc.by_id(s))
             .filter(|n| n.tag_name().name() == "material"),
     })
 }
 
 /// The `TEXCOORD` set an instance binds a texture's `texcoord` semantic to
 /// (`<bind_vertex_input semantic input_set>`).
-fn uv_set_of(instance: Node, symbol: &str, texcoord: &str) -> Option<u32> {
-    let material = child(instance, "bind_material")
-        .and_then(|b| child(b, "technique_common"))
-        .and_then(|t| {
-            child_elements(t).find(|m| {
-                m.tag_name().name() == "instance_material" && m.attribute("symbol") == Some(symbol)
-            })
-        })?;
-    child_elements(material)
+fn uv_set_of(instance: Node, symbol: Option<&str>, texcoord: &str) -> Option<u32> {
+    child_elements(instance_material(instance, symbol)?)
         .find(|b| {
             b.tag_name().name() == "bind_vertex_input" && b.attribute("semantic") == Some(texcoord)
         })
