@@ -30,6 +30,7 @@ for f in "$F"/asf_amc/*.amc; do put amc "$f"; done
 for f in "$F"/bvh/*.bvh; do put bvh "$f"; done
 for f in "$F"/gltf/*.gltf "$F"/gltf/*.glb; do put gltf "$f"; done
 for f in "$F"/usda/*.usda "$F"/usdc/*.usd?; do put usd "$f"; done
+for f in "$F"/collada/*.dae "$F"/collada/*.zae; do put collada "$f"; done
 put json_pose /dev/stdin <<<'{"Hips": {"quat": [0, 0, 0.3826834, 0.9238795]}, "Head": {"euler_deg": [10, 20, 30], "order": "zyx"}}'
 put json_keys /dev/stdin <<<'{"name": "k", "keys": [{"time": 0, "pose": {"Hips": {"quat": [0,0,0,1]}}}, {"time": 1, "translation": [0, 1, 0], "pose": {"Head": {"euler_deg": [0, 45, 0]}}}]}'
 for f in "$F"/ik/*.json; do put json_handles "$f"; done

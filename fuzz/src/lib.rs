@@ -18,7 +18,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use rigport_import::{asf_amc, bvh, csci520, gltf, json, obj, pinocchio, usda, Imported};
+use rigport_import::{asf_amc, bvh, collada, csci520, gltf, json, obj, pinocchio, usda, Imported};
 use rigport_model::Skeleton;
 
 /// The fixed ASF the AMC target reads motions against.
@@ -132,6 +132,12 @@ pub fn usd(data: &[u8]) {
     check(usda::import(&file("stage.usd", data)));
 }
 
+/// A COLLADA document or `.zae` package, through the importer's byte entry point
+/// (`collada::import_slice`, which tells a package by its zip signature).
+pub fn collada(data: &[u8]) {
+    check(collada::import_slice(data, &scratch().join("scene.dae")));
+}
+
 /// The skeleton the JSON targets name joints of.
 fn json_skeleton() -> &'static Skeleton {
     static SKELETON: OnceLock<Skeleton> = OnceLock::new();
@@ -172,7 +178,7 @@ pub fn json_handles(data: &[u8]) {
 pub type Target = fn(&[u8]);
 
 /// Every target by name, for the regression test and tools.
-pub const TARGETS: [(&str, Target); 11] = [
+pub const TARGETS: [(&str, Target); 12] = [
     ("obj", obj),
     ("pinocchio", pinocchio),
     ("csci520", csci520),
@@ -181,6 +187,7 @@ pub const TARGETS: [(&str, Target); 11] = [
     ("bvh", bvh),
     ("gltf", gltf),
     ("usd", usd),
+    ("collada", collada),
     ("json_pose", json_pose),
     ("json_keys", json_keys),
     ("json_handles", json_handles),

@@ -13,6 +13,7 @@ mod bad_input;
 mod batch;
 mod cloth;
 mod cloth_trust;
+mod collada;
 mod common;
 mod csci520;
 mod demo;

@@ -365,7 +365,7 @@ fn walk(
     for (file, kind) in &files {
         let mut inputs = vec![file.clone()];
         match kind {
-            Kind::Gltf | Kind::Bvh | Kind::Usda | Kind::Fbx | Kind::Csci520 => {}
+            Kind::Gltf | Kind::Bvh | Kind::Usda | Kind::Fbx | Kind::Collada | Kind::Csci520 => {}
             Kind::Asf => {
                 // CMU numbering: `07.asf` or `07-walk.asf` takes `07_05.amc`, `07_05-walk.amc`.
                 let stem = file

@@ -16,10 +16,12 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::{asf_amc, bvh, csci520, fbx, gltf, obj, pinocchio, usda, ImportError, Imported};
+use crate::{
+    asf_amc, bvh, collada, csci520, fbx, gltf, obj, pinocchio, usda, ImportError, Imported,
+};
 
 /// What positional inputs may be.
-pub const EXPECTED: &str = ".glb, .gltf, .usda/.usdc/.usdz/.usd, .fbx (binary or ASCII, also told by content), a CSCI 520 skin.config, .obj with Pinocchio .out files, .bvh, or .asf with .amc files";
+pub const EXPECTED: &str = ".glb, .gltf, .usda/.usdc/.usdz/.usd, .fbx (binary or ASCII, also told by content), .dae/.zae (COLLADA, a .dae also told by content), a CSCI 520 skin.config, .obj with Pinocchio .out files, .bvh, or .asf with .amc files";
 
 /// What one input path is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,6 +51,9 @@ pub enum Kind {
     /// An FBX file, binary or ASCII (by extension, or by its first bytes whatever the
     /// extension).
     Fbx,
+    /// A COLLADA document (`.dae`, or any extension when its root element is `<COLLADA>`)
+    /// or package (`.zae`).
+    Collada,
 }
 
 /// One asset to import.
@@ -84,6 +89,8 @@ pub enum Source {
     Usda(PathBuf),
     /// An FBX file (binary or ASCII).
     Fbx(PathBuf),
+    /// A COLLADA document or `.zae` package.
+    Collada(PathBuf),
 }
 
 impl Source {
@@ -95,7 +102,8 @@ impl Source {
             | Source::Csci520(p)
             | Source::Bvh(p)
             | Source::Usda(p)
-            | Source::Fbx(p) => p.display().to_string(),
+            | Source::Fbx(p)
+            | Source::Collada(p) => p.display().to_string(),
             Source::Pinocchio { mesh, .. } => mesh.display().to_string(),
             Source::AsfAmc { asf, .. } => asf.display().to_string(),
         }
@@ -108,7 +116,8 @@ impl Source {
             | Source::Obj(p)
             | Source::Bvh(p)
             | Source::Usda(p)
-            | Source::Fbx(p) => vec![p.clone()],
+            | Source::Fbx(p)
+            | Source::Collada(p) => vec![p.clone()],
             Source::Csci520(config) => {
                 let mut files = vec![config.clone()];
                 if let Some(Ok(entries)) = config.parent().map(std::fs::read_dir) {
@@ -146,6 +155,7 @@ impl Source {
             Source::Bvh(p) => bvh::import(p)?,
             Source::Usda(p) => usda::import(p)?,
             Source::Fbx(p) => fbx::import(p)?,
+            Source::Collada(p) => collada::import(p)?,
             Source::AsfAmc { asf, motions, fps } => asf_amc::import(asf, motions, *fps)?,
             Source::Pinocchio {
                 mesh,
@@ -297,7 +307,8 @@ fn extension(p: &Path) -> String {
 }
 
 /// What `path` is: a folder; an FBX file by its first bytes (`Kaydara FBX Binary` or
-/// `; FBX`), whatever its extension; else a file by its extension; a Pinocchio `.out` by
+/// `; FBX`), or a COLLADA document by its root element (`<COLLADA`), whatever its
+/// extension; else a file by its extension; a Pinocchio `.out` by
 /// its name (`skeleton*`, `attachment*`), else by its content.
 ///
 /// # Errors
@@ -306,12 +317,17 @@ pub fn detect(path: &Path) -> Result<Kind, DetectError> {
     if path.is_dir() {
         return Ok(Kind::Folder);
     }
-    if starts_like_fbx(path) {
+    let head = head_of(path);
+    if fbx::is_fbx(&head) {
         return Ok(Kind::Fbx);
+    }
+    if collada::is_collada(&head) {
+        return Ok(Kind::Collada);
     }
     let shown = || path.display().to_string();
     Ok(match extension(path).as_str() {
         "fbx" => Kind::Fbx,
+        "dae" | "zae" => Kind::Collada,
         "glb" | "gltf" => Kind::Gltf,
         "config" => Kind::Csci520,
         "obj" => Kind::Obj,
@@ -331,22 +347,16 @@ pub fn detect(path: &Path) -> Result<Kind, DetectError> {
     })
 }
 
-/// Whether the file's first bytes are an FBX header (a file that cannot be read is not).
-fn starts_like_fbx(path: &Path) -> bool {
+/// The file's first bytes (up to 4 KiB: room for an XML prolog and comments before a
+/// COLLADA root element); none for a file that cannot be read.
+fn head_of(path: &Path) -> Vec<u8> {
     use std::io::Read;
-    let mut head = [0u8; 64];
-    let Ok(file) = std::fs::File::open(path) else {
-        return false;
-    };
-    let mut n = 0;
-    let mut reader = file.take(head.len() as u64);
-    while let Ok(k) = reader.read(&mut head[n..]) {
-        if k == 0 {
-            break;
-        }
-        n += k;
+    let mut head = Vec::new();
+    if let Ok(file) = std::fs::File::open(path) {
+        // A read error leaves what was read: detection then falls back to the extension.
+        let _ = file.take(4096).read_to_end(&mut head);
     }
-    fbx::is_fbx(&head[..n])
+    head
 }
 
 /// Tells a Pinocchio `.out` file's kind by its name, else by its content.
@@ -428,6 +438,7 @@ pub fn plan(inputs: &Inputs) -> Result<Vec<Source>, DetectError> {
             Kind::Bvh => sources.push(Source::Bvh(input.clone())),
             Kind::Usda => sources.push(Source::Usda(input.clone())),
             Kind::Fbx => sources.push(Source::Fbx(input.clone())),
+            Kind::Collada => sources.push(Source::Collada(input.clone())),
             Kind::Asf => sources.push(Source::AsfAmc {
                 asf: input.clone(),
                 motions: Vec::new(),

@@ -9,6 +9,7 @@
 pub mod asf_amc;
 pub mod bone_mesh;
 pub mod bvh;
+pub mod collada;
 pub mod csci520;
 pub mod detect;
 mod error;

@@ -12,6 +12,10 @@
 //!     Location::line(Path::new("a.usda"), 7).with_prim("/Root/Skel").to_string(),
 //!     "a.usda:7: </Root/Skel>"
 //! );
+//! assert_eq!(
+//!     Location::line_column(Path::new("a.dae"), 12, 5).with_element("skin").to_string(),
+//!     "a.dae:12:5: element <skin>"
+//! );
 //! ```
 #![warn(missing_docs)]
 
@@ -34,6 +38,8 @@ pub struct Location {
     pub byte_offset: Option<u64>,
     /// The USD prim (or property) path the problem is about (`/Root/Skel`), for layers.
     pub prim: Option<String>,
+    /// The XML element the problem is about (its tag, `skin`), for XML formats (COLLADA).
+    pub element: Option<String>,
 }
 
 impl Location {
@@ -46,6 +52,7 @@ impl Location {
             json_path: None,
             byte_offset: None,
             prim: None,
+            element: None,
         }
     }
 
@@ -94,9 +101,21 @@ impl Location {
     }
 }
 
+impl Location {
+    /// The same place, about the XML element with tag `element` (written without the angle
+    /// brackets).
+    #[must_use]
+    pub fn with_element(self, element: impl Into<String>) -> Self {
+        Self {
+            element: Some(element.into()),
+            ..self
+        }
+    }
+}
+
 impl fmt::Display for Location {
     /// `file:line:column`, `file:line`, `file: at /json/path`, `file: at byte N`, or `file`;
-    /// then `: </prim/path>` when a prim is named.
+    /// then `: </prim/path>` when a prim is named, `: element <tag>` when an XML element is.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}", self.path.display())?;
         if let Some(line) = self.line {
@@ -113,6 +132,9 @@ impl fmt::Display for Location {
         }
         if let Some(prim) = &self.prim {
             write!(f, ": <{prim}>")?;
+        }
+        if let Some(element) = &self.element {
+            write!(f, ": element <{element}>")?;
         }
         Ok(())
     }

@@ -167,7 +167,8 @@ pub(crate) fn input_files(inputs: &Inputs) -> Vec<PathBuf> {
             | Source::Csci520(p)
             | Source::Bvh(p)
             | Source::Usda(p)
-            | Source::Fbx(p) => files.push(p),
+            | Source::Fbx(p)
+            | Source::Collada(p) => files.push(p),
             Source::Pinocchio {
                 mesh,
                 skeleton,
