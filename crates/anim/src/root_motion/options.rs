@@ -23,14 +23,21 @@ pub enum RootMotion {
     Extract,
 }
 
-/// How [`root_motion`] changes an asset's clips.
+/// How [`super::root_motion`] changes an asset's clips. With the `clap` feature, command
+/// lines flatten it into their arguments (`root-motion`, `root-yaw`, `root-window`).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct RootMotionOptions {
-    /// Keep, remove or extract the travel.
+    /// Keep the clips' travel over the ground (the default), remove it (in-place: the hips'
+    /// smoothed path taken out, their sway about it kept) or extract it (onto a root joint
+    /// above the hips, or onto the existing top joint).
+    #[cfg_attr(feature = "clap", arg(long = "root-motion", value_enum, default_value_t = RootMotion::Keep))]
     pub mode: RootMotion,
     /// Remove (or extract) the smoothed heading too, not only the ground-plane position.
+    #[cfg_attr(feature = "clap", arg(long = "root-yaw"))]
     pub yaw: bool,
-    /// The smoothing window in seconds (finite, >= 0; 0 follows the hips exactly).
+    /// The path's smoothing window in seconds (finite, >= 0; 0 follows the hips exactly).
+    #[cfg_attr(feature = "clap", arg(long = "root-window", value_name = "S", default_value_t = DEFAULT_WINDOW_S))]
     pub window_s: f32,
 }
 
