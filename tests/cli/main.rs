@@ -35,6 +35,7 @@ mod pinocchio;
 mod refit;
 mod render;
 mod retarget;
+mod root_motion;
 mod skinning;
 mod three;
 mod units;
