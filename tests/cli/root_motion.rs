@@ -226,7 +226,11 @@ fn extract_puts_the_travel_on_an_existing_top_joint() {
     };
     let dir = scratch();
     let (keep, extract) = (dir.path().join("keep.glb"), dir.path().join("extract.glb"));
-    convert(&[bvh.clone()], &keep, &["-q", "--input-units", "cm"]);
+    convert(
+        std::slice::from_ref(&bvh),
+        &keep,
+        &["-q", "--input-units", "cm"],
+    );
     let log = convert(
         &[bvh],
         &extract,
