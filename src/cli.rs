@@ -66,13 +66,12 @@ pub enum Command {
     #[command(after_help = rigport_import::json::keys::FORMAT)]
     Animate(AnimateArgs),
     /// Re-time a clip (resample, speed, warp curve, reverse, trim), baked to linear keys.
+    #[command(after_help = include_str!("../docs/help/root_motion.txt"))]
     Retime(RetimeArgs),
     /// Put a motion (BVH, ASF/AMC, glTF clip) onto another rig: joints mapped by the body
     /// roles both skeletons' structure shows or --map, rotations transferred relative to
     /// each rest pose, hips scaled.
-    #[command(
-        after_help = include_str!("../docs/help/retarget.txt")
-    )]
+    #[command(after_help = include_str!("../docs/help/retarget.txt"))]
     Retarget(RetargetArgs),
     /// Play clips one after another with crossfades, optionally as a seamless loop.
     Sequence(SequenceArgs),
@@ -80,9 +79,7 @@ pub enum Command {
     #[command(after_help = rigport_import::json::handles::FORMAT)]
     Ik(IkArgs),
     /// Hold mocap feet still while they touch the ground (two-bone IK on the legs).
-    #[command(
-        after_help = include_str!("../docs/help/footlock.txt")
-    )]
+    #[command(after_help = include_str!("../docs/help/footlock.txt"))]
     Footlock(FootlockArgs),
     /// Bake a skinning result (DQS) into a glTF every viewer plays back exactly.
     Bake(BakeArgs),
@@ -94,9 +91,7 @@ pub enum Command {
     Demo(DemoArgs),
     /// Run many items from a JSON Lines manifest (or every asset of a folder), in-process
     /// on --jobs threads; shards, resume and a per-item report (docs/scale.md).
-    #[command(
-        after_help = include_str!("../docs/help/batch.txt")
-    )]
+    #[command(after_help = include_str!("../docs/help/batch.txt"))]
     Batch(BatchArgs),
     /// Merge batch reports (the shards of one run) and print the summary table.
     BatchReport(BatchReportArgs),

@@ -18,17 +18,7 @@ pub const OUTPUT: u8 = 3;
 pub const DENIED_WARNINGS: u8 = 4;
 
 /// The exit-code table shown by `--help`.
-pub const HELP: &str = "\
-Exit codes:
-  0  success
-  1  an input could not be read or is invalid (the message names file and line)
-  2  usage error (unknown flag, missing argument or input, an output extension rigport
-     does not write, an output that is one of the inputs)
-  3  an output could not be written (nothing partial is left behind); only regular files
-     are replaced (a directory, fifo or device is refused); a symbolic link is followed
-     and its target replaced
-  4  warnings were reported and --deny-warnings was given
-  130, 143  interrupted by SIGINT, SIGTERM (temporary files removed)";
+pub const HELP: &str = include_str!("../docs/help/exit_codes.txt");
 
 /// Marks an error as an output failure.
 #[derive(Debug, thiserror::Error)]

@@ -1,6 +1,7 @@
 //! `rigport convert`: a rig (and its motion) to glTF or USD (`rigport_pipeline::convert`).
 
 use anyhow::{bail, Result};
+use rigport_anim::root_motion::RootMotionOptions;
 use rigport_pipeline::convert::ConvertOptions;
 use rigport_pipeline::progress::Progress as _;
 
@@ -16,6 +17,8 @@ pub struct ConvertArgs {
     /// Where to write.
     #[command(flatten)]
     pub output: OutputArgs,
+    #[command(flatten)]
+    pub root_motion: RootMotionOptions,
     /// Deprecated: the frame rate of AMC motions, now `--amc-fps` (kept for one release).
     #[arg(long, value_name = "FPS", hide = true, value_parser = frame_rate)]
     pub fps: Option<f32>,
@@ -33,6 +36,7 @@ pub fn run(ctx: &Context, args: &ConvertArgs) -> Result<()> {
     }
     let options = ConvertOptions {
         output: args.output.to_output(),
+        root_motion: args.root_motion,
     };
     ctx.run(|progress| rigport_pipeline::convert(&input, &options, progress))
 }

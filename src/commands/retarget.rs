@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
+use rigport_anim::root_motion::RootMotionOptions;
 use rigport_ik::retarget::RetargetOptions;
 use rigport_pipeline::load::Inputs;
 use rigport_pipeline::retarget::RetargetRequest;
@@ -42,6 +43,8 @@ pub struct RetargetArgs {
     /// Where to write.
     #[command(flatten)]
     pub output: OutputArgs,
+    #[command(flatten)]
+    pub root_motion: RootMotionOptions,
 }
 
 /// Runs `retarget`.
@@ -61,6 +64,7 @@ pub fn run(ctx: &Context, args: &RetargetArgs) -> Result<()> {
         },
         json: args.json,
         output: args.output.to_output(),
+        root_motion: args.root_motion,
     };
     ctx.run(|progress| rigport_pipeline::retarget(&input, &request, progress))
 }

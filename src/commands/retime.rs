@@ -3,6 +3,7 @@
 
 use anyhow::{Context as _, Result};
 use rigport_anim::retime::{Retime, WarpCurve};
+use rigport_anim::root_motion::RootMotionOptions;
 use rigport_pipeline::retime::{parse_trim, Change, RetimeOptions};
 
 use crate::args::{frame_rate, positive, InputArgs, OutputArgs};
@@ -39,6 +40,8 @@ pub struct RetimeArgs {
     /// Where to write.
     #[command(flatten)]
     pub output: OutputArgs,
+    #[command(flatten)]
+    pub root_motion: RootMotionOptions,
 }
 
 /// Runs `retime`.
@@ -66,6 +69,7 @@ pub fn run(ctx: &Context, args: &RetimeArgs) -> Result<()> {
         clip: args.clip.clone(),
         change,
         output: args.output.to_output(),
+        root_motion: args.root_motion,
     };
     ctx.run(|progress| rigport_pipeline::retime(&args.input.to_input(), &options, progress))
 }

@@ -36,6 +36,7 @@ mod pinocchio;
 mod refit;
 mod render;
 mod retarget;
+mod root_motion;
 mod skinning;
 mod three;
 mod units;

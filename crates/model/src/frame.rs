@@ -104,6 +104,22 @@ impl SceneFrame {
             * self.model_to_scene
     }
 
+    /// The scene's up direction in model space (unit length): the inverse of
+    /// `model_to_scene` applied to the up axis; +Y when that inverse is degenerate.
+    pub fn up_in_model(&self) -> glam::Vec3 {
+        let up = match self.up_axis {
+            UpAxis::Y => glam::DVec3::Y,
+            UpAxis::Z => glam::DVec3::Z,
+        };
+        let v = self.model_to_scene.inverse().transform_vector3(up);
+        let v = v.as_vec3().normalize_or_zero();
+        if v == glam::Vec3::ZERO || !v.is_finite() {
+            glam::Vec3::Y
+        } else {
+            v
+        }
+    }
+
     /// Model space -> glTF's frame (+Y up, metres): [`SceneFrame::model_to`] with Y and 1 m.
     /// Sources that state no unit keep their numbers.
     pub fn model_to_gltf(&self, meters_per_unit: Option<f64>) -> DMat4 {
@@ -124,6 +140,21 @@ mod tests {
         assert!((m.determinant() - 1.0).abs() < 1e-12);
         let back = UpAxis::Y.conversion_to(UpAxis::Z) * m;
         assert!(back.abs_diff_eq(DMat4::IDENTITY, 1e-12));
+    }
+
+    #[test]
+    fn up_in_model_undoes_the_placement() {
+        let z_up = SceneFrame {
+            up_axis: UpAxis::Z,
+            model_to_scene: UpAxis::Y.conversion_to(UpAxis::Z),
+        };
+        assert!(z_up.up_in_model().abs_diff_eq(glam::Vec3::Y, 1e-6));
+        let plain_z = SceneFrame {
+            up_axis: UpAxis::Z,
+            ..SceneFrame::default()
+        };
+        assert_eq!(plain_z.up_in_model(), glam::Vec3::Z);
+        assert_eq!(SceneFrame::default().up_in_model(), glam::Vec3::Y);
     }
 
     #[test]

@@ -14,6 +14,7 @@ mod format;
 mod frame;
 mod handle;
 mod index;
+mod insert_joint;
 pub mod interp;
 mod keyed;
 mod material;

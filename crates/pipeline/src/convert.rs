@@ -2,6 +2,8 @@
 //!
 //! [`run`] is the whole pipeline; [`crate::convert()`] is the same function.
 
+use rigport_anim::root_motion::RootMotionOptions;
+
 use crate::load::{Input, single_plan};
 use crate::outputs::check_request;
 use crate::progress::{Progress, step};
@@ -25,7 +27,7 @@ use crate::{PipelineError, Report};
 /// };
 /// let output = Output { options, ..Output::new(&out) };
 /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-/// convert(&input, &ConvertOptions { output }, &Silent)?;
+/// convert(&input, &ConvertOptions { output, ..Default::default() }, &Silent)?;
 /// let text = std::fs::read_to_string(&out)?;
 /// assert!(text.contains("upAxis = \"Z\"") && text.contains("metersPerUnit = 0.01"));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -34,19 +36,28 @@ use crate::{PipelineError, Report};
 pub struct ConvertOptions {
     /// The output file and how it is written.
     pub output: Output,
+    /// The clips' root motion: kept (the default), removed, or extracted onto a root joint
+    /// ([`crate::root_motion`]).
+    pub root_motion: RootMotionOptions,
 }
 
-/// Reads `input` and writes it to `options.output`.
+/// Reads `input`, changes its root motion if asked, and writes it to `options.output`.
 ///
 /// ```
+/// use rigport_anim::root_motion::{RootMotion, RootMotionOptions};
 /// use rigport_pipeline::{convert, load::Input, progress::Silent, write::Output};
 ///
 /// let dir = tempfile::tempdir()?;
 /// let out = dir.path().join("walk.usda");
 /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-/// let report = convert(&input, &convert::ConvertOptions { output: Output::new(&out) }, &Silent)?;
+/// let report = convert(&input, &convert::ConvertOptions { output: Output::new(&out), ..Default::default() }, &Silent)?;
 /// assert!(report.log[0].starts_with("wrote "));
 /// assert!(std::fs::read_to_string(&out)?.starts_with("#usda 1.0"));
+/// // The travel moved onto a root joint above the hips, reported per clip.
+/// let root_motion = RootMotionOptions { mode: RootMotion::Extract, ..Default::default() };
+/// let options = convert::ConvertOptions { output: Output::new(&out), root_motion };
+/// let report = convert(&input, &options, &Silent)?;
+/// assert!(report.log[1].starts_with("root motion extracted"), "{:?}", report.log);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 ///
@@ -59,9 +70,10 @@ pub fn run(
 ) -> Result<Report, PipelineError> {
     check_request(input, &options.output.path, &[])?;
     let plan = single_plan(&input.files)?;
-    let imported = step(progress, &format!("reading {}", plan.label()), || {
+    let mut imported = step(progress, &format!("reading {}", plan.label()), || {
         input.load(&plan)
     })?;
+    let moved = crate::root_motion::apply(&mut imported.asset, &options.root_motion)?;
     let line = write_output(
         imported.asset,
         imported.warnings,
@@ -69,5 +81,7 @@ pub fn run(
         &input.budget,
         progress,
     )?;
-    Ok(Report::logged(line))
+    let mut report = Report::logged(line);
+    report.log.extend(moved.iter().flat_map(|m| m.lines()));
+    Ok(report)
 }

@@ -14,7 +14,7 @@ use crate::progress;
 /// use rigport_pipeline::{write::Output, PipelineError};
 ///
 /// let input = Input::new(vec!["../../fixtures/bvh/missing.bvh".into()]);
-/// let options = ConvertOptions { output: Output::new("walk.glb") };
+/// let options = ConvertOptions { output: Output::new("walk.glb"), ..Default::default() };
 /// match convert(&input, &options, &Silent) {
 ///     Err(PipelineError::Import(e)) => assert!(e.to_string().contains("missing.bvh"), "{e}"),
 ///     other => panic!("expected an import error, got {other:?}"),
@@ -94,7 +94,7 @@ impl PipelineError {
     ///
     /// // rigport writes .usda, .usdc and .usdz, not the ambiguous .usd.
     /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-    /// let options = ConvertOptions { output: rigport_pipeline::write::Output::new("walk.usd") };
+    /// let options = ConvertOptions { output: rigport_pipeline::write::Output::new("walk.usd"), ..Default::default() };
     /// assert!(convert(&input, &options, &Silent).unwrap_err().is_usage());
     /// ```
     pub fn is_usage(&self) -> bool {
@@ -113,7 +113,7 @@ impl PipelineError {
     ///
     /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
     /// let out = tempfile::tempdir()?.path().join("gone/walk.glb");
-    /// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(out) };
+    /// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(out), ..Default::default() };
     /// assert!(convert(&input, &options, &Silent).unwrap_err().is_output());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
@@ -156,7 +156,7 @@ impl PipelineError {
 ///     ..Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()])
 /// };
 /// let dir = tempfile::tempdir()?;
-/// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(dir.path().join("a.glb")) };
+/// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(dir.path().join("a.glb")), ..Default::default() };
 /// let err = convert(&input, &options, &Silent).unwrap_err();
 /// assert!(err.is_usage() && err.to_string().contains("states 1 m per unit"), "{err}");
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -179,7 +179,7 @@ pub struct UnitsConflict {
 ///
 /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
 /// let out = tempfile::tempdir()?.path().join("gone/walk.glb");
-/// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(&out) };
+/// let options = ConvertOptions { output: rigport_pipeline::write::Output::new(&out), ..Default::default() };
 /// let err = convert(&input, &options, &Silent).unwrap_err();
 /// // The error names the output; its cause says why.
 /// let text = chain(&err);

@@ -18,6 +18,8 @@
 //!   memory check, the influence fit (`truncate` or `refit`) and the writer chosen by the
 //!   output's extension;
 //! - [`memory`]: this process's memory budget;
+//! - [`root_motion`]: the clips' travel kept, removed (in place) or moved onto a root
+//!   joint, for `convert`, `retarget` and `retime`;
 //! - [`units`]: the units of inputs that state none, and the warning for a skeleton too
 //!   tall for metres;
 //! - private to the crate: the output checks made before any work (an output must not be
@@ -33,7 +35,7 @@
 //! let dir = tempfile::tempdir()?;
 //! let usdz = dir.path().join("walk.usdz");
 //! let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-//! convert(&input, &ConvertOptions { output: Output::new(&usdz) }, &Silent)?;
+//! convert(&input, &ConvertOptions { output: Output::new(&usdz), ..Default::default() }, &Silent)?;
 //! let listing = inspect(&Input::new(vec![usdz]), &InspectOptions { json: true }, &Silent)?;
 //! let json: serde_json::Value = serde_json::from_str(listing.output.as_deref().unwrap_or(""))?;
 //! assert_eq!(json[0]["joints"].as_array().map(Vec::len), Some(9));
@@ -61,6 +63,7 @@ pub mod render;
 mod report;
 pub mod retarget;
 pub mod retime;
+pub mod root_motion;
 pub mod sequence;
 pub mod units;
 pub mod write;

@@ -25,7 +25,7 @@ use rigport_model::Warning;
 ///
 /// let dir = tempfile::tempdir()?;
 /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-/// let options = ConvertOptions { output: Output::new(dir.path().join("walk.glb")) };
+/// let options = ConvertOptions { output: Output::new(dir.path().join("walk.glb")), ..Default::default() };
 /// let steps = Steps::default();
 /// convert(&input, &options, &steps)?;
 /// let steps = steps.0.into_inner().unwrap();
@@ -96,7 +96,7 @@ impl Progress for Silent {}
 /// let dir = tempfile::tempdir()?;
 /// let out = dir.path().join("walk.glb");
 /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-/// let err = convert(&input, &ConvertOptions { output: Output::new(&out) }, &Strict).unwrap_err();
+/// let err = convert(&input, &ConvertOptions { output: Output::new(&out), ..Default::default() }, &Strict).unwrap_err();
 /// assert!(matches!(err, PipelineError::Denied(_)), "{err}");
 /// assert!(!out.exists(), "nothing is written");
 /// # Ok::<(), Box<dyn std::error::Error>>(())

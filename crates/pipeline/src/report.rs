@@ -11,7 +11,7 @@ use rigport_model::Warning;
 /// let dir = tempfile::tempdir()?;
 /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
 /// // `convert` says what it wrote; `inspect`'s listing is its product.
-/// let options = ConvertOptions { output: Output::new(dir.path().join("walk.glb")) };
+/// let options = ConvertOptions { output: Output::new(dir.path().join("walk.glb")), ..Default::default() };
 /// let converted = convert(&input, &options, &Silent)?;
 /// assert!(converted.log[0].starts_with("wrote ") && converted.output.is_none());
 /// let listed = inspect(&input, &InspectOptions { json: false }, &Silent)?;

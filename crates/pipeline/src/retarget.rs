@@ -6,6 +6,7 @@
 
 use std::path::Path;
 
+use rigport_anim::root_motion::RootMotionOptions;
 use rigport_ik::footlock::up_in_model;
 use rigport_ik::retarget::RetargetReport;
 use rigport_ik::retarget::{JointMap, Limb, RetargetInput, RetargetOptions, auto_map, retarget};
@@ -34,6 +35,7 @@ use crate::{PipelineError, Report};
 ///     options: Default::default(),
 ///     json: false,
 ///     output: Output::new(&out),
+///     root_motion: Default::default(),
 /// };
 /// assert!(retarget(&Input::new(vec![bvh.into()]), &request, &Silent).is_err());
 /// assert!(!out.exists());
@@ -53,12 +55,16 @@ pub struct RetargetRequest {
     pub json: bool,
     /// The output file and how it is written.
     pub output: Output,
+    /// The retargeted clip's root motion, changed on the rig ([`crate::root_motion`]);
+    /// the travel is in the report (`"root_motion"` in JSON).
+    pub root_motion: RootMotionOptions,
 }
 
 /// Reads the motion (`input`) and the rig (`request.onto`), puts the clip onto the rig,
 /// and writes the rig with it; the report comes back as a summary or as JSON.
 ///
 /// ```
+/// use rigport_anim::root_motion::{RootMotion, RootMotionOptions};
 /// use rigport_pipeline::retarget::RetargetRequest;
 /// use rigport_pipeline::{load::Input, progress::Silent, retarget, write::Output};
 ///
@@ -71,10 +77,13 @@ pub struct RetargetRequest {
 ///     options: Default::default(),
 ///     json: true,
 ///     output: Output::new(dir.path().join("onto.glb")),
+///     // The travel moved onto a root joint, and listed in the report.
+///     root_motion: RootMotionOptions { mode: RootMotion::Extract, ..Default::default() },
 /// };
 /// let report = retarget(&Input::new(vec![bvh.into()]), &request, &Silent)?;
 /// let json: serde_json::Value = serde_json::from_str(report.output.as_deref().unwrap_or(""))?;
 /// assert!(json["frames"].as_u64().is_some());
+/// assert_eq!(json["root_motion"]["mode"], "extract");
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 ///
@@ -102,12 +111,17 @@ pub fn run(
         )
     })
     .map_err(|e| PipelineError::step(format!("{} onto {}", plan.label(), rig_plan.label()), e))?;
-    let json = request.json.then(|| report_json(&done));
+    let mut json = request.json.then(|| report_json(&done));
     let summary = done.report.summary();
-    let (asset, mut warnings) = (done.asset, target.warnings);
+    let (mut asset, mut warnings) = (done.asset, target.warnings);
     warnings.extend(done.warnings);
+    let moved = crate::root_motion::apply(&mut asset, &request.root_motion)?;
+    if let (Some(Value::Object(json)), Some(moved)) = (&mut json, &moved) {
+        json.insert("root_motion".into(), moved.json());
+    }
     let line = write_output(asset, warnings, &request.output, &input.budget, progress)?;
     let mut report = Report::logged(line);
+    report.log.extend(moved.iter().flat_map(|m| m.lines()));
     match json {
         Some(json) => {
             let text = serde_json::to_string_pretty(&json)

@@ -3,6 +3,7 @@
 //! [`run`] is the whole pipeline; [`crate::retime()`] is the same function.
 
 use rigport_anim::retime::{Retime, retime};
+use rigport_anim::root_motion::RootMotionOptions;
 use rigport_anim::sequence::trim;
 use rigport_model::{Clip, Warning};
 
@@ -73,6 +74,7 @@ pub fn parse_trim(text: &str) -> Result<Change, String> {
 ///     clip: Some("end_sites".into()),
 ///     change: Change::Trim { start: 0.0, end: 0.05 },
 ///     output: Output::new(dir.path().join("start.glb")),
+///     root_motion: Default::default(),
 /// };
 /// let report = retime(&input, &options, &Silent)?;
 /// assert!(report.log[0].contains("0.050 s"), "{}", report.log[0]);
@@ -86,16 +88,20 @@ pub struct RetimeOptions {
     pub change: Change,
     /// The output file and how it is written.
     pub output: Output,
+    /// Every clip's root motion, changed after the retiming ([`crate::root_motion`]).
+    pub root_motion: RootMotionOptions,
 }
 
 fn keys_of(clip: &Clip) -> usize {
     clip.tracks.iter().map(|t| t.times.len()).max().unwrap_or(0)
 }
 
-/// Reads `input`, changes the timing of one clip, and writes the rig.
+/// Reads `input`, changes the timing of one clip (and the root motion of every clip, if
+/// asked), and writes the rig.
 ///
 /// ```
 /// use rigport_anim::retime::Retime;
+/// use rigport_anim::root_motion::{RootMotion, RootMotionOptions};
 /// use rigport_pipeline::retime::{Change, RetimeOptions};
 /// use rigport_pipeline::{load::Input, progress::Silent, retime, write::Output};
 ///
@@ -106,9 +112,12 @@ fn keys_of(clip: &Clip) -> usize {
 ///     clip: None,
 ///     change: Change::Retime(Retime::Speed(0.5)),
 ///     output: Output::new(&out),
+///     // Every clip played in place, its heading kept.
+///     root_motion: RootMotionOptions { mode: RootMotion::InPlace, ..Default::default() },
 /// };
 /// let report = retime(&input, &options, &Silent)?;
 /// assert!(report.log[0].starts_with("wrote "));
+/// assert!(report.log[1].starts_with("root motion in place"), "{:?}", report.log);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 ///
@@ -153,6 +162,9 @@ pub fn run(
         ),
     });
     asset.clips[index] = after;
+    let moved = crate::root_motion::apply(&mut asset, &options.root_motion)?;
     let line = write_output(asset, warnings, &options.output, &input.budget, progress)?;
-    Ok(Report::logged(line))
+    let mut report = Report::logged(line);
+    report.log.extend(moved.iter().flat_map(|m| m.lines()));
+    Ok(report)
 }

@@ -28,7 +28,7 @@ use crate::progress::{Progress, step};
 /// let options = WriteOptions { skinning: Some(SkinningMethod::Dqs), ..WriteOptions::default() };
 /// let output = Output { options, ..Output::new(&out) };
 /// let input = Input::new(vec!["../../fixtures/gltf/skin_basic.glb".into()]);
-/// convert(&input, &ConvertOptions { output }, &Silent)?;
+/// convert(&input, &ConvertOptions { output, ..Default::default() }, &Silent)?;
 /// let text = std::fs::read_to_string(&out)?;
 /// assert!(text.contains(r#"primvars:skel:skinningMethod = "dualQuaternion""#));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -60,7 +60,7 @@ pub struct WriteOptions {
 /// // Keys that a 1 mm tolerance can drop are dropped before writing.
 /// let output = Output { reduce_tolerance: Some(0.001), ..Output::new(dir.path().join("walk.glb")) };
 /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
-/// let report = convert(&input, &ConvertOptions { output }, &Silent)?;
+/// let report = convert(&input, &ConvertOptions { output, ..Default::default() }, &Silent)?;
 /// assert!(report.log[0].starts_with("wrote "));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```

@@ -342,20 +342,9 @@ pub struct Footlocked {
     pub warnings: Vec<Warning>,
 }
 
-/// The scene's up direction in model space (unit length): the inverse of the asset's
-/// model-to-scene transform applied to its up axis.
+/// The scene's up direction in model space (unit length): [`SceneFrame::up_in_model`].
 pub fn up_in_model(frame: &SceneFrame) -> Vec3 {
-    let up = match frame.up_axis {
-        rigport_model::UpAxis::Y => glam::DVec3::Y,
-        rigport_model::UpAxis::Z => glam::DVec3::Z,
-    };
-    let v = frame.model_to_scene.inverse().transform_vector3(up);
-    let v = v.as_vec3().normalize_or_zero();
-    if v == Vec3::ZERO {
-        Vec3::Y
-    } else {
-        v
-    }
+    frame.up_in_model()
 }
 
 /// Largest extent of the joints' rest positions (at least `f32::MIN_POSITIVE`).
