@@ -54,6 +54,17 @@ pub(super) fn run(
         used.extend(r.skin.iter().flat_map(|s| s.joints.iter().copied()));
     }
     let skel = skeleton::build(&scene, &used, doc.path)?;
+    if let Some((node, off)) = skel.sheared.first() {
+        warnings.push(Warning::Incomplete {
+            location: crate::Location::file(doc.path).to_string(),
+            message: format!(
+                "{} joint transforms have a shear (from <skew>, <lookat> or a <matrix>) that a \
+                 joint's translation, rotation and scale cannot hold; it is left out (node {node:?}: \
+                 {off:.1e} of the matrix)",
+                skel.sheared.len()
+            ),
+        });
+    }
     let mut materials = Materials::default();
     let mut morphs = Vec::new();
     let mut names = HashSet::new();
@@ -62,7 +73,14 @@ pub(super) fn run(
         let geo = match geometries.entry(resolved.geometry) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::hash_map::Entry::Vacant(e) => {
-                e.insert(geometry::read(doc, resolved.geometry)?)
+                let geo = geometry::read(doc, resolved.geometry)?;
+                for (location, message) in &geo.lost {
+                    warnings.push(Warning::Incomplete {
+                        location: location.clone(),
+                        message: message.clone(),
+                    });
+                }
+                e.insert(geo)
             }
         };
         let (place, attached_to) = placement(&scene, &skel, *n, resolved);
@@ -115,6 +133,20 @@ pub(super) fn run(
                         defaults: morph.weights.clone(),
                     });
                 }
+            }
+            if let Some(skin) = resolved
+                .skin
+                .as_ref()
+                .filter(|s| s.on_bind_shape > 0 && k == 0)
+            {
+                warnings.push(Warning::Incomplete {
+                    location: doc.at(*instance).to_string(),
+                    message: format!(
+                        "{} influences on joint -1 (the bind shape itself, unmoved) are left out \
+                         and their rows renormalized: those vertices follow their joints fully",
+                        skin.on_bind_shape
+                    ),
+                });
             }
             if let Some(skin) = &resolved.skin {
                 let joints = skin

@@ -37,6 +37,8 @@ pub(super) struct Skin {
     pub(super) inv_bind: Vec<Mat4>,
     pub(super) bind_shape: DMat4,
     pub(super) weights: Vec<Vec<Influence>>,
+    /// How many influences named joint `-1` (the bind shape itself) with a weight, left out.
+    pub(super) on_bind_shape: usize,
 }
 
 /// A morph: per target its name and deltas per `<vertices>` vertex, and default weights.
@@ -181,22 +183,24 @@ fn read_skin(
         .map(|m| geometry::positions(doc, m).map(|p| p.len()))
         .transpose()?
         .unwrap_or(0);
-    let weights = read_weights(doc, skin, joints.len(), vertex_count)?;
+    let (weights, on_bind_shape) = read_weights(doc, skin, joints.len(), vertex_count)?;
     Ok(Skin {
         joints,
         inv_bind,
         bind_shape,
         weights,
+        on_bind_shape,
     })
 }
 
-/// `<vertex_weights>`: per vertex, its (palette index, weight) pairs with weight > 0.
+/// `<vertex_weights>`: per vertex, its (palette index, weight) pairs with weight > 0, and
+/// how many weighted influences on joint `-1` were left out.
 fn read_weights(
     doc: &Doc,
     skin: Node,
     joint_count: usize,
     vertex_count: usize,
-) -> Result<Vec<Vec<Influence>>, ImportError> {
+) -> Result<(Vec<Vec<Influence>>, usize), ImportError> {
     let vw = child(skin, "vertex_weights")
         .ok_or_else(|| doc.invalid(skin, "has no <vertex_weights>"))?;
     let (_, joint_offset) =
@@ -240,6 +244,7 @@ fn read_weights(
         ));
     }
     let mut at = 0;
+    let mut on_bind_shape = 0;
     let mut out = Vec::with_capacity(vertex_count);
     for &n in &vcount {
         let mut row = Vec::new();
@@ -251,6 +256,11 @@ fn read_weights(
             // which a joint palette cannot say; it is left out (and the row renormalized
             // on output).
             if joint == -1 {
+                let weighted = usize::try_from(w)
+                    .ok()
+                    .filter(|&i| i < weights.count)
+                    .is_some_and(|i| weights.float(i, 0) > 0.0);
+                on_bind_shape += usize::from(weighted);
                 continue;
             }
             let oob = |what, plural, index: i64, count| {
@@ -282,7 +292,7 @@ fn read_weights(
         }
         out.push(row);
     }
-    Ok(out)
+    Ok((out, on_bind_shape))
 }
 
 fn read_morph<'a, 'i>(

@@ -7,7 +7,7 @@
 //! | `VERTEX` (the `<vertices>` inputs: `POSITION`, and `NORMAL`/`TEXCOORD` when given per vertex) | positions; the `<vertices>` index is [`Mesh::source_vertex`] (what skin weights and morph targets index) |
 //! | `NORMAL` | normals (all primitives of a part must have them, else none) |
 //! | `TEXCOORD` of every `set`, in set order | `uvs`, `extra_uvs` (v flipped to glTF's top-left origin) |
-//! | `COLOR` | not kept (the model has no vertex colours) |
+//! | `COLOR` | not kept (the model has no vertex colours), with a W004 warning |
 //! | a polygon of n corners | its fan from the first corner; sizes kept in [`Mesh::polygons`] |
 //!
 //! Corners become one vertex per unique index tuple within a primitive element.
@@ -74,9 +74,10 @@ impl Part {
     }
 }
 
-/// A geometry's parts.
+/// A geometry's parts, and what of it is not kept (the element, what).
 pub(super) struct Geometry {
     pub(super) parts: Vec<Part>,
+    pub(super) lost: Vec<(String, String)>,
 }
 
 /// The `POSITION` source of a `<mesh>`'s `<vertices>`.
@@ -99,7 +100,10 @@ pub(super) fn positions(doc: &Doc, mesh: Node) -> Result<Vec<DVec3>, ImportError
 /// A missing source, a count that does not match, an index past its source.
 pub(super) fn read(doc: &Doc, geometry: Node) -> Result<Geometry, ImportError> {
     let Some(mesh) = child(geometry, "mesh") else {
-        return Ok(Geometry { parts: Vec::new() });
+        return Ok(Geometry {
+            parts: Vec::new(),
+            lost: Vec::new(),
+        });
     };
     let positions = positions(doc, mesh)?;
     let vertices = child(mesh, "vertices").ok_or_else(|| doc.invalid(mesh, "has no <vertices>"))?;
@@ -144,7 +148,23 @@ pub(super) fn read(doc: &Doc, geometry: Node) -> Result<Geometry, ImportError> {
         )?;
     }
     parts.retain(|p| !p.triangles.is_empty());
-    Ok(Geometry { parts })
+    let mut lost = Vec::new();
+    let colors = mesh
+        .descendants()
+        .find(|n| n.tag_name().name() == "input" && n.attribute("semantic") == Some("COLOR"));
+    if let Some(input) = colors {
+        lost.push((
+            doc.at(input).to_string(),
+            "vertex colours (COLOR) are not kept: rigport's meshes have none".to_string(),
+        ));
+    }
+    if let Some(h) = mesh.descendants().find(|n| n.tag_name().name() == "h") {
+        lost.push((
+            doc.at(h).to_string(),
+            "polygon holes (<h>) are not kept: each polygon is its outer ring".to_string(),
+        ));
+    }
+    Ok(Geometry { parts, lost })
 }
 
 /// An input's `set` (0 when absent).

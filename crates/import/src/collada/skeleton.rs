@@ -5,7 +5,8 @@
 //! animation moves, and every node between those and the scene root (so a joint's parent
 //! is always a joint, as fbx/ does). Each joint's rest transform is its node's local
 //! matrix (its transform elements composed) as translation, rotation and scale; a shear
-//! (from `<skew>`, `<lookat>` or a `<matrix>`) cannot be a TRS and is dropped there, while
+//! (from `<skew>`, `<lookat>` or a `<matrix>`) cannot be a TRS and is dropped there (a W004
+//! warning names the joints), while
 //! meshes are placed from the TRS so that what they sit on is what the file shows.
 
 use std::collections::HashSet;
@@ -17,6 +18,10 @@ use rigport_model::{Joint, JointIndex, Skeleton, Transform};
 use super::scene::Scene;
 use crate::{ImportError, Location, Problem};
 
+/// How far (relative to the matrix's largest element) a node matrix may be from its TRS
+/// before the difference counts as a lost shear (`f32` rounding of a TRS is ~1e-7).
+const SHEAR_TOLERANCE: f64 = 1e-5;
+
 /// The skeleton and where each scene node went.
 pub(super) struct Skel {
     pub(super) skeleton: Skeleton,
@@ -24,6 +29,9 @@ pub(super) struct Skel {
     pub(super) joint_of: Vec<Option<JointIndex>>,
     /// Per joint: its rest model-space matrix from the TRS rest transforms.
     pub(super) world: Vec<DMat4>,
+    /// The joints whose node matrix has a shear the TRS left out, with the largest
+    /// element of the difference (relative to the matrix's largest).
+    pub(super) sheared: Vec<(String, f64)>,
 }
 
 impl Skel {
@@ -64,6 +72,7 @@ pub(super) fn build(scene: &Scene, used: &[usize], path: &Path) -> Result<Skel, 
     let mut joints = Vec::new();
     let mut world: Vec<DMat4> = Vec::new();
     let mut names = HashSet::new();
+    let mut sheared = Vec::new();
     for (n, node) in scene.nodes.iter().enumerate() {
         if !keep[n] {
             continue;
@@ -71,6 +80,19 @@ pub(super) fn build(scene: &Scene, used: &[usize], path: &Path) -> Result<Skel, 
         let parent = node.parent.and_then(|p| joint_of[p]);
         let rest_local = Transform::from_mat4(&node.local.as_mat4());
         let local = rest_local.to_mat4().as_dmat4();
+        let size = node
+            .local
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |a, v| a.max(v.abs()));
+        let off = (local - node.local)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |a, v| a.max(v.abs()))
+            / size.max(f64::MIN_POSITIVE);
+        if off > SHEAR_TOLERANCE {
+            sheared.push((node.name().to_string(), off));
+        }
         world.push(match parent {
             Some(p) => world[p.get()] * local,
             None => local,
@@ -88,6 +110,7 @@ pub(super) fn build(scene: &Scene, used: &[usize], path: &Path) -> Result<Skel, 
         skeleton,
         joint_of,
         world,
+        sheared,
     })
 }
 

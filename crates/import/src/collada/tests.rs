@@ -319,3 +319,60 @@ fn the_fixture_chains_skin_over_morph_with_its_material_and_clips() {
         assert!(mesh.material.is_some() && asset.images.is_empty());
     }
 }
+
+#[test]
+fn every_loss_is_a_coded_warning_at_its_element() {
+    let warnings_of = |text: &str| -> Vec<String> {
+        import_str(text)
+            .warnings
+            .iter()
+            .map(|w| {
+                assert_eq!(w.code(), "W004", "{w}");
+                w.to_string()
+            })
+            .collect()
+    };
+    let clean = scene(
+        &quad(
+            "<triangles count=\"2\"><input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/>\
+             <p>0 1 2 0 2 3</p></triangles>",
+        ),
+        "<node id=\"m\"><instance_geometry url=\"#quad\"/></node>",
+    );
+    assert!(warnings_of(&clean).is_empty());
+    // Vertex colours, named at their <input>.
+    let coloured = scene(
+        &quad(
+            "<triangles count=\"2\"><input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/>\
+             <input semantic=\"COLOR\" source=\"#n\" offset=\"1\"/>\
+             <p>0 0 1 0 2 0 0 0 2 0 3 0</p></triangles>",
+        ),
+        "<node id=\"m\"><instance_geometry url=\"#quad\"/></node>",
+    );
+    let w = warnings_of(&coloured);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("element <input>") && w[0].contains("vertex colours"), "{w:?}");
+    // A polygon with a hole keeps its outer ring.
+    let holed = scene(
+        &quad(
+            "<polygons count=\"1\"><input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/>\
+             <ph><p>0 1 2 3</p><h>0 1 2</h></ph></polygons>",
+        ),
+        "<node id=\"m\"><instance_geometry url=\"#quad\"/></node>",
+    );
+    let w = warnings_of(&holed);
+    assert!(w.len() == 1 && w[0].contains("element <h>"), "{w:?}");
+    // A joint with a skew.
+    let skewed = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1").replace(
+        "<node id=\"jnode\" sid=\"J\" name=\"arm\" type=\"JOINT\"/>",
+        "<node id=\"jnode\" sid=\"J\" name=\"arm\" type=\"JOINT\"><skew>30 1 0 0 0 1 0</skew></node>",
+    );
+    let w = warnings_of(&skewed);
+    assert!(w.len() == 1 && w[0].contains("shear") && w[0].contains("\"arm\""), "{w:?}");
+    // Influences on joint -1 (the bind shape).
+    let on_shape = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
+        .replace("<vcount>1 1 1 1</vcount>", "<vcount>2 1 1 1</vcount>")
+        .replace("<v>0 0 0 0 0 0 0 0</v>", "<v>0 0 -1 0 0 0 0 0 0 0</v>");
+    let w = warnings_of(&on_shape);
+    assert!(w.len() == 1 && w[0].contains("1 influences on joint -1"), "{w:?}");
+}

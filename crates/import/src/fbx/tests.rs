@@ -104,3 +104,123 @@ fn a_file_without_bones_or_animation_is_static_meshes() {
         .iter()
         .any(|w| matches!(w, Warning::Incomplete { message, .. } if message.contains("texture"))));
 }
+
+/// A triangle with a Phong material: a base colour texture, a normal map, a bump map, an
+/// emissive colour and a transparency (ASCII FBX 7.4; textures beside it).
+const PHONG: &str = r#"; FBX 7.4.0 project file
+FBXHeaderExtension:  {
+	FBXHeaderVersion: 1003
+	FBXVersion: 7400
+}
+Objects:  {
+	Geometry: 10, "Geometry::tri", "Mesh" {
+		Vertices: *9 {
+			a: 0,0,0,1,0,0,0,1,0
+		}
+		PolygonVertexIndex: *3 {
+			a: 0,1,-3
+		}
+		GeometryVersion: 124
+		LayerElementUV: 0 {
+			Version: 101
+			Name: "map1"
+			MappingInformationType: "ByPolygonVertex"
+			ReferenceInformationType: "Direct"
+			UV: *6 {
+				a: 0,0,1,0,0,1
+			}
+		}
+		LayerElementMaterial: 0 {
+			Version: 101
+			Name: ""
+			MappingInformationType: "AllSame"
+			ReferenceInformationType: "IndexToDirect"
+			Materials: *1 {
+				a: 0
+			}
+		}
+		Layer: 0 {
+			Version: 100
+			LayerElement:  {
+				Type: "LayerElementUV"
+				TypedIndex: 0
+			}
+			LayerElement:  {
+				Type: "LayerElementMaterial"
+				TypedIndex: 0
+			}
+		}
+	}
+	Model: 20, "Model::tri", "Mesh" {
+		Version: 232
+	}
+	Material: 30, "Material::shiny", "" {
+		Version: 102
+		ShadingModel: "phong"
+		Properties70:  {
+			P: "DiffuseColor", "Color", "", "A",0.5,0.25,1
+			P: "EmissiveColor", "Color", "", "A",1,0.5,0
+			P: "EmissiveFactor", "Number", "", "A",0.5
+			P: "TransparentColor", "Color", "", "A",1,1,1
+			P: "TransparencyFactor", "Number", "", "A",0.25
+		}
+	}
+	Texture: 40, "Texture::base", "" {
+		Type: "TextureVideoClip"
+		FileName: "base.png"
+		RelativeFilename: "base.png"
+	}
+	Texture: 41, "Texture::normals", "" {
+		Type: "TextureVideoClip"
+		FileName: "normals.png"
+		RelativeFilename: "normals.png"
+	}
+	Texture: 42, "Texture::bumps", "" {
+		Type: "TextureVideoClip"
+		FileName: "bumps.png"
+		RelativeFilename: "bumps.png"
+	}
+}
+Connections:  {
+	C: "OO",20,0
+	C: "OO",10,20
+	C: "OO",30,20
+	C: "OP",40,30, "DiffuseColor"
+	C: "OP",41,30, "NormalMap"
+	C: "OP",42,30, "Bump"
+}
+"#;
+
+#[test]
+fn phong_keeps_emission_normal_map_and_transparency_and_names_the_bump_it_loses() {
+    let dir = tempfile::tempdir().unwrap();
+    // The importer keeps an image's bytes as they are; any bytes do.
+    for (name, byte) in [("base.png", 1u8), ("normals.png", 2), ("bumps.png", 3)] {
+        let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+        png.push(byte);
+        std::fs::write(dir.path().join(name), png).unwrap();
+    }
+    let path = dir.path().join("phong.fbx");
+    std::fs::write(&path, PHONG).unwrap();
+    let imported = import(&path).unwrap();
+    let m = &imported.asset.materials[0];
+    let image = |t: &Option<rigport_model::TextureRef>| {
+        imported.asset.images[t.as_ref().expect("a texture").image.get()]
+            .name
+            .clone()
+    };
+    assert_eq!(image(&m.base_color_texture), "base.png");
+    assert_eq!(image(&m.normal_texture), "normals.png");
+    assert_eq!(m.emissive_factor, [0.5, 0.25, 0.0]);
+    // Opacity 1 - 0.25 x TransparentColor (white).
+    assert!((m.base_color_factor[3] - 0.75).abs() < 1e-6, "{m:?}");
+    assert_eq!(m.alpha_mode, rigport_model::AlphaMode::Blend);
+    assert_eq!((m.metallic_factor, m.roughness_factor), (0.0, 1.0));
+    let lost: Vec<String> = imported.warnings.iter().map(|w| w.to_string()).collect();
+    assert_eq!(lost.len(), 1, "{lost:?}");
+    assert!(
+        lost[0].contains("shiny") && lost[0].contains("textures on Bump are not kept"),
+        "{lost:?}"
+    );
+    assert_eq!(imported.warnings[0].code(), "W004");
+}
