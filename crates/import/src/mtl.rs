@@ -15,8 +15,9 @@
 //! Texture file names are read relative to the `.mtl`'s folder (backslashes as `/`; when
 //! options such as `-bm 1` precede the name, the last word is the name, as obj2gltf
 //! assumes); a file that is not found there is looked for by its base name in that folder,
-//! then skipped with a warning. Other statements (`Ka`, `illum`, `map_Ka`, `map_Ks`,
-//! `map_d`, ...) are ignored.
+//! then skipped with a W004 warning, as is a material no library defines. Textures on other
+//! inputs (`map_Ka`, `map_Ks`, `map_d`, `disp`, `refl`, ...) are W004 warnings too; other
+//! statements (`Ka`, `illum`, ...) are ignored.
 
 use std::path::{Path, PathBuf};
 
@@ -112,6 +113,18 @@ pub fn parse(text: &str, path: &Path, warnings: &mut Vec<Warning>) -> Vec<MtlMat
             "map_kd" => m.map_kd = Some(texture_name(rest)),
             "map_bump" | "bump" => m.map_bump = Some(texture_name(rest)),
             "map_ke" => m.map_ke = Some(texture_name(rest)),
+            // Textures the material cannot hold: a loss, with a code.
+            k if k.starts_with("map_") || matches!(k, "disp" | "decal" | "refl" | "norm") => {
+                warnings.push(Warning::Incomplete {
+                    location: format!("{}:{line_no}", path.display()),
+                    message: format!(
+                        "material {:?}: the texture `{keyword}` {:?} is not kept (glTF's \
+                         metallic-roughness material has no such input)",
+                        m.name,
+                        texture_name(rest)
+                    ),
+                });
+            }
             _ => {}
         }
         if bad {
@@ -215,10 +228,10 @@ pub fn load(
                     known.push((m, mtl_folder.clone()));
                 }
             }
-            Err(e) => warnings.push(Warning::Note {
+            Err(e) => warnings.push(Warning::Incomplete {
                 location: obj_path.display().to_string(),
                 message: format!(
-                    "material library {} cannot be read ({e}); its materials are grey",
+                    "material library {} cannot be read ({e}); its materials are left out",
                     lib_path.display()
                 ),
             }),
@@ -231,7 +244,7 @@ pub fn load(
     for name in used {
         let Some((m, mtl_folder)) = known.iter().find(|(m, _)| m.name == *name) else {
             if !known.is_empty() {
-                warnings.push(Warning::Note {
+                warnings.push(Warning::Incomplete {
                     location: obj_path.display().to_string(),
                     message: format!("material {name:?} is in no material library; it is grey"),
                 });
@@ -265,7 +278,7 @@ pub fn load(
                     return Some(ImageIndex(images.len() as u32 - 1));
                 }
             }
-            warnings.push(Warning::Note {
+            warnings.push(Warning::Incomplete {
                 location: obj_path.display().to_string(),
                 message: format!(
                     "texture {file:?} of material {name:?} not found in {}; skipped",
@@ -310,5 +323,24 @@ mod tests {
         let grey = convert(&MtlMaterial::new("x"), |_| None);
         assert_eq!(grey.base_color_factor, [0.5, 0.5, 0.5, 1.0]);
         assert_eq!(grey.roughness_factor, 1.0);
+    }
+
+    #[test]
+    fn textures_it_cannot_hold_are_coded_losses_at_their_line() {
+        let text =
+            "newmtl skin\nmap_Kd skin.png\nmap_Ks spec.png\nmap_d -clamp on mask.png\nKa 1 1 1\n";
+        let mut w = Vec::new();
+        parse(text, Path::new("a.mtl"), &mut w);
+        let shown: Vec<String> = w.iter().map(|w| format!("{}: {w}", w.code())).collect();
+        assert_eq!(shown.len(), 2, "{shown:?}");
+        assert!(
+            shown[0]
+                .starts_with("W004: a.mtl:3: material \"skin\": the texture `map_Ks` \"spec.png\""),
+            "{shown:?}"
+        );
+        assert!(
+            shown[1].starts_with("W004: a.mtl:4:") && shown[1].contains("\"mask.png\""),
+            "{shown:?}"
+        );
     }
 }

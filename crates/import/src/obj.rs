@@ -756,11 +756,14 @@ mod material_tests {
         assert!((asset.materials[1].roughness_factor - 0.5).abs() < 1e-6);
         assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
 
-        // A missing library: no materials, one note.
+        // A missing library: no materials, one coded loss.
         std::fs::remove_file(dir.path().join("rig.mtl")).expect("rm");
         let imported = import(&path).expect("import");
         assert!(imported.asset.materials.is_empty());
         assert_eq!(imported.asset.meshes.len(), 1);
-        assert!(matches!(imported.warnings[..], [Warning::Note { .. }]));
+        assert!(matches!(
+            imported.warnings[..],
+            [Warning::Incomplete { .. }]
+        ));
     }
 }

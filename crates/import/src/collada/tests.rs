@@ -351,7 +351,10 @@ fn every_loss_is_a_coded_warning_at_its_element() {
     );
     let w = warnings_of(&coloured);
     assert_eq!(w.len(), 1, "{w:?}");
-    assert!(w[0].contains("element <input>") && w[0].contains("vertex colours"), "{w:?}");
+    assert!(
+        w[0].contains("element <input>") && w[0].contains("vertex colours"),
+        "{w:?}"
+    );
     // A polygon with a hole keeps its outer ring.
     let holed = scene(
         &quad(
@@ -368,11 +371,17 @@ fn every_loss_is_a_coded_warning_at_its_element() {
         "<node id=\"jnode\" sid=\"J\" name=\"arm\" type=\"JOINT\"><skew>30 1 0 0 0 1 0</skew></node>",
     );
     let w = warnings_of(&skewed);
-    assert!(w.len() == 1 && w[0].contains("shear") && w[0].contains("\"arm\""), "{w:?}");
+    assert!(
+        w.len() == 1 && w[0].contains("shear") && w[0].contains("\"arm\""),
+        "{w:?}"
+    );
     // Influences on joint -1 (the bind shape).
     let on_shape = skinned("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
         .replace("<vcount>1 1 1 1</vcount>", "<vcount>2 1 1 1</vcount>")
         .replace("<v>0 0 0 0 0 0 0 0</v>", "<v>0 0 -1 0 0 0 0 0 0 0</v>");
     let w = warnings_of(&on_shape);
-    assert!(w.len() == 1 && w[0].contains("1 influences on joint -1"), "{w:?}");
+    assert!(
+        w.len() == 1 && w[0].contains("1 influences on joint -1"),
+        "{w:?}"
+    );
 }

@@ -344,6 +344,18 @@ impl<'l> Importer<'l, '_> {
                 format!("only one UV set is imported; {list} left out"),
             );
         }
+        // Display colour and opacity: what a viewer shows without a material.
+        let shown: Vec<&str> = ["primvars:displayColor", "primvars:displayOpacity"]
+            .into_iter()
+            .filter(|n| prim.prop(n).is_some())
+            .collect();
+        if !shown.is_empty() {
+            let list = shown.join(", ");
+            self.incomplete(
+                &path,
+                format!("{list} not imported: rigport's meshes have no vertex colours"),
+            );
+        }
         if let Some(pv) = &normals {
             self.check_primvar(&path, normals_name, pv, n_faces, n_points, n_corners)?;
         }

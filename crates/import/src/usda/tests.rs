@@ -738,3 +738,28 @@ def Mesh "M"
     assert_eq!(lost.len(), 1, "{:?}", imported.warnings);
     assert_eq!(lost[0].code(), "W004");
 }
+
+#[test]
+fn display_colour_left_out_is_a_coded_warning() {
+    let text = r#"#usda 1.0
+def Mesh "M"
+{
+    int[] faceVertexCounts = [3]
+    int[] faceVertexIndices = [0, 1, 2]
+    point3f[] points = [(1, 1, 0), (0, 0, 0), (0, 1, 0)]
+    color3f[] primvars:displayColor = [(1, 0, 0)]
+}
+"#;
+    let imported = ok(text, "red.usda");
+    let shown: Vec<String> = imported
+        .warnings
+        .iter()
+        .map(|w| format!("{}: {w}", w.code()))
+        .collect();
+    assert_eq!(shown.len(), 1, "{shown:?}");
+    assert!(
+        shown[0].starts_with("W004")
+            && shown[0].contains("</M>: primvars:displayColor not imported"),
+        "{shown:?}"
+    );
+}
