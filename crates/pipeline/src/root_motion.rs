@@ -1,6 +1,6 @@
 //! Root motion for the commands that write clips (`convert`, `retarget`, `retime`): the
 //! hips found by the body's structure, then `rigport-anim`'s
-//! [`root_motion`](rigport_anim::root_motion::root_motion) job on every clip, and its
+//! [`root_motion`] job on every clip, and its
 //! travel as report lines and JSON.
 //!
 //! The options are the job's own ([`RootMotionOptions`]); [`RootMotion::Keep`] (the

@@ -67,7 +67,7 @@ pub struct Travel {
     pub turn_deg: f32,
 }
 
-/// What [`root_motion`] did.
+/// What [`root_motion`](super::root_motion) did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RootMotionReport {
     /// One per clip, in clip order (empty for [`RootMotion::Keep`]).
