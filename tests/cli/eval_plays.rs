@@ -98,40 +98,6 @@ fn eval_plays_time_sampled_points_as_usdskel_and_three_do() {
     assert!(dev <= 1e-6, "rigport eval and three.js differ by {dev:e}");
 }
 
-/// The demo's `.usda` (three clips in variants) and its skirt converted to `.usda` (61
-/// blend shapes driven by a SkelAnimation): `rigport eval` equals UsdSkel at every frame.
-#[test]
-fn eval_plays_the_demo_usd_and_its_blend_shapes_as_usdskel_does() {
-    let Some(py) = python() else {
-        return;
-    };
-    let dir = common::scratch();
-    let demo = dir.path().join("demo");
-    rigport_ok(&["demo", "-q", "--no-corpus", "-o", demo.to_str().unwrap()]);
-    let skirt = dir.path().join("skirt.usda");
-    rigport_ok(&[
-        "convert",
-        "-q",
-        demo.join("skirt.glb").to_str().unwrap(),
-        "-o",
-        skirt.to_str().unwrap(),
-    ]);
-    for (file, clip, variant) in [
-        (demo.join("demo.usda"), "wave", Some("wave")),
-        (demo.join("demo.usda"), "twist", Some("twist")),
-        (skirt.clone(), "wave", None),
-    ] {
-        let (times, ours) = eval(&file, clip, "10", dir.path());
-        let usd = usdskel_points(&py, &file, &times, variant);
-        let dev = deviation(&usd, &ours.numbers);
-        eprintln!(
-            "{} {clip}: rigport eval vs UsdSkel: {dev:.2e} of the diagonal",
-            file.display()
-        );
-        assert!(dev <= 1e-6, "{}: {dev:e}", file.display());
-    }
-}
-
 /// A cloth bake (the corpus arm with its cloth grid): `rigport eval` of the `.usda` (the
 /// garment as time-sampled points) equals UsdSkel, and of the `.glb` (morph targets)
 /// equals three.js, at every frame.
@@ -169,4 +135,161 @@ fn eval_plays_cloth_bakes_as_usdskel_and_three_do() {
     let dev = deviation(&three.numbers, &in_three_order(&glb, &report, &from_glb));
     eprintln!("cloth .glb: rigport eval vs three.js: {dev:.2e} of the diagonal");
     assert!(dev <= 1e-6, "rigport eval and three.js differ by {dev:e}");
+}
+
+/// The clip names of `file`, in its order (`rigport inspect --json`).
+fn clips_of(file: &Path) -> Vec<String> {
+    let out = crate::common::rigport(&["inspect", "--json", file.to_str().unwrap()]);
+    assert!(out.status.success(), "inspect {}", file.display());
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("inspect JSON");
+    json[0]["clips"]
+        .as_array()
+        .expect("clips")
+        .iter()
+        .map(|c| c["name"].as_str().expect("a clip name").to_string())
+        .collect()
+}
+
+/// Every clip of `file` at 30 fps: `rigport eval` equals three.js (`.glb`) or UsdSkel
+/// (`.usda`, each clip's variant when there are several), to 1e-6 of the diagonal.
+/// Returns the files' worst deviation.
+fn plays_as_viewers_do(file: &Path, dir: &Path) -> f64 {
+    let clips = clips_of(file);
+    assert!(!clips.is_empty(), "{}: no clip to play", file.display());
+    let mut worst = 0.0f64;
+    for clip in &clips {
+        let (times, ours) = eval(file, clip, "30", dir);
+        assert!(ours.shape[1] > 0, "{}: no vertex to play", file.display());
+        let dev = if file.extension().is_some_and(|e| e == "usda") {
+            let Some(py) = python() else {
+                return 0.0;
+            };
+            let variant = (clips.len() > 1).then_some(clip.as_str());
+            deviation(&usdskel_points(&py, file, &times, variant), &ours.numbers)
+        } else {
+            let secs: Vec<String> = times.iter().map(|t| format!("{t}")).collect();
+            let Some((report, three)) =
+                three_eval(file, &["--clip", clip, "--times", &secs.join(",")])
+            else {
+                return 0.0;
+            };
+            deviation(&three.numbers, &in_three_order(file, &report, &ours))
+        };
+        eprintln!("{} {clip:?}: {dev:.2e} of the diagonal", file.display());
+        assert!(dev <= 1e-6, "{} {clip:?}: {dev:e}", file.display());
+        worst = worst.max(dev);
+    }
+    worst
+}
+
+/// Every file the demo writes (its character with three clips as `.glb` and `.usda` clip
+/// variants, the DQS twist baked into corrective morph targets, the skirt's cloth bake as
+/// morph targets) and the skirt converted to `.usda` (61 blend shapes driven by a
+/// SkelAnimation) play in `rigport eval` as in three.js and UsdSkel.
+#[test]
+fn every_demo_file_plays_in_eval_as_in_the_viewers() {
+    let dir = common::scratch();
+    let demo = dir.path().join("demo");
+    rigport_ok(&["demo", "-q", "--no-corpus", "-o", demo.to_str().unwrap()]);
+    let mut files: Vec<_> = std::fs::read_dir(&demo)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "glb" || e == "usda"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 4, "{files:?}");
+    let skirt = dir.path().join("skirt.usda");
+    rigport_ok(&[
+        "convert",
+        "-q",
+        demo.join("skirt.glb").to_str().unwrap(),
+        "-o",
+        skirt.to_str().unwrap(),
+    ]);
+    files.push(skirt);
+    for file in &files {
+        plays_as_viewers_do(file, dir.path());
+    }
+}
+
+/// One output of each kind the commands write from the project's fixtures, as `.glb` and
+/// `.usda`: skeleton-only motion (ASF/AMC, BVH: a generated bone mesh), morph targets
+/// (glTF; two primitives of one size), USD rigid bindings, COLLADA skin over morph, a DQS
+/// bake and a retimed clip: `rigport eval` plays each as three.js and UsdSkel do (clip
+/// variants: the demo's `.usda`).
+#[test]
+fn every_kind_of_output_plays_in_eval_as_in_the_viewers() {
+    let dir = common::scratch();
+    let fixture = |p: &str| repo().join(p).to_str().unwrap().to_string();
+    let runs: Vec<(&str, Vec<String>)> = vec![
+        (
+            "amc",
+            vec![
+                "convert".into(),
+                fixture("fixtures/asf_amc/translation.asf"),
+                fixture("fixtures/asf_amc/translation.amc"),
+            ],
+        ),
+        (
+            "bvh",
+            vec!["convert".into(), fixture("fixtures/bvh/mixed_orders.bvh")],
+        ),
+        (
+            "morph",
+            vec!["convert".into(), fixture("fixtures/gltf/morph_sparse.gltf")],
+        ),
+        (
+            "rigid",
+            vec!["convert".into(), fixture("fixtures/usda/rigid_subset.usda")],
+        ),
+        (
+            "collada",
+            vec![
+                "convert".into(),
+                fixture("fixtures/collada/skinned_quad.dae"),
+            ],
+        ),
+        // DQS: baked into morph targets for glTF, declared (`dualQuaternion`) for USD.
+        (
+            "dqs",
+            vec![
+                "bake".into(),
+                fixture("fixtures/usda/skinned_arm.usda"),
+                "--skinning".into(),
+                "dqs".into(),
+            ],
+        ),
+        (
+            "dqs_declared",
+            vec![
+                "convert".into(),
+                fixture("fixtures/usda/skinned_arm.usda"),
+                "--skinning".into(),
+                "dqs".into(),
+            ],
+        ),
+        (
+            "retimed",
+            vec![
+                "retime".into(),
+                fixture("fixtures/usda/skinned_arm.usda"),
+                "--speed".into(),
+                "0.5".into(),
+            ],
+        ),
+    ];
+    for (name, args) in &runs {
+        let exts: &[&str] = match *name {
+            "dqs" => &["glb"],
+            "dqs_declared" => &["usda"],
+            _ => &["glb", "usda"],
+        };
+        for ext in exts {
+            let out = dir.path().join(format!("{name}.{ext}"));
+            let mut all: Vec<&str> = args.iter().map(String::as_str).collect();
+            all.extend(["-q", "-o", out.to_str().unwrap()]);
+            rigport_ok(&all);
+            plays_as_viewers_do(&out, dir.path());
+        }
+    }
 }
