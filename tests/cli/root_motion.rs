@@ -95,13 +95,15 @@ fn in_place_holds_the_hips_over_one_point_and_keeps_their_height() {
         let h = node(&kept, hips);
         let [a, b, c] = leg.map(|n| node(&kept, n));
         let leg_length = fk[0][a].distance(fk[0][b]) + fk[0][b].distance(fk[0][c]);
-        for (window, bound) in [("0", 0.01), ("1", 0.10)] {
+        // By default the hips stay within 1% of the leg length of one point; a 1 s window
+        // keeps their sway about the smoothed path (2-5% on these walks).
+        for (window, bound) in [("default", 0.01), ("1", 0.10)] {
             let out = dir.path().join(format!("in_place_{window}.glb"));
-            let log = convert(
-                &inputs,
-                &out,
-                &["--root-motion", "in-place", "--root-window", window],
-            );
+            let mut args = vec!["--root-motion", "in-place"];
+            if window != "default" {
+                args.extend(["--root-window", window]);
+            }
+            let log = convert(&inputs, &out, &args);
             assert!(log.contains("root motion in place: hips"), "{label}: {log}");
             assert_valid(&out);
             let fo = frames(&gltf_read::read(&out));

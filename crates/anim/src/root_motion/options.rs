@@ -7,8 +7,10 @@ use rigport_model::{JointIndex, SkeletonProblem};
 /// the skeleton has one of that name).
 pub const ROOT_NAME: &str = "root";
 
-/// The default smoothing window (seconds): about one gait cycle of a walk (two steps).
-pub const DEFAULT_WINDOW_S: f32 = 1.0;
+/// The default smoothing window (seconds): 0, the hips' own ground position, so an
+/// in-place clip holds them over one point (a walk's hips sway 2-5% of the leg length about
+/// any smoothed path; a window of about one gait cycle, 1 s, keeps that sway).
+pub const DEFAULT_WINDOW_S: f32 = 0.0;
 
 /// What happens to the hips' travel over the ground.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

@@ -172,6 +172,20 @@ fn keep_changes_nothing() {
 
 #[test]
 fn in_place_keeps_the_sway_and_the_height_and_removes_the_travel() {
+    // By default the hips are held over the origin exactly.
+    let mut asset = walker(false, 0.0);
+    root_motion(
+        &mut asset,
+        JointIndex(0),
+        Vec3::Y,
+        &options(RootMotion::InPlace, false),
+    )
+    .expect("in place");
+    for m in model_frames(&asset) {
+        let p = m[0].w_axis;
+        assert!(Vec3::new(p.x, 0.0, p.z).length() < 1e-5, "{p}");
+    }
+    // A 1 s window keeps the sway about the smoothed path.
     for armature in [false, true] {
         let mut asset = walker(armature, 0.0);
         let hips = JointIndex(u32::from(armature));
@@ -180,7 +194,10 @@ fn in_place_keeps_the_sway_and_the_height_and_removes_the_travel() {
             &mut asset,
             hips,
             Vec3::Y,
-            &options(RootMotion::InPlace, false),
+            &RootMotionOptions {
+                window_s: 1.0,
+                ..options(RootMotion::InPlace, false)
+            },
         )
         .expect("in place");
         let travel = &report.travel[0];
