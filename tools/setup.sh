@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Install the external tools rigport's tests shell out to, into folders of this
 # repo that git ignores:
-#   tools/node_modules  Khronos glTF-Validator (npm gltf-validator) and three.js
-#                       (npm three, for tools/three_eval.mjs), pinned in
+#   tools/node_modules  Khronos glTF-Validator (npm gltf-validator), three.js
+#                       (npm three, for tools/three_eval.mjs and three_source_eval.mjs)
+#                       and @xmldom/xmldom (ColladaLoader's DOMParser in Node), pinned in
 #                       tools/package.json + tools/package-lock.json, `npm ci`
 #   tools/.venv         Python >= 3.11 venv with usd-core + numpy, pinned in
 #                       tools/requirements.txt
@@ -104,7 +105,8 @@ fi
 # ------------------------------------------------------------ glTF-Validator
 npm_hash="$(hash_of "$TOOLS_DIR/package.json" "$TOOLS_DIR/package-lock.json" "node-major=$node_major")"
 if [[ "$force" != 1 && -f "$NPM_STAMP" && "$(cat "$NPM_STAMP")" == "$npm_hash" \
-      && -f "$NODE_MODULES/gltf-validator/package.json" && -f "$NODE_MODULES/three/package.json" ]]; then
+      && -f "$NODE_MODULES/gltf-validator/package.json" && -f "$NODE_MODULES/three/package.json" \
+      && -f "$NODE_MODULES/@xmldom/xmldom/package.json" ]]; then
   say "glTF-Validator + three.js: up to date in tools/node_modules (stamp matches package-lock.json)"
 else
   say "glTF-Validator + three.js: npm ci in tools/ with npm $(npm --version 2>/dev/null) (exact versions from tools/package-lock.json)"

@@ -8,7 +8,7 @@
 // matrix.
 //
 //   node tools/three_eval.mjs FILE.(glb|gltf) [--clip NAME | --clip-index I]
-//        [--times T0,T1,... | --fps F] [--npy OUT.npy]
+//        [--times T0,T1,... | --fps F] [--npy OUT.npy] [--rest-npy REST.npy]
 //
 // Without --clip/--clip-index no clip plays (the scene as loaded: rest pose and
 // default morph weights). --times takes seconds; --fps F samples the clip from 0
@@ -24,7 +24,8 @@
 //    "positions": [[x,y,z, ...] per time]}      (omitted with --npy)
 // meshes are in scene traversal order; "offset" is the mesh's first vertex in
 // the concatenated vertex list. With --npy OUT the positions go to OUT as a
-// little-endian float32 array of shape (times, total vertices, 3).
+// little-endian float32 array of shape (times, total vertices, 3). --rest-npy REST writes
+// the scene as loaded, before any clip plays (shape (1, total vertices, 3)).
 //
 // Textures are not decoded (Node has no image decoder): a loader plugin stands
 // in for each texture and records which image and MIME type the material's map
@@ -40,8 +41,10 @@ import process from 'node:process';
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 
+import { npy } from './npy.mjs';
+
 const USAGE = `usage: node tools/three_eval.mjs FILE.(glb|gltf) [--clip NAME | --clip-index I]
-       [--times T0,T1,... | --fps F] [--npy OUT.npy]`;
+       [--times T0,T1,... | --fps F] [--npy OUT.npy] [--rest-npy REST.npy]`;
 
 function usage(msg) {
   process.stderr.write(`three_eval: ${msg}\n${USAGE}\n`);
@@ -49,7 +52,7 @@ function usage(msg) {
 }
 
 function parseArgs(argv) {
-  const opts = { file: null, clip: null, clipIndex: null, times: null, fps: null, npy: null };
+  const opts = { file: null, clip: null, clipIndex: null, times: null, fps: null, npy: null, restNpy: null };
   for (let i = 0; i < argv.length; i++) {
     const a = argv[i];
     const value = () => {
@@ -61,6 +64,7 @@ function parseArgs(argv) {
     else if (a === '--times') opts.times = value().split(',').map(Number);
     else if (a === '--fps') opts.fps = Number(value());
     else if (a === '--npy') opts.npy = value();
+    else if (a === '--rest-npy') opts.restNpy = value();
     else if (a === '-h' || a === '--help') {
       process.stdout.write(`${USAGE}\n`);
       process.exit(0);
@@ -189,21 +193,31 @@ async function main() {
     action.play();
   }
 
-  const out = new Float32Array(times.length * offset * 3);
   const v = new THREE.Vector3();
-  times.forEach((t, f) => {
-    if (clip) mixer.setTime(t);
-    scene.updateMatrixWorld(true);
+  // Every mesh's world-space vertices at the current pose into `out` from float `base`.
+  const positionsInto = (out, base) => {
     for (const [k, mesh] of meshes.entries()) {
-      const base = (f * offset + info[k].offset) * 3;
+      const at = base + info[k].offset * 3;
       for (let i = 0; i < info[k].vertex_count; i++) {
         mesh.getVertexPosition(i, v);
         v.applyMatrix4(mesh.matrixWorld);
-        out[base + 3 * i] = v.x;
-        out[base + 3 * i + 1] = v.y;
-        out[base + 3 * i + 2] = v.z;
+        out[at + 3 * i] = v.x;
+        out[at + 3 * i + 1] = v.y;
+        out[at + 3 * i + 2] = v.z;
       }
     }
+  };
+  if (opts.restNpy) {
+    scene.updateMatrixWorld(true);
+    const rest = new Float32Array(offset * 3);
+    positionsInto(rest, 0);
+    await writeFile(opts.restNpy, npy(rest, [1, offset, 3]));
+  }
+  const out = new Float32Array(times.length * offset * 3);
+  times.forEach((t, f) => {
+    if (clip) mixer.setTime(t);
+    scene.updateMatrixWorld(true);
+    positionsInto(out, f * offset * 3);
   });
 
   const result = {
@@ -219,20 +233,6 @@ async function main() {
     result.positions = times.map((_, f) => Array.from(out.subarray(f * offset * 3, (f + 1) * offset * 3)));
   }
   process.stdout.write(`${JSON.stringify(result)}\n`);
-}
-
-// A NumPy .npy (version 1.0) file of little-endian float32.
-function npy(values, shape) {
-  let header = `{'descr': '<f4', 'fortran_order': False, 'shape': (${shape.join(', ')}${shape.length === 1 ? ',' : ''}), }`;
-  const unpadded = 10 + header.length + 1;
-  header += ' '.repeat((64 - (unpadded % 64)) % 64) + '\n';
-  const head = Buffer.alloc(10);
-  head.write('\x93NUMPY', 0, 'latin1');
-  head[6] = 1;
-  head[7] = 0;
-  head.writeUInt16LE(header.length, 8);
-  const body = Buffer.from(values.buffer, values.byteOffset, values.byteLength);
-  return Buffer.concat([head, Buffer.from(header, 'latin1'), body]);
 }
 
 main().catch((error) => {
