@@ -4,7 +4,8 @@
 //!   compressed by PCA), so any glTF viewer shows DQS;
 //! - [`cloth`]: garments simulated on a skinned body (position-based dynamics, capsule
 //!   colliders) and baked into morph targets;
-//! - [`refit`]: influences refit to at most K per vertex over a pose set.
+//! - [`refit`]: influences refit to at most K per vertex over a pose set;
+//! - [`weights`]: automatic skin weights by bone heat (Pinocchio's attachment step).
 //!
 //! Like the evaluator, these jobs know no file format.
 #![warn(missing_docs)]
@@ -12,3 +13,4 @@
 pub mod bake;
 pub mod cloth;
 pub mod refit;
+pub mod weights;
