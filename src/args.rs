@@ -15,10 +15,9 @@ use rigport_pipeline::write::{Output, WriteOptions};
 /// Where a rig comes from.
 #[derive(Clone, Debug, Args)]
 pub struct InputArgs {
-    /// Input files or folders: a .glb/.gltf; an .obj with Pinocchio skeleton and attachment
-    /// .out files (told apart by name or content); a USC CSCI 520 skin.config; or a folder
-    /// holding one of these sets. Required unless --mesh, --skeleton or --attachment
-    /// names the files.
+    /// Input files or folders: a .glb/.gltf; an .obj with Pinocchio skeleton and attachment .out
+    /// files (told apart by name or content); a USC CSCI 520 skin.config; or a folder holding
+    /// one of these sets. Required unless --mesh, --skeleton or --attachment names the files.
     #[arg(required_unless_present_any = ["mesh", "skeleton", "attachment"])]
     pub inputs: Vec<PathBuf>,
     /// The OBJ mesh of a Pinocchio rig.
@@ -37,10 +36,12 @@ pub struct InputArgs {
     /// Frame rate of AMC motions, which do not state one (default: 120, CMU's rate).
     #[arg(long, value_name = "FPS", value_parser = frame_rate)]
     pub amc_fps: Option<f32>,
-    /// Do not generate a bone mesh for skeleton-only inputs (ASF/AMC, BVH). By default each
-    /// bone gets a small skinned shape so viewers show the motion.
+    /// No bone mesh for skeleton-only inputs (ASF/AMC, BVH; by default each bone gets one).
     #[arg(long)]
     pub no_bone_mesh: bool,
+    /// Skin weights for a Pinocchio mesh and skeleton given without attachment: auto (bone heat).
+    #[arg(long, value_name = "auto", value_parser = ["auto"])]
+    pub weights: Option<String>,
     /// The unit of inputs that state none (BVH, OBJ/Pinocchio, CSCI 520): m, cm, mm, in, ft,
     /// metres per unit, or auto (centimetres for a human skeleton 100-250 units tall).
     /// Default: metres, with a warning for a skeleton too tall for them.
@@ -62,6 +63,7 @@ impl InputArgs {
                 attachment: self.attachment.clone(),
                 motions: self.motion.clone(),
                 amc_fps: self.amc_fps,
+                auto_weights: self.weights.is_some(),
             },
             bone_mesh: !self.no_bone_mesh,
             budget: crate::memory::budget(),

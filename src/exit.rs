@@ -100,9 +100,11 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
                     PinocchioFile::Attachment => "--attachment",
                 })
                 .collect();
+            let auto = (flags == ["--attachment"]).then_some(" (or --weights auto)");
             format!(
-                "a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}",
-                flags.join(", ")
+                "a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}{}",
+                flags.join(", "),
+                auto.unwrap_or_default()
             )
         }
         DetectError::NoInput => "no input given (see --help)".to_string(),

@@ -70,6 +70,14 @@ pub enum Source {
         /// `attachment.out`.
         attachment: PathBuf,
     },
+    /// A Pinocchio mesh and skeleton without an attachment, whose weights the caller
+    /// computes ([`Inputs::auto_weights`]; [`Source::import`] refuses it).
+    PinocchioUnweighted {
+        /// The OBJ.
+        mesh: PathBuf,
+        /// `skeleton.out`.
+        skeleton: PathBuf,
+    },
     /// A bare OBJ mesh (no rig).
     Obj(PathBuf),
     /// A USC CSCI 520 rig: its `skin.config`.
@@ -104,7 +112,9 @@ impl Source {
             | Source::Usda(p)
             | Source::Fbx(p)
             | Source::Collada(p) => p.display().to_string(),
-            Source::Pinocchio { mesh, .. } => mesh.display().to_string(),
+            Source::Pinocchio { mesh, .. } | Source::PinocchioUnweighted { mesh, .. } => {
+                mesh.display().to_string()
+            }
             Source::AsfAmc { asf, .. } => asf.display().to_string(),
         }
     }
@@ -135,6 +145,7 @@ impl Source {
                 skeleton,
                 attachment,
             } => vec![mesh.clone(), skeleton.clone(), attachment.clone()],
+            Source::PinocchioUnweighted { mesh, skeleton } => vec![mesh.clone(), skeleton.clone()],
             Source::AsfAmc { asf, motions, .. } => {
                 let mut files = vec![asf.clone()];
                 files.extend(motions.iter().cloned());
@@ -162,6 +173,14 @@ impl Source {
                 skeleton,
                 attachment,
             } => pinocchio::import(mesh, skeleton, attachment)?,
+            Source::PinocchioUnweighted { mesh, .. } => {
+                return Err(ImportError::new(
+                    crate::Location::file(mesh),
+                    crate::Problem::Invalid(
+                        "no attachment.out: the weights must be computed (`--weights auto`)".into(),
+                    ),
+                ))
+            }
         })
     }
 }
@@ -181,6 +200,9 @@ pub struct Inputs {
     pub motions: Vec<PathBuf>,
     /// The AMC frame rate (`--amc-fps`; default [`asf_amc::DEFAULT_FPS`]).
     pub amc_fps: Option<f32>,
+    /// A Pinocchio mesh and skeleton without an attachment are a
+    /// [`Source::PinocchioUnweighted`] (`--weights auto`), not an incomplete rig.
+    pub auto_weights: bool,
 }
 
 impl Inputs {
@@ -246,7 +268,7 @@ pub enum DetectError {
     #[error("{0}: more .out files than a Pinocchio rig has")]
     TooManyOuts(String),
     /// An incomplete Pinocchio rig: the files it lacks, in [`PinocchioFile`] order.
-    #[error("a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}", join(.0))]
+    #[error("a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}{}", join(.0), if .0 == &[PinocchioFile::Attachment] { " (or --weights auto to compute the weights)" } else { "" })]
     IncompletePinocchio(Vec<PinocchioFile>),
     /// A folder without one recognizable asset.
     #[error("{path}: expected one .obj with one skeleton and one attachment .out file (or one .glb/.gltf); found {objs} .obj, {skeletons} skeleton, {attachments} attachment, {gltfs} glTF files")]
@@ -514,6 +536,9 @@ pub fn plan(inputs: &Inputs) -> Result<Vec<Source>, DetectError> {
             skeleton,
             attachment,
         }),
+        (Some(mesh), Some(skeleton), None) if inputs.auto_weights => {
+            sources.push(Source::PinocchioUnweighted { mesh, skeleton })
+        }
         (Some(mesh), None, None) => sources.push(Source::Obj(mesh)),
         (None, None, None) => {}
         (mesh, skeleton, attachment) => {

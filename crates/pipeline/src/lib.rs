@@ -66,6 +66,7 @@ pub mod retime;
 pub mod root_motion;
 pub mod sequence;
 pub mod units;
+mod weights;
 pub mod write;
 
 pub use animate::run as animate;

@@ -137,7 +137,10 @@ pub(crate) fn load(
     budget: &MemoryBudget,
 ) -> Result<Imported, PipelineError> {
     crate::memory::check_import(plan, budget)?;
-    let mut imported = plan.import()?;
+    let mut imported = match plan {
+        Source::PinocchioUnweighted { mesh, skeleton } => crate::weights::auto_rig(mesh, skeleton)?,
+        _ => plan.import()?,
+    };
     if bone_mesh && rigport_import::bone_mesh::add_bone_mesh(&mut imported.asset) {
         imported.warnings.push(Warning::Note {
             location: plan.label(),
@@ -174,6 +177,7 @@ pub(crate) fn input_files(inputs: &Inputs) -> Vec<PathBuf> {
                 skeleton,
                 attachment,
             } => files.extend([mesh, skeleton, attachment]),
+            Source::PinocchioUnweighted { mesh, skeleton } => files.extend([mesh, skeleton]),
             Source::AsfAmc { asf, motions, .. } => {
                 files.push(asf);
                 files.extend(motions);

@@ -129,6 +129,42 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
     Ok(Imported { asset, warnings })
 }
 
+/// Imports a Pinocchio mesh and skeleton that come without an `attachment.out`: `weigh`
+/// computes the weights (one row of `J - 1` bone weights per OBJ `v`, column `k` for the
+/// bone ending at joint `k + 1`, as the file would hold them) from the mesh (its
+/// [`Mesh::source_vertex`] maps its vertices to rows) and the skeleton, with any warnings;
+/// the rig is then built as [`import`] builds it.
+///
+/// # Errors
+/// As [`import`] for the mesh and skeleton; as `weigh`.
+pub fn import_weighing(
+    mesh: &Path,
+    skeleton: &Path,
+    weigh: impl FnOnce(&Mesh, &PinocchioSkeleton) -> Result<(Vec<Vec<f32>>, Vec<Warning>), ImportError>,
+) -> Result<Imported, ImportError> {
+    let mesh_bytes = read_file(mesh)?;
+    let (mesh_data, mut warnings, materials_used) = obj::parse_with_materials(&mesh_bytes, mesh)?;
+    let skeleton_bytes = read_file(skeleton)?;
+    let pino = parse_skeleton(utf8(&skeleton_bytes, skeleton)?, skeleton)?;
+    let (rows, weigh_warnings) = weigh(&mesh_data, &pino)?;
+    warnings.extend(weigh_warnings);
+    let name = mesh_data.name.clone();
+    let imported = assemble_from(
+        &name,
+        &skeleton.display().to_string(),
+        mesh_data,
+        &pino,
+        None,
+        rows.iter().map(Vec::as_slice),
+        None,
+        None,
+    )?;
+    warnings.extend(imported.warnings);
+    let mut asset = imported.asset;
+    obj::apply_materials(&mut asset, mesh, &materials_used, false, &mut warnings);
+    Ok(Imported { asset, warnings })
+}
+
 /// Builds the asset from already-parsed or generated Pinocchio data; [`import`] and the
 /// built-in demo rig use it.
 ///

@@ -1,0 +1,96 @@
+//! Automatic skin weights for a Pinocchio mesh and skeleton that come without an
+//! `attachment.out` (`--weights auto`): bone heat (`rigport_deform::weights`) on the mesh,
+//! one bone per Pinocchio joint after the root (from its parent's position to its own), the
+//! rig then built as the attachment would have built it.
+
+use std::path::Path;
+
+use rigport_deform::weights::{Bone, HeatOptions, Repairs, bone_heat};
+use rigport_import::pinocchio::{PinocchioSkeleton, import_weighing};
+use rigport_import::{ImportError, Imported, Location, Problem};
+use rigport_model::{Mesh, Warning};
+
+use crate::PipelineError;
+
+/// The rig of `mesh` and `skeleton` with weights by bone heat; the repairs, if any, as a
+/// W003 warning, and a note saying the weights were computed.
+///
+/// # Errors
+/// As the Pinocchio importer; a mesh without faces or a skeleton without bones.
+pub(crate) fn auto_rig(mesh: &Path, skeleton: &Path) -> Result<Imported, PipelineError> {
+    Ok(import_weighing(mesh, skeleton, |m, s| weigh(m, s, mesh))?)
+}
+
+/// One row of bone weights per OBJ vertex (column `k`: the bone ending at joint `k + 1`).
+fn weigh(
+    mesh: &Mesh,
+    skeleton: &PinocchioSkeleton,
+    path: &Path,
+) -> Result<(Vec<Vec<f32>>, Vec<Warning>), ImportError> {
+    let bones: Vec<Bone> = (1..skeleton.positions.len())
+        .map(|k| Bone {
+            head: skeleton.parents[k]
+                .map_or(skeleton.positions[k], |p| skeleton.positions[p as usize]),
+            tail: skeleton.positions[k],
+        })
+        .collect();
+    let heat = bone_heat(
+        &mesh.positions,
+        &mesh.triangles,
+        &bones,
+        &HeatOptions::default(),
+    )
+    .map_err(|e| ImportError::new(Location::file(path), Problem::Invalid(e.to_string())))?;
+    let mut rows = vec![vec![0.0f32; bones.len()]; mesh.source_vertex_count()];
+    for (v, row) in heat.rows.iter().enumerate() {
+        let source = mesh.source_vertex.get(v).map_or(v, |&s| s as usize);
+        if let Some(out) = rows.get_mut(source) {
+            out.iter_mut().for_each(|w| *w = 0.0);
+            for &(b, w) in row {
+                out[b as usize] = w;
+            }
+        }
+    }
+    // Vertices that see no bone are part of the method (Pinocchio's too): the note counts
+    // them; the repairs of a broken mesh are a warning.
+    let mut warnings = vec![Warning::Note {
+        location: path.display().to_string(),
+        message: format!(
+            "no attachment: skin weights computed by bone heat for {} vertices and {} bones \
+             ({} vertices see no bone and take their neighbours' weights)",
+            mesh.positions.len(),
+            bones.len(),
+            heat.repairs.unseen
+        ),
+    }];
+    let repairs = Repairs {
+        unseen: 0,
+        ..heat.repairs
+    };
+    if repairs.any() {
+        warnings.push(Warning::Repaired {
+            location: path.display().to_string(),
+            message: repairs_text(&repairs),
+        });
+    }
+    Ok((rows, warnings))
+}
+
+/// What bone heat repaired, as one sentence.
+fn repairs_text(r: &Repairs) -> String {
+    let parts: Vec<String> = [
+        (r.welded, "coincident vertices welded"),
+        (r.degenerate_faces, "faces without area skipped"),
+        (r.non_manifold_edges, "non-manifold edges"),
+        (
+            r.by_distance,
+            "vertices no heat reaches weighted by distance",
+        ),
+        (r.negative_edges, "negative cotangent weights clamped"),
+    ]
+    .iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} {what}"))
+    .collect();
+    format!("automatic weights: {}", parts.join(", "))
+}
