@@ -177,7 +177,7 @@ impl Source {
                 return Err(ImportError::new(
                     crate::Location::file(mesh),
                     crate::Problem::Invalid(
-                        "no attachment.out: the weights must be computed (`--weights auto`)".into(),
+                        "no attachment.out: the weights must be computed (automatic weights)".into(),
                     ),
                 ))
             }
@@ -268,7 +268,7 @@ pub enum DetectError {
     #[error("{0}: more .out files than a Pinocchio rig has")]
     TooManyOuts(String),
     /// An incomplete Pinocchio rig: the files it lacks, in [`PinocchioFile`] order.
-    #[error("a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}{}", join(.0), if .0 == &[PinocchioFile::Attachment] { " (or --weights auto to compute the weights)" } else { "" })]
+    #[error("a Pinocchio rig needs a mesh, a skeleton and an attachment; missing {}", join(.0))]
     IncompletePinocchio(Vec<PinocchioFile>),
     /// A folder without one recognizable asset.
     #[error("{path}: expected one .obj with one skeleton and one attachment .out file (or one .glb/.gltf); found {objs} .obj, {skeletons} skeleton, {attachments} attachment, {gltfs} glTF files")]

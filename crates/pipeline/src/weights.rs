@@ -30,7 +30,7 @@ fn weigh(
     let bones: Vec<Bone> = (1..skeleton.positions.len())
         .map(|k| Bone {
             head: skeleton.parents[k]
-                .map_or(skeleton.positions[k], |p| skeleton.positions[p as usize]),
+                .map_or(skeleton.positions[k], |p| skeleton.positions[p]),
             tail: skeleton.positions[k],
         })
         .collect();
