@@ -167,9 +167,10 @@ fn tracks(glb: &Path) -> BTreeMap<(String, String, String), (Vec<f32>, Vec<f32>)
     out
 }
 
-/// Every CMU 07 clip of the corpus onto `07-walk.asf` (given as the rig's folder of
-/// subjects): taken directly, with tracks equal to `convert` of each ASF/AMC pair; the
-/// other subjects' clips in that folder are retargeted.
+/// Every CMU 07 clip of the corpus onto `07-walk.asf` (the AMC files given alone go with
+/// the `.asf` rig): taken directly, with tracks equal to `convert` of each ASF/AMC pair.
+/// The corpus' folder of CMU subjects as one motion: 07 taken, the other subjects' clips
+/// retargeted.
 #[test]
 fn cmu_07_clips_onto_their_asf_are_taken_as_convert_writes_them() {
     let (Some(asf), Some(folder)) = (corpus(&format!("{CMU}/07-walk.asf")), corpus(CMU)) else {
@@ -254,7 +255,15 @@ fn every_motion_kind_in_one_run() {
     let glb = dir.path().join("mixed.glb");
     let mut args = vec![s(&rig)];
     args.extend(files.iter().map(|p| s(p)));
-    args.extend(["--plant-feet", "--fps", "30", "-o", s(&glb)]);
+    args.extend([
+        "--plant-feet",
+        "--fps",
+        "30",
+        "--amc-fps",
+        "120",
+        "-o",
+        s(&glb),
+    ]);
     let report = combine_json(&args);
     let clips = report["clips"].as_array().unwrap();
     for c in clips {

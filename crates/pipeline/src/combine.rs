@@ -27,6 +27,7 @@ use rigport_anim::retime::{Retime, retime};
 use rigport_anim::root_motion::RootMotionOptions;
 use rigport_ik::footlock::{Leg, footlock};
 use rigport_ik::retarget::{RetargetOptions, target_legs};
+use rigport_import::detect::DetectError;
 use rigport_model::glam::Vec3;
 use rigport_model::{Asset, Clip, Warning};
 use serde_json::json;
@@ -163,8 +164,19 @@ pub fn run(
     request: &CombineRequest,
     progress: &dyn Progress,
 ) -> Result<Report, PipelineError> {
+    // The AMC frame rate is for the motions' AMC files when the rig is no `.asf`.
+    let fps_without_asf = matches!(
+        crate::load::single_plan(&rig.files),
+        Err(PipelineError::Detect(DetectError::FpsWithoutAsf))
+    );
+    let amc_fps = rig.files.amc_fps;
+    let mut rig = rig.clone();
+    if fps_without_asf {
+        rig.files.amc_fps = None;
+    }
+    let rig = &rig;
     let rig_plan = crate::load::single_plan(&rig.files)?;
-    let motions = motions::expand(&request.motions, &rig_plan, rig.files.amc_fps)?;
+    let motions = motions::expand(&request.motions, &rig_plan, amc_fps)?;
     let mut read: Vec<PathBuf> = motions.iter().flat_map(|m| m.source.files()).collect();
     read.extend(request.map.iter().cloned());
     let read: Vec<&std::path::Path> = read.iter().map(PathBuf::as_path).collect();
