@@ -7,6 +7,7 @@ use crate::commands::animate::AnimateArgs;
 use crate::commands::bake::BakeArgs;
 use crate::commands::batch::{BatchArgs, BatchReportArgs};
 use crate::commands::cloth::ClothArgs;
+use crate::commands::combine::CombineArgs;
 use crate::commands::convert::ConvertArgs;
 use crate::commands::demo::DemoArgs;
 use crate::commands::eval::EvalArgs;
@@ -73,6 +74,10 @@ pub enum Command {
     /// each rest pose, hips scaled.
     #[command(after_help = include_str!("../docs/help/retarget.txt"))]
     Retarget(RetargetArgs),
+    /// Put many motions onto one rig as named clips (taken or retargeted), in one file.
+    #[command(override_usage = "rigport combine [OPTIONS] RIG MOTION... -o OUT")]
+    #[command(after_help = include_str!("../docs/help/combine.txt"))]
+    Combine(CombineArgs),
     /// Play clips one after another with crossfades, optionally as a seamless loop.
     Sequence(SequenceArgs),
     /// Solve IK handles moving over time, one pose per frame, baked into a clip.

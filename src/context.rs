@@ -10,6 +10,9 @@ use rigport_model::Warning;
 use rigport_pipeline::progress::{Denied, Progress};
 use rigport_pipeline::{PipelineError, Report};
 
+/// Where a `batch` item's warnings are collected instead of printed.
+pub type Captured = Arc<Mutex<Vec<String>>>;
+
 /// Settings every command shares.
 pub struct Context {
     /// Print nothing but errors and warnings.
@@ -17,18 +20,14 @@ pub struct Context {
     /// Fail on warnings.
     pub deny_warnings: bool,
     /// When set (`batch` items), warnings are collected here instead of printed.
-    pub captured: Option<Arc<Mutex<Vec<String>>>>,
+    pub captured: Option<Captured>,
     /// The spinner or bar of the step under way.
     bar: Mutex<Option<indicatif::ProgressBar>>,
 }
 
 impl Context {
     /// A context; `captured` collects the warnings instead of printing them.
-    pub fn new(
-        quiet: bool,
-        deny_warnings: bool,
-        captured: Option<Arc<Mutex<Vec<String>>>>,
-    ) -> Self {
+    pub fn new(quiet: bool, deny_warnings: bool, captured: Option<Captured>) -> Self {
         Self {
             quiet,
             deny_warnings,

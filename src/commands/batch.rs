@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use anyhow::{anyhow, Result};
 use rigport_batch::{manifest, report, FailureKind, Item, ItemError, Record, Shard, Summary};
 
-use crate::context::Context;
+use crate::context::{Captured, Context};
 use crate::exit::{self, OutputError, UsageError};
 
 /// `rigport batch`.
@@ -66,14 +66,14 @@ pub enum ItemRun {
 /// quiet context that collects its warnings into `captured`; with `deny_warnings` (or the
 /// item's own flag) a warning fails it. Passed in by the dispatcher (`commands::run_item`):
 /// command modules do not import each other, the dispatcher or the top-level parser.
-pub type RunItem = fn(Vec<OsString>, bool, Arc<Mutex<Vec<String>>>) -> ItemRun;
+pub type RunItem = fn(Vec<OsString>, bool, Captured) -> ItemRun;
 
 /// The commands an item may run: those that read inputs and write one output file. Files
-/// an item reads besides its inputs (retarget's `--onto` rig and `--map`, cloth's garment,
+/// an item reads besides its inputs (retarget's `--onto` rig and `--map`, combine's motions, cloth's garment,
 /// ik's handles, animate's keys) go in its options.
-const COMMANDS: [&str; 11] = [
-    "convert", "animate", "retime", "sequence", "ik", "footlock", "retarget", "cloth", "bake",
-    "render", "eval",
+const COMMANDS: [&str; 12] = [
+    "convert", "animate", "retime", "sequence", "ik", "footlock", "retarget", "combine", "cloth",
+    "bake", "render", "eval",
 ];
 
 /// Runs `batch`.
@@ -168,10 +168,7 @@ fn execute(
     let [output] = outputs else {
         return Err(input(format!("{} writes one output", item.command)));
     };
-    let mut argv: Vec<OsString> = vec!["rigport".into(), item.command.clone().into()];
-    argv.extend(item.inputs.iter().map(|p| p.clone().into_os_string()));
-    argv.extend(item.options.iter().map(OsString::from));
-    argv.extend(["-o".into(), output.clone().into_os_string()]);
+    let argv = item.command_line("rigport", output);
     let captured = Arc::new(Mutex::new(Vec::new()));
     let result = match run_item(argv, deny_warnings, Arc::clone(&captured)) {
         ItemRun::Unparsed(text) => {

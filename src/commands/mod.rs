@@ -6,6 +6,7 @@ pub mod animate;
 pub mod bake;
 pub mod batch;
 pub mod cloth;
+pub mod combine;
 pub mod convert;
 pub mod demo;
 pub mod eval;
@@ -18,13 +19,12 @@ pub mod retime;
 pub mod sequence;
 
 use std::ffi::OsString;
-use std::sync::{Arc, Mutex};
 
 use anyhow::Result;
 use clap::Parser as _;
 
 use crate::cli::{Cli, Command};
-use crate::context::Context;
+use crate::context::{Captured, Context};
 use crate::exit::UsageError;
 
 /// Runs the parsed command line.
@@ -38,11 +38,7 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 /// Parses and runs one `batch` item's command line (see [`batch::RunItem`]).
-fn run_item(
-    argv: Vec<OsString>,
-    deny_warnings: bool,
-    captured: Arc<Mutex<Vec<String>>>,
-) -> batch::ItemRun {
+fn run_item(argv: Vec<OsString>, deny_warnings: bool, captured: Captured) -> batch::ItemRun {
     let cli = match Cli::try_parse_from(argv) {
         Ok(cli) => cli,
         Err(e) => return batch::ItemRun::Unparsed(e.to_string()),
@@ -61,6 +57,7 @@ fn run_command(ctx: Context, command: Command) -> Result<()> {
         Command::Animate(args) => animate::run(&ctx, &args),
         Command::Retime(args) => retime::run(&ctx, &args),
         Command::Retarget(args) => retarget::run(&ctx, &args),
+        Command::Combine(args) => combine::run(&ctx, &args),
         Command::Sequence(args) => sequence::run(&ctx, &args),
         Command::Ik(args) => ik::run(&ctx, &args),
         Command::Footlock(args) => footlock::run(&ctx, &args),

@@ -14,6 +14,7 @@ mod batch;
 mod cloth;
 mod cloth_trust;
 mod collada;
+mod combine;
 mod common;
 mod csci520;
 mod demo;

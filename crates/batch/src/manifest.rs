@@ -40,6 +40,17 @@ pub struct Item {
     pub outputs: Vec<PathBuf>,
 }
 
+impl Item {
+    /// The item's command line: `program COMMAND INPUTS... OPTIONS... -o OUTPUT`.
+    pub fn command_line(&self, program: &str, output: &Path) -> Vec<std::ffi::OsString> {
+        let mut argv = vec![program.into(), self.command.clone().into()];
+        argv.extend(self.inputs.iter().map(|p| p.clone().into_os_string()));
+        argv.extend(self.options.iter().map(Into::into));
+        argv.extend(["-o".into(), output.as_os_str().to_os_string()]);
+        argv
+    }
+}
+
 /// Why a manifest cannot be used. Every variant names the manifest (and line).
 #[derive(Debug, thiserror::Error)]
 pub enum ManifestError {
@@ -262,15 +273,10 @@ impl Expansion {
     }
 }
 
-/// Expands a folder into one `convert` item per recognised asset, walking it in sorted
-/// order and skipping hidden entries:
-/// - each `.glb`, `.gltf`, `.bvh`, `.usda`, `.usdc`, `.usdz` and `.usd` file;
-/// - a CSCI 520 `.config` (USC CSCI 520 rig; the folder's `.obj` files are its meshes);
-/// - an `.asf` with the `.amc` files beside it (all of them when it is the folder's only
-///   `.asf`, else those of its subject number, CMU style: `07-walk.asf` takes
-///   `07_05-walk.amc`);
-/// - an `.obj`, with every `.out` file beside it (a Pinocchio rig; `rigport convert` says
-///   what is wrong when they are not one skeleton and one attachment), or alone.
+/// Expands a folder into one `convert` item per recognised asset
+/// ([`rigport_import::gather::assets_in`]: each glTF, BVH, USD, FBX, COLLADA file, CSCI 520
+/// `.config`, `.asf` with its `.amc` files, `.obj` with the `.out` files beside it; `rigport
+/// convert` says what is wrong when those are not one skeleton and one attachment).
 ///
 /// The id is the main file's path relative to the folder (`/`-separated); the output is
 /// that path with the extension replaced (`walk.bvh` -> `walk.glb`), or with the
@@ -279,9 +285,17 @@ impl Expansion {
 /// # Errors
 /// A folder that cannot be read; no asset found.
 pub fn expand_folder(root: &Path, how: &Expansion) -> Result<Vec<Item>, ManifestError> {
-    let mut found = Vec::new();
     let exclude = how.exclude.as_ref().and_then(|e| e.canonicalize().ok());
-    walk(root, exclude.as_deref(), &mut found)?;
+    let found =
+        rigport_import::gather::assets_in(root, exclude.as_deref()).map_err(|e| match e {
+            rigport_import::detect::DetectError::Io { path, source, .. } => {
+                ManifestError::Io { path, source }
+            }
+            other => ManifestError::Io {
+                path: root.display().to_string(),
+                source: std::io::Error::other(other.to_string()),
+            },
+        })?;
     let mut items = Vec::new();
     let mut taken = std::collections::BTreeSet::new();
     for (main, inputs) in found {
@@ -311,99 +325,6 @@ pub fn expand_folder(root: &Path, how: &Expansion) -> Result<Vec<Item>, Manifest
     }
     check_unique(&items, &root.display().to_string())?;
     Ok(items)
-}
-
-/// Collects `(main file, inputs)` per asset below `dir`; files are classified by
-/// [`rigport_import::detect::detect`] (extension, and content for `.out` files), and files
-/// it does not recognise are skipped.
-fn walk(
-    dir: &Path,
-    exclude: Option<&Path>,
-    found: &mut Vec<(PathBuf, Vec<PathBuf>)>,
-) -> Result<(), ManifestError> {
-    use rigport_import::detect::{detect, Kind};
-    let io = |source| ManifestError::Io {
-        path: dir.display().to_string(),
-        source,
-    };
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(io)?
-        .map(|e| e.map(|e| e.path()))
-        .collect::<Result<_, _>>()
-        .map_err(io)?;
-    entries.retain(|p| {
-        !p.file_name()
-            .is_some_and(|n| n.to_string_lossy().starts_with('.'))
-    });
-    entries.sort();
-    let mut dirs = Vec::new();
-    let mut files: Vec<(PathBuf, Kind)> = Vec::new();
-    for path in entries {
-        match detect(&path) {
-            Ok(Kind::Folder) => dirs.push(path),
-            Ok(kind) => files.push((path, kind)),
-            // Not an input rigport reads (.txt, .bin, .mtl, ...), or unreadable: skipped.
-            Err(_) => {}
-        }
-    }
-    let of = |k: &[Kind]| -> Vec<PathBuf> {
-        files
-            .iter()
-            .filter(|(_, kind)| k.contains(kind))
-            .map(|(p, _)| p.clone())
-            .collect()
-    };
-    let has_config = !of(&[Kind::Csci520]).is_empty();
-    let asfs = of(&[Kind::Asf]);
-    let amcs = of(&[Kind::Amc]);
-    let objs = of(&[Kind::Obj]);
-    let outs = of(&[
-        Kind::PinocchioSkeleton,
-        Kind::PinocchioAttachment,
-        Kind::PinocchioUnknown,
-    ]);
-    for (file, kind) in &files {
-        let mut inputs = vec![file.clone()];
-        match kind {
-            Kind::Gltf | Kind::Bvh | Kind::Usda | Kind::Fbx | Kind::Collada | Kind::Csci520 => {}
-            Kind::Asf => {
-                // CMU numbering: `07.asf` or `07-walk.asf` takes `07_05.amc`, `07_05-walk.amc`.
-                let stem = file
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().to_string())
-                    .unwrap_or_default();
-                let subject = stem.split(['-', '_']).next().unwrap_or_default();
-                let of_subject = |amc: &&PathBuf| {
-                    let name = amc
-                        .file_stem()
-                        .map(|s| s.to_string_lossy().to_string())
-                        .unwrap_or_default();
-                    name.strip_prefix(subject)
-                        .is_some_and(|rest| rest.is_empty() || rest.starts_with(['-', '_']))
-                };
-                inputs.extend(
-                    amcs.iter()
-                        .filter(|a| asfs.len() == 1 || of_subject(a))
-                        .cloned(),
-                );
-            }
-            // The meshes of a skin.config are read through it.
-            Kind::Obj if !has_config => {
-                if objs.len() == 1 {
-                    inputs.extend(outs.iter().cloned());
-                }
-            }
-            _ => continue,
-        }
-        found.push((file.clone(), inputs));
-    }
-    for sub in dirs {
-        if exclude.is_some_and(|e| sub.canonicalize().is_ok_and(|s| s == e)) {
-            continue;
-        }
-        walk(&sub, exclude, found)?;
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@ pub mod csci520;
 pub mod detect;
 mod error;
 pub mod fbx;
+pub mod gather;
 pub mod gltf;
 pub mod json;
 pub mod mtl;

@@ -5,7 +5,7 @@
 //! Every command is `rigport_pipeline::COMMAND(input, options, &dyn Progress) ->
 //! Result<Report, PipelineError>`, one module each: [`convert()`], [`inspect()`],
 //! [`eval()`], [`animate()`], [`retime()`], [`sequence()`], [`ik()`], [`footlock()`],
-//! [`retarget()`], [`bake()`], [`cloth()`], [`render()`], and [`demo()`] (no input).
+//! [`retarget()`], [`combine()`], [`bake()`], [`cloth()`], [`render()`], and [`demo()`] (no input).
 //! Each checks its output before any work, and gives [`progress::Progress::warnings`]
 //! everything lossy before writing, so a caller can refuse it ([`progress::Silent`] shows
 //! nothing and accepts all).
@@ -46,6 +46,7 @@ pub mod animate;
 mod asset_report;
 pub mod bake;
 pub mod cloth;
+pub mod combine;
 pub mod convert;
 pub mod demo;
 mod dump;
@@ -72,6 +73,7 @@ pub mod write;
 pub use animate::run as animate;
 pub use bake::run as bake;
 pub use cloth::run as cloth;
+pub use combine::run as combine;
 pub use convert::run as convert;
 pub use demo::run as demo;
 pub use eval::run as eval;

@@ -8,9 +8,9 @@ use std::path::Path;
 
 use rigport_anim::root_motion::RootMotionOptions;
 use rigport_ik::footlock::up_in_model;
-use rigport_ik::retarget::RetargetReport;
 use rigport_ik::retarget::{JointMap, Limb, RetargetInput, RetargetOptions, auto_map, retarget};
-use rigport_model::{Asset, Warning};
+use rigport_ik::retarget::{RetargetReport, Retargeted};
+use rigport_model::{Asset, Clip, Warning};
 use serde_json::{Value, json};
 
 use crate::load::Input;
@@ -149,8 +149,7 @@ pub(crate) struct Done {
 /// or by [`auto_map`].
 ///
 /// # Errors
-/// No such clip, a bad map file (with its JSON path), no joints in common, or a failed
-/// solve ([`PipelineError::Invalid`], [`PipelineError::Json`], [`PipelineError::Step`]).
+/// No such clip, or as [`clip_onto`].
 pub(crate) fn onto(
     source: &Asset,
     mut target: Asset,
@@ -166,6 +165,29 @@ pub(crate) fn onto(
             "no clip to retarget; the source has none".into(),
         ));
     };
+    let done = clip_onto(source, found, &target, map_file, options)?;
+    target.clips = vec![done.clip];
+    Ok(Done {
+        asset: target,
+        clip: found.name.clone(),
+        report: done.report,
+        warnings: done.warnings,
+    })
+}
+
+/// Puts `found` (a clip of `source`) onto `target`'s skeleton, mapped by `map_file` or by
+/// [`auto_map`]; `target` itself is left as it is (`combine` puts many clips on one rig).
+///
+/// # Errors
+/// A bad map file (with its JSON path), no joints in common, or a failed solve
+/// ([`PipelineError::Json`], [`PipelineError::Step`]).
+pub(crate) fn clip_onto(
+    source: &Asset,
+    found: &Clip,
+    target: &Asset,
+    map_file: Option<&Path>,
+    options: &RetargetOptions,
+) -> Result<Retargeted, PipelineError> {
     let (source_up, target_up) = (up_in_model(&source.frame), up_in_model(&target.frame));
     let map = match map_file {
         Some(path) => {
@@ -190,15 +212,8 @@ pub(crate) fn onto(
         target_up,
         map: &map,
     };
-    let done = retarget(&input, options)
-        .map_err(|e| PipelineError::step(format!("cannot retarget clip {:?}", found.name), e))?;
-    target.clips = vec![done.clip];
-    Ok(Done {
-        asset: target,
-        clip: found.name.clone(),
-        report: done.report,
-        warnings: done.warnings,
-    })
+    retarget(&input, options)
+        .map_err(|e| PipelineError::step(format!("cannot retarget clip {:?}", found.name), e))
 }
 
 /// The report of `done` as JSON (`rigport retarget --json`).

@@ -539,6 +539,25 @@ pub fn retarget(
     })
 }
 
+/// The legs [`retarget`] finds on a target skeleton and plants (`up`: model-space up): by
+/// the body roles its rest pose shows, else by its naming convention ([`find_feet`]).
+/// Empty when it shows no legs.
+///
+/// ```
+/// use rigport_model::glam::Vec3;
+///
+/// let demo = rigport_demo::build(1)?;
+/// let legs = rigport_ik::retarget::target_legs(&demo.asset.skeleton, Vec3::Y);
+/// assert_eq!(legs.len(), 2);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn target_legs(skeleton: &Skeleton, up: Vec3) -> Vec<Leg> {
+    let up = unit_or_y(up);
+    let roles = roles::find_body(skeleton, up, None)
+        .map_or_else(|| maps::roles_of(skeleton, up), |b| b.roles);
+    legs_of(skeleton, &roles)
+}
+
 /// The legs of a skeleton: by the body roles of its convention (upper leg, lower leg, foot,
 /// toes), else as [`find_feet`] finds them.
 fn legs_of(skeleton: &Skeleton, roles: &[(&'static str, JointIndex)]) -> Vec<Leg> {
