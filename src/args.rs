@@ -42,9 +42,8 @@ pub struct InputArgs {
     /// Skin weights for a Pinocchio mesh and skeleton given without attachment: auto (bone heat).
     #[arg(long, value_name = "auto", value_parser = ["auto"])]
     pub weights: Option<String>,
-    /// The unit of inputs that state none (BVH, OBJ/Pinocchio, CSCI 520): m, cm, mm, in, ft,
-    /// metres per unit, or auto (centimetres for a human skeleton 100-250 units tall).
-    /// Default: metres, with a warning for a skeleton too tall for them.
+    /// Unit of inputs that state none (BVH, OBJ/Pinocchio, CSCI 520): m, cm, mm, in, ft, metres
+    /// per unit, or auto (cm for a human 100-250 units tall). Default: m, warned if too tall.
     #[arg(long, value_name = "UNIT", value_parser = InputUnits::from_str)]
     pub input_units: Option<InputUnits>,
     /// Apply --input-units even to a file that states its own unit (ASF, USD, glTF).

@@ -177,7 +177,8 @@ impl Source {
                 return Err(ImportError::new(
                     crate::Location::file(mesh),
                     crate::Problem::Invalid(
-                        "no attachment.out: the weights must be computed (automatic weights)".into(),
+                        "no attachment.out: the weights must be computed (automatic weights)"
+                            .into(),
                     ),
                 ))
             }

@@ -29,8 +29,7 @@ fn weigh(
 ) -> Result<(Vec<Vec<f32>>, Vec<Warning>), ImportError> {
     let bones: Vec<Bone> = (1..skeleton.positions.len())
         .map(|k| Bone {
-            head: skeleton.parents[k]
-                .map_or(skeleton.positions[k], |p| skeleton.positions[p]),
+            head: skeleton.parents[k].map_or(skeleton.positions[k], |p| skeleton.positions[p]),
             tail: skeleton.positions[k],
         })
         .collect();
