@@ -29,8 +29,7 @@ pub struct InputArgs {
     /// Pinocchio `attachment.out` (one row of bone weights per OBJ vertex).
     #[arg(long, value_name = "A.out")]
     pub attachment: Option<PathBuf>,
-    /// An AMC motion for the .asf skeleton among the inputs (repeat for several clips;
-    /// .amc files may also be given as inputs).
+    /// An AMC motion for the .asf among the inputs (repeat for several; or give .amc inputs).
     #[arg(long, value_name = "M.amc")]
     pub motion: Vec<PathBuf>,
     /// Frame rate of AMC motions, which do not state one (default: 120, CMU's rate).
