@@ -136,3 +136,29 @@ fn broken_meshes_all_get_weights_and_the_repairs_are_counted() {
         assert!((sum - 1.0).abs() < 1e-3, "{row:?}");
     }
 }
+
+/// The corpus's SMPL mesh (6,890 vertices, no attachment) with its pynocchio skeleton,
+/// whose root is written as its own parent (read as the root, with a W003 repair).
+#[test]
+fn the_smpl_rest_mesh_converts_with_automatic_weights() {
+    let Some(dir) = corpus("1_pinocchio/pynocchio_smpl__kulendu") else {
+        return;
+    };
+    let out_dir = scratch();
+    let out = out_dir.path().join("smpl.glb");
+    let log = rigport_ok(&[
+        "convert",
+        dir.join("rest.obj").to_str().unwrap(),
+        dir.join("smpl_skeleton.out").to_str().unwrap(),
+        "--weights",
+        "auto",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(log.contains("read as the root (-1)"), "{log}");
+    assert!(
+        log.contains("bone heat for 6890 vertices and 23 bones"),
+        "{log}"
+    );
+    assert_valid(&out);
+}

@@ -126,6 +126,44 @@ pub fn parse_skeleton(text: &str, path: &Path) -> Result<PinocchioSkeleton, Impo
     Ok(skeleton)
 }
 
+/// [`parse_skeleton`], except that a root written as its own parent (joint 0 with parent
+/// `0`, as the pynocchio SMPL files write it) is read as the root, with a
+/// [`Warning::Repaired`] at its line: joint 0 is the root by the format's rules, so the
+/// repair is unambiguous.
+///
+/// # Errors
+/// As [`parse_skeleton`].
+pub fn read_skeleton(
+    text: &str,
+    path: &Path,
+) -> Result<(PinocchioSkeleton, Option<Warning>), ImportError> {
+    let first = Lines::new(text).find(|(_, l)| !l.trim_ascii().is_empty());
+    if let Some((line_no, raw)) = first {
+        let fields: Vec<&str> = raw.split_ascii_whitespace().collect();
+        if fields.len() == 5 && fields[0] == "0" && fields[4] == "0" {
+            let mut fixed = String::with_capacity(text.len() + 1);
+            for (n, l) in Lines::new(text) {
+                if n == line_no {
+                    fixed.push_str(&fields[..4].join(" "));
+                    fixed.push_str(" -1");
+                } else {
+                    fixed.push_str(l);
+                }
+                fixed.push('\n');
+            }
+            let skeleton = parse_skeleton(&fixed, path)?;
+            let warning = Warning::Repaired {
+                location: Location::line(path, line_no).to_string(),
+                message:
+                    "the root (joint 0) is written as its own parent (0); read as the root (-1)"
+                        .into(),
+            };
+            return Ok((skeleton, Some(warning)));
+        }
+    }
+    Ok((parse_skeleton(text, path)?, None))
+}
+
 /// Parses `attachment.out` for a skeleton of `joint_count` joints and a mesh of
 /// `vertex_count` OBJ `v` lines.
 ///

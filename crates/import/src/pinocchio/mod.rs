@@ -42,7 +42,7 @@ use rigport_model::{
 use crate::problem::{Hierarchy, Mismatch, Missing, Rule};
 use crate::{obj, read_file, utf8, ImportError, Imported, Location, Problem};
 use files::check_topology;
-pub use files::{parse_attachment, parse_skeleton, Attachment, PinocchioSkeleton};
+pub use files::{parse_attachment, parse_skeleton, read_skeleton, Attachment, PinocchioSkeleton};
 
 /// Imports a Pinocchio rig: the OBJ mesh, `skeleton.out` and `attachment.out`.
 ///
@@ -62,7 +62,7 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
     let read_rig = || -> Result<_, ImportError> {
         let expected_vertices = obj::count_vertex_lines(&mesh_bytes);
         let skeleton_bytes = read_file(skeleton)?;
-        let pino = parse_skeleton(utf8(&skeleton_bytes, skeleton)?, skeleton)?;
+        let (pino, repaired) = read_skeleton(utf8(&skeleton_bytes, skeleton)?, skeleton)?;
         let attachment_bytes = read_file(attachment)?;
         let parsed = parse_attachment(
             utf8(&attachment_bytes, attachment)?,
@@ -85,6 +85,7 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
         };
         Ok((
             pino,
+            repaired,
             attachment_bytes,
             parsed,
             influences,
@@ -95,7 +96,8 @@ pub fn import(mesh: &Path, skeleton: &Path, attachment: &Path) -> Result<Importe
         crate::join(|| obj::parse_with_materials(&mesh_bytes, mesh), read_rig);
     // Errors in file order: the mesh first.
     let (mesh_data, mut warnings, materials_used) = mesh_result?;
-    let (pino, attachment_bytes, parsed, mut influences, expected_vertices) = rig_result?;
+    let (pino, repaired, attachment_bytes, parsed, mut influences, expected_vertices) = rig_result?;
+    warnings.extend(repaired);
     let vertex_count = mesh_data.source_vertex_count();
     let (weights, attachment_warnings) = if vertex_count == expected_vertices {
         parsed?
@@ -145,7 +147,8 @@ pub fn import_weighing(
     let mesh_bytes = read_file(mesh)?;
     let (mesh_data, mut warnings, materials_used) = obj::parse_with_materials(&mesh_bytes, mesh)?;
     let skeleton_bytes = read_file(skeleton)?;
-    let pino = parse_skeleton(utf8(&skeleton_bytes, skeleton)?, skeleton)?;
+    let (pino, repaired) = read_skeleton(utf8(&skeleton_bytes, skeleton)?, skeleton)?;
+    warnings.extend(repaired);
     let (rows, weigh_warnings) = weigh(&mesh_data, &pino)?;
     warnings.extend(weigh_warnings);
     let name = mesh_data.name.clone();

@@ -691,3 +691,23 @@ fn corpus_rigs_import() {
         );
     }
 }
+
+#[test]
+fn a_root_written_as_its_own_parent_is_read_as_the_root_with_a_repair() {
+    let text = "\n0 0 0 0 0\n1 0 1 0 0\n";
+    let (skeleton, warning) = read_skeleton(text, Path::new("s.out")).unwrap();
+    assert_eq!(skeleton.parents, vec![None, Some(0)]);
+    let warning = warning.expect("a repair");
+    assert_eq!(warning.code(), "W003");
+    assert!(warning.to_string().starts_with("s.out:2: "), "{warning}");
+    // The strict parser still refuses it; another joint that is its own parent stays an
+    // error.
+    assert!(parse_skeleton(text, Path::new("s.out")).is_err());
+    assert!(read_skeleton("0 0 0 0 -1\n1 0 1 0 1\n", Path::new("s.out")).is_err());
+    assert_eq!(
+        read_skeleton("0 0 0 0 -1\n1 0 1 0 0\n", Path::new("s.out"))
+            .unwrap()
+            .1,
+        None
+    );
+}
