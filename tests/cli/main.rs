@@ -19,6 +19,7 @@ mod csci520;
 mod demo;
 mod eval_plays;
 mod fbx;
+mod fbx_blender;
 mod fbx_fidelity;
 mod fidelity_exceptions;
 mod fidelity_frames;
