@@ -21,6 +21,7 @@ mod eval_plays;
 mod fbx;
 mod fbx_blender;
 mod fbx_fidelity;
+mod fbx_mixamo;
 mod fidelity_exceptions;
 mod fidelity_frames;
 mod fidelity_match;
