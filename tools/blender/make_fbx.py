@@ -14,6 +14,8 @@ Writes OUT_DIR/CASE.fbx (binary FBX 7.4, as Blender writes it) for each CASE:
   mixamo     a Mixamo-like character (tools/blender/mixamo.py): ~20k vertices on the 65
              `mixamorig:` bones, centimetres, +Y up, one clip
   mixamo_anim the same armature and clip, no mesh (an animation-only Mixamo download)
+  mixamo_bench the character at Mixamo's download size for BENCHMARKS.md: ~28k vertices,
+             a 15 s clip (about 2.9 MB)
 
 What Blender's exporter cannot write, and so is not made here (fixtures/README.md):
 pivots, pre/post rotation and inherit types (it writes every transform as Lcl T/R/S with
@@ -187,6 +189,10 @@ def make(case, path):
         # metre scene as centimetres (UnitScaleFactor 1).
         types = {"ARMATURE", "MESH"} if case == "mixamo" else {"ARMATURE"}
         export(path, apply_scale_options="FBX_SCALE_NONE", object_types=types)
+    elif case == "mixamo_bench":
+        reset()
+        mixamo.build(with_mesh=True, rings_big=35, frames=450)
+        export(path, apply_scale_options="FBX_SCALE_NONE")
     else:
         raise SystemExit(f"make_fbx.py: unknown case {case!r}")
 

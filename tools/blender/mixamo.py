@@ -65,7 +65,7 @@ def radius_of(name):
     return 0.03
 
 
-def build_mesh(arm_obj, table):
+def build_mesh(arm_obj, table, rings_big=24):
     """One tube per bone (finger ends and head top have none), skinned to its bone and,
     near the head, to its parent."""
     verts, faces, weights = [], [], []
@@ -73,7 +73,7 @@ def build_mesh(arm_obj, table):
         if name.endswith(("4", "_End")):
             continue
         finger = "Hand" in name and name[-1].isdigit()
-        segments, rings = (8, 3) if finger else (32, 24)
+        segments, rings = (8, 3) if finger else (32, rings_big)
         head, tail = Vector(head), Vector(tail)
         axis = tail - head
         rot = Vector((0, 0, 1)).rotation_difference(axis.normalized()).to_matrix().to_4x4()
@@ -131,7 +131,7 @@ def key_clip(arm_obj, frames=60):
     bpy.context.scene.frame_end = frames
 
 
-def build(with_mesh=True):
+def build(with_mesh=True, rings_big=24, frames=60):
     table = bones()
     data = bpy.data.armatures.new("Armature")
     arm = bpy.data.objects.new("Armature", data)
@@ -146,6 +146,6 @@ def build(with_mesh=True):
             b.use_connect = False
     bpy.ops.object.mode_set(mode="OBJECT")
     if with_mesh:
-        build_mesh(arm, table)
-    key_clip(arm)
+        build_mesh(arm, table, rings_big)
+    key_clip(arm, frames)
     return arm
