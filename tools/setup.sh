@@ -7,12 +7,17 @@
 #                       tools/package.json + tools/package-lock.json, `npm ci`
 #   tools/.venv         Python >= 3.11 venv with usd-core + numpy, pinned in
 #                       tools/requirements.txt
+#   tools/.venv-blender optional (--blender, or RIGPORT_SETUP_BLENDER=1): Python 3.11 venv
+#                       with Blender as a module (bpy, 373 MB wheel, 0.9 GB installed) and
+#                       numpy < 2, pinned in tools/requirements-blender.txt; for the tests
+#                       that compare with Blender's FBX importer (RIGPORT_BLENDER_PYTHON)
 #
 # Idempotent: each part writes a stamp holding a hash of its pin files (and of
 # the interpreter it was built with); when the stamp matches, that part is
 # skipped, so a warm run takes well under a second.
 #
-# usage: bash tools/setup.sh [--force]     (or RIGPORT_SETUP_FORCE=1)
+# usage: bash tools/setup.sh [--force] [--blender]   (or RIGPORT_SETUP_FORCE=1,
+#        RIGPORT_SETUP_BLENDER=1)
 # Needs: node >= 18 + npm, python3 >= 3.11 with the venv module, and the npm
 # registry and PyPI reachable on a cold run. No stdin is read.
 set -euo pipefail
@@ -24,9 +29,12 @@ NPM_STAMP="$NODE_MODULES/.rigport-setup-stamp"
 VENV_STAMP="$VENV/.rigport-setup-stamp"
 
 force="${RIGPORT_SETUP_FORCE:-0}"
+blender="${RIGPORT_SETUP_BLENDER:-0}"
+BLENDER_VENV="$TOOLS_DIR/.venv-blender"
 for arg in "$@"; do
   case "$arg" in
     --force) force=1 ;;
+    --blender) blender=1 ;;
     -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "setup: unknown argument: $arg (try --help)" >&2; exit 2 ;;
   esac
@@ -143,5 +151,30 @@ else
   venv_pkgs="$(venv_list)" || die "tools/.venv/bin/python does not run after install"
 fi
 say "Python venv: $venv_pkgs"
+
+# ------------------------------------------------- Blender venv (optional)
+if [[ "$blender" == 1 ]]; then
+  blender_hash="$(hash_of "$TOOLS_DIR/requirements-blender.txt" "python=$py_version" "python-path=$PYTHON")"
+  if [[ "$force" != 1 && -f "$BLENDER_VENV/.rigport-setup-stamp" \
+        && "$(cat "$BLENDER_VENV/.rigport-setup-stamp")" == "$blender_hash" ]] \
+     && "$BLENDER_VENV/bin/python" -c 'import bpy' >/dev/null 2>&1; then
+    say "Blender venv: up to date in tools/.venv-blender (stamp matches requirements-blender.txt)"
+  else
+    [[ "$py_version" == 3.11.* ]] || die "bpy 4.5 needs Python 3.11, found $py_version." \
+      "set RIGPORT_SETUP_PYTHON to a Python 3.11"
+    say "Blender venv: creating tools/.venv-blender and installing tools/requirements-blender.txt (373 MB bpy wheel)"
+    t0=$SECONDS
+    rm -rf "$BLENDER_VENV"
+    "$PYTHON" -m venv "$BLENDER_VENV" || die "python -m venv failed."
+    PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1 \
+      "$BLENDER_VENV/bin/python" -m pip install --quiet --require-virtualenv --only-binary=:all: --no-compile \
+        -r "$TOOLS_DIR/requirements-blender.txt" \
+      || die "pip install -r tools/requirements-blender.txt failed (is PyPI reachable?)"
+    printf '%s\n' "$blender_hash" > "$BLENDER_VENV/.rigport-setup-stamp"
+    say "Blender venv: installed in $((SECONDS - t0))s"
+  fi
+  say "Blender venv: bpy $("$BLENDER_VENV/bin/python" -c 'import bpy; print(bpy.app.version_string)' 2>/dev/null | tail -n 1)"
+  say "ready: RIGPORT_BLENDER_PYTHON=$BLENDER_VENV/bin/python"
+fi
 
 say "ready: RIGPORT_GLTF_VALIDATOR=$TOOLS_DIR/validate_gltf.mjs RIGPORT_PYTHON=$VENV/bin/python"

@@ -36,6 +36,8 @@
 #     took 173 CPU-s in dev against 443 CPU-s in release (opt-level 3 for every
 #     dependency), and dev keeps debug assertions and overflow checks on.
 #   RIGPORT_NO_NEXTEST=1               use plain `cargo test` even if nextest is installed
+#   RIGPORT_NO_BLENDER=1               do not install bpy (tools/.venv-blender); the Blender
+#                                      tests then skip (and fail when CI is set)
 #   extra arguments are passed to the test runner, e.g. `bash tools/test.sh -E 'test(fk)'`
 #   for nextest or `bash tools/test.sh fk` for cargo test.
 set -euo pipefail
@@ -113,11 +115,16 @@ plain() { sed -E 's/\x1b\[[0-9;]*[A-Za-z]//g' "$1" > "$1.plain"; }
 CURRENT_STEP="setup (tools/setup.sh)"
 banner "$CURRENT_STEP"
 t0=$SECONDS
-bash tools/setup.sh
+# Blender (bpy, for tests/cli/fbx_blender.rs and fbx_mixamo.rs): installed unless
+# RIGPORT_NO_BLENDER=1 (about 15 s for a 373 MB wheel; its tests add about 50 s).
+if [[ "${RIGPORT_NO_BLENDER:-0}" == 1 ]]; then bash tools/setup.sh; else bash tools/setup.sh --blender; fi
 record "$CURRENT_STEP" PASS "$((SECONDS - t0))"
 
 export RIGPORT_GLTF_VALIDATOR="$ROOT/tools/validate_gltf.mjs"
 export RIGPORT_PYTHON="$ROOT/tools/.venv/bin/python"
+if [[ "${RIGPORT_NO_BLENDER:-0}" != 1 ]]; then
+  export RIGPORT_BLENDER_PYTHON="$ROOT/tools/.venv-blender/bin/python"
+fi
 
 # ------------------------------------------------------- 2 validator self-check
 # A minimal valid asset must pass (exit 0); one without asset.version must fail

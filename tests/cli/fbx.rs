@@ -73,8 +73,9 @@ fn every_corpus_fbx_converts_to_a_clean_usda() {
 }
 
 /// Extent along the file's own up axis of the skinned meshes' points at bind time, in the
-/// file's unit, read by ufbx without any conversion; and the file's metres per unit.
-fn source_height(file: &Path) -> (f64, f64) {
+/// file's unit, read by ufbx without any conversion (bind time: each skin's first cluster's
+/// `TransformLink` times its geometry-to-bone matrix); and the file's metres per unit.
+pub fn source_height(file: &Path) -> (f64, f64) {
     let scene = ufbx::load_file(file.to_str().unwrap(), ufbx::LoadOpts::default()).unwrap();
     let up = scene.settings.axes.up as usize;
     // ufbx's axes: +X, -X, +Y, -Y, +Z, -Z.
@@ -84,7 +85,8 @@ fn source_height(file: &Path) -> (f64, f64) {
         let Some(skin) = mesh.skin_deformers.first() else {
             continue;
         };
-        let m = &skin.clusters[0].geometry_to_world;
+        let c = &skin.clusters[0];
+        let m = ufbx::matrix_mul(&c.bind_to_world, &c.geometry_to_bone);
         for p in mesh.vertices.iter() {
             let w = [
                 m.m00 * p.x + m.m01 * p.y + m.m02 * p.z + m.m03,
@@ -99,7 +101,7 @@ fn source_height(file: &Path) -> (f64, f64) {
 }
 
 /// Extent along +Y of the skinned meshes' bind-space points in a `.glb`.
-fn glb_height(glb: &Path) -> f64 {
+pub fn glb_height(glb: &Path) -> f64 {
     let (doc, buffers, _) = gltf::import(glb).unwrap();
     let (mut lo, mut hi) = (f64::MAX, f64::MIN);
     for node in doc.nodes().filter(|n| n.skin().is_some()) {

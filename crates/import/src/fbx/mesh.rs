@@ -46,8 +46,8 @@ pub(super) fn build(
             .skin_deformers
             .first()
             .filter(|s| s.clusters.iter().any(|c| c.bone_node.is_some()));
-        // Where the points go: bind-time model space for a skinned mesh (the clusters'
-        // `geometry_to_world`), else the nearest joint's space, else model space.
+        // Where the points go: bind-time model space for a skinned mesh (the first cluster's
+        // bind matrix times geometry-to-bone), else the nearest joint's space, else model space.
         let (to_space, attached_to) = match skin {
             Some(skin) => (cluster_geometry_to_world(skin), None),
             None => match skel.nearest_joint(node) {
@@ -102,12 +102,19 @@ pub(super) fn build(
     out
 }
 
-/// The mesh's geometry-to-world matrix at bind time, from its first cluster with a bone.
+/// The mesh's geometry-to-world matrix at bind time, from its first cluster with a bone:
+/// the bone's bind matrix (`TransformLink`) times the cluster's geometry-to-bone matrix
+/// (`Transform` and the geometric transform). Not ufbx's `geometry_to_world`, which is the
+/// bone's transform as loaded (the file's `Lcl` pose, not its bind pose) times
+/// geometry-to-bone: the two agree only when a file's `Lcl` pose is its bind pose, and
+/// Blender writes the pose of the current frame there (ufbx.h, `ufbx_skin_cluster`).
 fn cluster_geometry_to_world(skin: &ufbx::SkinDeformer) -> DMat4 {
     skin.clusters
         .iter()
         .find(|c| c.bone_node.is_some())
-        .map_or(DMat4::IDENTITY, |c| mat(&c.geometry_to_world))
+        .map_or(DMat4::IDENTITY, |c| {
+            mat(&c.bind_to_world) * mat(&c.geometry_to_bone)
+        })
 }
 
 /// The triangles of `faces`, their corners made unique by (control point, normal, UV

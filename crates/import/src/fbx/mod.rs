@@ -11,7 +11,7 @@
 //! | `GlobalSettings.UnitScaleFactor` | kept: [`Asset::meters_per_unit`] = ufbx's `unit_meters` (0.01 for centimetres), numbers as in the file |
 //! | bone nodes (`LimbNode`, ...), skin clusters' nodes, animated nodes, and every node between them and the scene root | one [`Joint`] each, parents first, rest = the node's evaluated local transform (segment scale compensate folded in by ufbx's `Compensate` inherit handling, helper nodes where that is not exact) |
 //! | each material part of a mesh node | one [`Mesh`]: triangles (polygons kept in [`Mesh::polygons`] when ufbx's triangulation is a fan), normals, every UV set, its material |
-//! | skin deformer | a [`SkinBinding`]: mesh points at bind time from the clusters (`geometry_to_world`), inverse bind = the clusters' `bind_to_world` inverted (the clusters win over the BindPose and the rest pose), every influence kept |
+//! | skin deformer | a [`SkinBinding`]: mesh points at bind time from the clusters (`TransformLink` times geometry-to-bone, not ufbx's `geometry_to_world`, which poses them by the loaded `Lcl` pose), inverse bind = the clusters' `bind_to_world` inverted (the clusters win over the BindPose and the rest pose), every influence kept |
 //! | blend shape channels | morph targets (the full-weight shape; in-betweens left out with a warning) |
 //! | each animation stack | one [`Clip`] named after it, sampled by ufbx's `bake_anim` (see `anim.rs`) |
 //!

@@ -224,3 +224,70 @@ fn phong_keeps_emission_normal_map_and_transparency_and_names_the_bump_it_loses(
     );
     assert_eq!(imported.warnings[0].code(), "W004");
 }
+
+/// A triangle bound to one bone whose `Lcl` pose (x + 5) is not its bind pose (the
+/// identity `TransformLink`), as Blender writes a file at a frame other than the rest.
+const POSED_BONE: &str = "; FBX 7.4.0 project file
+FBXHeaderExtension:  {
+\tFBXHeaderVersion: 1003
+\tFBXVersion: 7400
+}
+Objects:  {
+\tGeometry: 10, \"Geometry::tri\", \"Mesh\" {
+\t\tVertices: *9 {
+\t\t\ta: 0,0,0,1,0,0,0,1,0
+\t\t}
+\t\tPolygonVertexIndex: *3 {
+\t\t\ta: 0,1,-3
+\t\t}
+\t}
+\tModel: 20, \"Model::tri\", \"Mesh\" {
+\t}
+\tModel: 30, \"Model::bone\", \"LimbNode\" {
+\t\tProperties70:  {
+\t\t\tP: \"Lcl Translation\", \"Lcl Translation\", \"\", \"A\",5,0,0
+\t\t}
+\t}
+\tDeformer: 40, \"Deformer::skin\", \"Skin\" {
+\t}
+\tDeformer: 50, \"SubDeformer::cluster\", \"Cluster\" {
+\t\tIndexes: *3 {
+\t\t\ta: 0,1,2
+\t\t}
+\t\tWeights: *3 {
+\t\t\ta: 1,1,1
+\t\t}
+\t\tTransform: *16 {
+\t\t\ta: 1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1
+\t\t}
+\t\tTransformLink: *16 {
+\t\t\ta: 1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1
+\t\t}
+\t}
+}
+Connections:  {
+\tC: \"OO\",20,0
+\tC: \"OO\",10,20
+\tC: \"OO\",30,0
+\tC: \"OO\",40,10
+\tC: \"OO\",50,40
+\tC: \"OO\",30,50
+}
+";
+
+#[test]
+fn skinned_points_sit_at_the_bind_pose_not_the_loaded_pose() {
+    // FBX SDK: the cluster's TransformLink is the bone at bind time; the mesh's points at
+    // bind time are TransformLink x Transform x point, whatever pose the bone's Lcl
+    // properties hold (ufbx's `geometry_to_world` would put them at x + 5).
+    let imported = import_slice(POSED_BONE.as_bytes(), Path::new("x.fbx")).expect("imports");
+    let mesh = &imported.asset.meshes[0];
+    let xs: Vec<f32> = mesh.positions.iter().map(|p| p.x).collect();
+    let lo = xs.iter().copied().fold(f32::MAX, f32::min);
+    let hi = xs.iter().copied().fold(f32::MIN, f32::max);
+    assert!(
+        lo.abs() < 1e-6 && (hi - 1.0).abs() < 1e-6,
+        "{:?}",
+        mesh.positions
+    );
+}
