@@ -151,10 +151,50 @@ fn skeleton_parent_cycle() {
 
 #[test]
 fn skeleton_root_is_its_own_parent() {
+    // Joint 0 is the root by the format's rules, so a root written with parent 0 (as the
+    // pynocchio SMPL files write it) is repaired, with a W003 at its line; under
+    // --deny-warnings that is exit 4 and nothing written. Another joint that is its own
+    // parent stays an error.
+    let dir = scratch();
+    let [m, s, a] = rig(
+        dir.path(),
+        Some(("skeleton.out", "0 0 0 0 0\n1 0 1 0 0\n2 0 2 0 1\n")),
+    );
+    let out = dir.path().join("repaired.glb");
+    let args = [
+        m.to_str().unwrap(),
+        s.to_str().unwrap(),
+        a.to_str().unwrap(),
+    ];
+    let log = rigport_ok(&[
+        "convert",
+        args[0],
+        args[1],
+        args[2],
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        log.contains("warning[W003]") && log.contains("skeleton.out:1"),
+        "{log}"
+    );
+    assert_valid(&out);
+    let denied = dir.path().join("denied.glb");
+    let o = rigport(&[
+        "convert",
+        args[0],
+        args[1],
+        args[2],
+        "--deny-warnings",
+        "-o",
+        denied.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(4));
+    assert!(!denied.exists());
     check_case(
         "skeleton.out",
-        "0 0 0 0 0\n1 0 1 0 0\n2 0 2 0 1\n",
-        &["skeleton.out:1", "-1"],
+        "0 0 0 0 -1\n1 0 1 0 1\n2 0 2 0 1\n",
+        &["skeleton.out:2", "its own parent"],
     );
 }
 
