@@ -19,17 +19,13 @@ pub fn set(max_memory: Option<u64>) {
 /// Sets the budget as [`set`], shared by `workers` items running at once (`rigport batch
 /// --jobs`, 0: one per core), each getting an equal part.
 pub fn set_shared(max_memory: Option<u64>, workers: usize) {
-    let workers = match workers {
-        0 => std::thread::available_parallelism().map_or(1, usize::from),
-        n => n,
-    };
-    let whole = rigport_pipeline::memory::process_budget(max_memory, "--max-memory");
-    // Once per process: the origin outlives every message that quotes it.
-    let origin = format!(
-        "{}, shared by the batch's --jobs items in flight",
-        whole.origin
-    );
-    let _ = BUDGET.set(whole.shared_by(workers, Box::leak(origin.into_boxed_str())));
+    let shared_by = "the batch's --jobs items in flight";
+    let _ = BUDGET.set(rigport_pipeline::memory::shared_budget(
+        max_memory,
+        "--max-memory",
+        workers,
+        shared_by,
+    ));
 }
 
 /// This run's budget.

@@ -14,8 +14,8 @@
 //!
 //! # Temporary files
 //! Temporary files are named `.<file name>.<pid>.<n>.tmp`. Every live one is listed in a
-//! process-wide registry that [`remove_temp_files`] empties (the CLI calls it on SIGINT and
-//! SIGTERM). A process killed outright (SIGKILL, power loss) cannot clean up: the first
+//! process-wide registry that [`remove_temp_files`] empties (on SIGINT and SIGTERM once
+//! [`remove_temp_files_on_interrupt`] runs, as the CLI does). A process killed outright (SIGKILL, power loss) cannot clean up: the first
 //! write into a folder then removes the temporary files of that naming whose process is no
 //! longer running (Linux only, where `/proc/<pid>` tells; elsewhere nothing is swept).
 //! The sweep trusts the process id: a folder shared over the network with another machine
@@ -25,6 +25,10 @@
 //! makes every rename wait that many milliseconds (at most 60 s) once its temporary file is
 //! written, so that a test can interrupt a write while the file exists.
 #![warn(missing_docs)]
+
+mod signals;
+
+pub use signals::remove_temp_files_on_interrupt;
 
 use std::ffi::OsString;
 use std::fs::{self, File, OpenOptions};
