@@ -52,3 +52,4 @@ mod usd_import;
 mod usd_root_motion;
 mod usd_topology;
 mod usdz;
+mod verify;
