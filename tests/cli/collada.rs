@@ -6,36 +6,14 @@
 //! gives its named clips; a document with another extension is told by its root element;
 //! `inspect` and `eval` read it; broken files fail with exit 1, a location and no output.
 
-use std::path::PathBuf;
-
 use crate::common::*;
 
 const DIR: &str = "8_collada/assimp_test_models__assimp";
 
-/// The corpus's COLLADA files, from its manifest (`None`: skipped, see `corpus`).
-fn corpus_collada() -> Option<Vec<PathBuf>> {
-    let manifest = corpus("MANIFEST.tsv")?;
-    let root = manifest.parent().unwrap().to_path_buf();
-    let text = std::fs::read_to_string(&manifest).unwrap();
-    let files: Vec<PathBuf> = text
-        .lines()
-        .filter_map(|l| {
-            let mut fields = l.split('\t');
-            (fields.next() == Some("8_collada")).then(|| root.join(fields.next().unwrap()))
-        })
-        .collect();
-    assert!(
-        !files.is_empty(),
-        "no 8_collada rows in {}",
-        manifest.display()
-    );
-    Some(files)
-}
-
 #[test]
 fn every_corpus_collada_converts_to_a_valid_glb() {
     // None of assimp's five files is broken: each must convert.
-    let Some(files) = corpus_collada() else {
+    let Some(files) = corpus_section("8_collada") else {
         return;
     };
     let dir = scratch();
@@ -54,7 +32,7 @@ fn every_corpus_collada_converts_to_a_valid_glb() {
 
 #[test]
 fn every_corpus_collada_converts_to_a_clean_usda() {
-    let Some(files) = corpus_collada() else {
+    let Some(files) = corpus_section("8_collada") else {
         return;
     };
     let Some(python) = crate::usd::python() else {

@@ -33,35 +33,7 @@ pub fn rigport_ok(args: &[&str]) -> String {
 // rigport-testkit, shared with the crates' tests.
 pub use rigport_testkit::gltf_validator::{assert_valid, validate};
 pub use rigport_testkit::npy::{read_npy, read_npz, NpyArray};
-pub use rigport_testkit::{corpus, corpus_dir, require};
-
-/// The Pinocchio rigs of the corpus: (label, mesh, skeleton, attachment).
-pub const PINOCCHIO_RIGS: [(&str, &str, &str, &str); 4] = [
-    (
-        "arma2",
-        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/arma2.obj",
-        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/skeleton2.out",
-        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/attachment2.out",
-    ),
-    (
-        "keepon",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/keepon.obj",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/skeleton.out",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/attachment.out",
-    ),
-    (
-        "armadillo",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/Armadillo.obj",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/skeleton.out",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/attachment.out",
-    ),
-    (
-        "model1",
-        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/Model1.obj",
-        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/skeleton.out",
-        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/attachment.out",
-    ),
-];
+pub use rigport_testkit::{corpus, corpus_dir, require, PINOCCHIO_RIGS};
 
 /// The glTF samples of the corpus.
 pub const GLTF_SAMPLES: [&str; 5] = [
@@ -71,6 +43,28 @@ pub const GLTF_SAMPLES: [&str; 5] = [
     "5_gltf/bevy_assets__bevyengine_bevy/SimpleSkin.gltf",
     "5_gltf/blender_io_roundtrip__KhronosGroup/03_skinned_cylinder.gltf",
 ];
+
+/// The corpus files of one `MANIFEST.tsv` section (its first column, e.g. `7_fbx`), in
+/// manifest order; `None` when the corpus is absent (see [`corpus`]). A section without
+/// rows is a failure: the manifest changed under the test.
+pub fn corpus_section(section: &str) -> Option<Vec<PathBuf>> {
+    let manifest = corpus("MANIFEST.tsv")?;
+    let root = manifest.parent().expect("the corpus folder").to_path_buf();
+    let text = std::fs::read_to_string(&manifest).expect("MANIFEST.tsv reads");
+    let files: Vec<PathBuf> = text
+        .lines()
+        .filter_map(|l| {
+            let mut fields = l.split('\t');
+            (fields.next() == Some(section)).then(|| root.join(fields.next().unwrap_or("")))
+        })
+        .collect();
+    assert!(
+        !files.is_empty(),
+        "no {section} rows in {}",
+        manifest.display()
+    );
+    Some(files)
+}
 
 /// A scratch folder, removed at drop.
 pub fn scratch() -> tempfile::TempDir {

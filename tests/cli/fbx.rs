@@ -6,31 +6,15 @@
 //! another extension is told by its bytes; broken files fail with exit 1, a location and
 //! no output. The same files convert to `.usda` that usd-core's validators pass.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::common::*;
-
-/// The corpus's FBX files, from its manifest (`None`: skipped, see `corpus`).
-fn corpus_fbx() -> Option<Vec<PathBuf>> {
-    let manifest = corpus("MANIFEST.tsv")?;
-    let root = manifest.parent().unwrap().to_path_buf();
-    let text = std::fs::read_to_string(&manifest).unwrap();
-    let files: Vec<PathBuf> = text
-        .lines()
-        .filter_map(|l| {
-            let mut fields = l.split('\t');
-            (fields.next() == Some("7_fbx")).then(|| root.join(fields.next().unwrap()))
-        })
-        .collect();
-    assert!(!files.is_empty(), "no 7_fbx rows in {}", manifest.display());
-    Some(files)
-}
 
 #[test]
 fn every_corpus_fbx_converts_to_a_valid_glb() {
     // None of assimp's six files is broken: each must convert (a broken one would be
     // listed here with its expected located error).
-    let Some(files) = corpus_fbx() else {
+    let Some(files) = corpus_section("7_fbx") else {
         return;
     };
     let dir = scratch();
@@ -51,7 +35,7 @@ fn every_corpus_fbx_converts_to_a_valid_glb() {
 fn every_corpus_fbx_converts_to_a_clean_usda() {
     // The USD writer states the file's unit (metres per unit from `UnitScaleFactor`);
     // usd-core's validators and rigport's checks (tools/check_usd.py) pass it.
-    let Some(files) = corpus_fbx() else {
+    let Some(files) = corpus_section("7_fbx") else {
         return;
     };
     let Some(python) = crate::usd::python() else {

@@ -61,21 +61,6 @@ pub fn make_fbx(bpy: &Path, dir: &Path, cases: &[&str]) -> Vec<PathBuf> {
     cases.iter().map(|c| dir.join(format!("{c}.fbx"))).collect()
 }
 
-/// The FBX files of the corpus (`7_fbx` rows), or `None` (skip).
-fn corpus_fbx() -> Option<Vec<PathBuf>> {
-    let manifest = corpus("MANIFEST.tsv")?;
-    let root = manifest.parent().unwrap().to_path_buf();
-    let text = std::fs::read_to_string(&manifest).unwrap();
-    Some(
-        text.lines()
-            .filter_map(|l| {
-                let mut f = l.split('\t');
-                (f.next() == Some("7_fbx")).then(|| root.join(f.next().unwrap()))
-            })
-            .collect(),
-    )
-}
-
 /// The source time of clip time 0 of the stack `name`: the earlier of the stack's start
 /// and its first key (rigport's clips start there, crates/import/src/fbx/anim.rs).
 fn stack_offset(file: &Path, name: &str) -> f64 {
@@ -225,8 +210,11 @@ fn blender_made_fixtures_play_in_blender_as_the_usda_in_usdskel() {
 
 #[test]
 fn corpus_fbx_plays_in_blender_as_the_usda_in_usdskel() {
-    let (Some(bpy), Some(py), Some(files)) = (blender_python(), crate::usd::python(), corpus_fbx())
-    else {
+    let (Some(bpy), Some(py), Some(files)) = (
+        blender_python(),
+        crate::usd::python(),
+        corpus_section("7_fbx"),
+    ) else {
         return;
     };
     let dir = scratch();

@@ -18,33 +18,6 @@ use rigport_eval::{Pose, Rig, RigOutput};
 use rigport_model::glam::{Quat, Vec3};
 use rigport_model::{Influence, Influences};
 
-const RIGS: [(&str, &str, &str, &str); 4] = [
-    (
-        "arma2",
-        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/arma2.obj",
-        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/skeleton2.out",
-        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/attachment2.out",
-    ),
-    (
-        "keepon",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/keepon.obj",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/skeleton.out",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/attachment.out",
-    ),
-    (
-        "armadillo",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/Armadillo.obj",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/skeleton.out",
-        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/attachment.out",
-    ),
-    (
-        "model1",
-        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/Model1.obj",
-        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/skeleton.out",
-        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/attachment.out",
-    ),
-];
-
 /// A small seeded generator (SplitMix64), in [0, 1).
 struct Rng(u64);
 
@@ -159,7 +132,7 @@ fn score(label: &str, files: [&str; 3]) -> Option<(f64, f64, f64)> {
 
 #[test]
 fn bone_heat_is_close_to_pinocchios_own_weights() {
-    for (label, mesh, skeleton, attachment) in RIGS {
+    for (label, mesh, skeleton, attachment) in rigport_testkit::PINOCCHIO_RIGS {
         let Some((l1, mean, max)) = score(label, [mesh, skeleton, attachment]) else {
             return;
         };

@@ -18,6 +18,7 @@ pub mod gather;
 pub mod gltf;
 pub mod json;
 pub mod mtl;
+mod names;
 mod number;
 pub mod obj;
 pub mod pinocchio;

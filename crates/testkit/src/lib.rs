@@ -65,3 +65,31 @@ pub fn corpus(rel: &str) -> Option<PathBuf> {
         p.exists().then_some(p),
     )
 }
+
+/// The Pinocchio rigs of the corpus: (label, mesh, skeleton, attachment).
+pub const PINOCCHIO_RIGS: [(&str, &str, &str, &str); 4] = [
+    (
+        "arma2",
+        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/arma2.obj",
+        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/skeleton2.out",
+        "1_pinocchio/edinburgh_cav_arma2__gpfvic_CAV1/attachment2.out",
+    ),
+    (
+        "keepon",
+        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/keepon.obj",
+        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/skeleton.out",
+        "1_pinocchio/berkeley_cs184__icheung_Keepon/keepon/attachment.out",
+    ),
+    (
+        "armadillo",
+        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/Armadillo.obj",
+        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/skeleton.out",
+        "1_pinocchio/berkeley_cs184__icheung_Keepon/armadillo/attachment.out",
+    ),
+    (
+        "model1",
+        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/Model1.obj",
+        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/skeleton.out",
+        "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/attachment.out",
+    ),
+];

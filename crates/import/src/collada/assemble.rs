@@ -14,9 +14,10 @@ use super::controller::{self, Resolved};
 use super::geometry;
 use super::material::Materials;
 use super::scene::{self, Scene};
-use super::skeleton::{self, unique, Skel};
+use super::skeleton::{self, Skel};
 use super::xml::{child, child_elements, Doc, Node};
 use super::zae::Files;
+use crate::names::unique;
 use crate::{ImportError, Problem};
 
 /// Builds the asset of `doc` (named `name`), with the warnings of lossy steps.

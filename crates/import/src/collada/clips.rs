@@ -19,9 +19,10 @@ use rigport_model::{Clip, Interpolation, MeshIndex, Track, TrackTarget, Transfor
 
 use super::anim::{Channel, Interp, Target};
 use super::scene::Scene;
-use super::skeleton::{unique, Skel};
+use super::skeleton::Skel;
 use super::transform::{self, Kind};
 use super::xml::{child, children, Doc, Node};
+use crate::names::unique;
 use crate::ImportError;
 
 /// Samples added per second over `BEZIER`/`HERMITE` segments.

@@ -16,6 +16,7 @@ use rigport_model::glam::DMat4;
 use rigport_model::{Joint, JointIndex, Skeleton, Transform};
 
 use super::scene::Scene;
+use crate::names::unique;
 use crate::{ImportError, Location, Problem};
 
 /// How far (relative to the matrix's largest element) a node matrix may be from its TRS
@@ -112,16 +113,4 @@ pub(super) fn build(scene: &Scene, used: &[usize], path: &Path) -> Result<Skel, 
         world,
         sheared,
     })
-}
-
-/// `name`, or `fallback` when empty, made unique among `used` with `_2`, `_3`, ...
-pub(super) fn unique(name: &str, fallback: &str, used: &mut HashSet<String>) -> String {
-    let base = if name.is_empty() { fallback } else { name };
-    let mut candidate = base.to_string();
-    let mut n = 2;
-    while !used.insert(candidate.clone()) {
-        candidate = format!("{base}_{n}");
-        n += 1;
-    }
-    candidate
 }

@@ -15,7 +15,8 @@ use std::path::Path;
 use rigport_model::{Clip, Interpolation, Track, TrackTarget};
 
 use super::mesh::Built;
-use super::skeleton::{quat, unique, vec3, Skel};
+use super::skeleton::{quat, vec3, Skel};
+use crate::names::unique;
 use crate::{ImportError, Location};
 
 /// One baked stack.

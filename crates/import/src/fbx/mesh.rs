@@ -11,7 +11,8 @@ use rigport_model::{
 };
 
 use super::incomplete;
-use super::skeleton::{mat, unique, Skel};
+use super::skeleton::{mat, Skel};
+use crate::names::unique;
 
 /// The meshes, their skins, and which blend channels drive each mesh's morph targets.
 pub(super) struct Built {

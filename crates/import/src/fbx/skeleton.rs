@@ -6,6 +6,7 @@ use std::path::Path;
 use rigport_model::glam::{DMat4, DVec4, Quat, Vec3};
 use rigport_model::{Joint, JointIndex, Skeleton, Transform};
 
+use crate::names::unique;
 use crate::{ImportError, Location, Problem};
 
 /// The skeleton and where each FBX node went.
@@ -144,16 +145,4 @@ fn from_matrix(m: &DMat4) -> Transform {
         rotation: rotation.normalize(),
         scale,
     }
-}
-
-/// `name`, or `fallback` when empty, made unique among `used` with `_2`, `_3`, ...
-pub(super) fn unique(name: &str, fallback: &str, used: &mut HashSet<String>) -> String {
-    let base = if name.is_empty() { fallback } else { name };
-    let mut candidate = base.to_string();
-    let mut n = 2;
-    while !used.insert(candidate.clone()) {
-        candidate = format!("{base}_{n}");
-        n += 1;
-    }
-    candidate
 }
