@@ -70,9 +70,39 @@ pub fn run(
 ) -> Result<Report, PipelineError> {
     check_request(input, &options.output.path, &[])?;
     let plan = single_plan(&input.files)?;
-    let mut imported = step(progress, &format!("reading {}", plan.label()), || {
+    let imported = step(progress, &format!("reading {}", plan.label()), || {
         input.load(&plan)
     })?;
+    convert_imported(input, imported, options, progress)
+}
+
+/// The rest of [`run`] for an asset already imported from `input` (the Python bindings
+/// open once, then write): the output checked, the root motion changed if asked, and the
+/// asset written to `options.output`. [`run`] is this after its import, so both write the
+/// same bytes.
+///
+/// ```
+/// use rigport_pipeline::convert::{convert_imported, ConvertOptions};
+/// use rigport_pipeline::{load::Input, progress::Silent, write::Output};
+///
+/// let dir = tempfile::tempdir()?;
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let (_, imported) = input.load_single(&Silent, "reading")?;
+/// let options = ConvertOptions { output: Output::new(dir.path().join("walk.glb")), ..Default::default() };
+/// let report = convert_imported(&input, imported, &options, &Silent)?;
+/// assert!(report.log[0].starts_with("wrote "));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// As [`run`], but for the import.
+pub fn convert_imported(
+    input: &Input,
+    mut imported: rigport_import::Imported,
+    options: &ConvertOptions,
+    progress: &dyn Progress,
+) -> Result<Report, PipelineError> {
+    check_request(input, &options.output.path, &[])?;
     let moved = crate::root_motion::apply(&mut imported.asset, &options.root_motion)?;
     let line = write_output(
         imported.asset,

@@ -7,25 +7,63 @@ use std::path::Path;
 
 use rigport_eval::sample::{CompiledClip, FrameGrid, SampleJob};
 use rigport_eval::{Pose, Rig, RigOutput};
-use rigport_export::npz::{EvalDump, NpzWriter, SPILL_LIMIT};
+use rigport_export::npz::EvalArrays;
+use rigport_export::npz::{EvalDump, SPILL_LIMIT};
 use rigport_model::SkinningMethod;
-use rigport_model::{Asset, MemoryBudget};
+use rigport_model::{Asset, MemoryBudget, RestRotation};
 
 use crate::PipelineError;
 
-/// What to evaluate.
+/// What to evaluate: a pose, or a clip sampled at its keys or a rate; the influences
+/// limited or not; the skinning method. `rigport eval` and the Python bindings' `evaluate`
+/// and `pose` take it.
+///
+/// ```
+/// use rigport_pipeline::eval::{Evaluation, PoseSource};
+///
+/// // A clip named "walk" sampled at 30 frames per second, skinned with DQS.
+/// let request = Evaluation {
+///     clip: Some("walk"),
+///     fps: Some(30.0),
+///     skinning: Some(rigport_model::SkinningMethod::Dqs),
+///     ..Evaluation::default()
+/// };
+/// assert!(request.pose.is_none() && request.max_influences.is_none());
+/// // A pose given as rotations already read (none: every joint at rest).
+/// let rest = Evaluation { pose: Some(PoseSource::Rotations(&[])), ..Evaluation::default() };
+/// assert!(rest.pose.is_some());
+/// ```
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct DumpOptions<'a> {
-    /// A `POSE.json` to evaluate instead of a clip.
-    pub pose: Option<&'a Path>,
+pub struct Evaluation<'a> {
+    /// A pose to evaluate instead of a clip.
+    pub pose: Option<PoseSource<'a>>,
     /// The clip to sample (default: the first; none: the rest pose).
     pub clip: Option<&'a str>,
     /// Sample at this rate (default: the clip's key times).
     pub fps: Option<f32>,
+    /// Sample at these times, in seconds (instead of a rate or the key times).
+    pub times: Option<&'a [f32]>,
     /// Limit the influences per vertex as a glTF would (`rigport_export::gltf_influences`).
     pub max_influences: Option<usize>,
     /// The skinning method (default: the first skin's own).
     pub skinning: Option<SkinningMethod>,
+}
+
+/// Where a pose comes from: a `POSE.json` file, or its rotations already read (from a
+/// dictionary, `rigport_import::json::pose::parse`).
+///
+/// ```
+/// use rigport_pipeline::eval::PoseSource;
+///
+/// let file = PoseSource::File(std::path::Path::new("rest.json"));
+/// assert!(matches!(file, PoseSource::File(_)));
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub enum PoseSource<'a> {
+    /// A `POSE.json`, read against the rig's skeleton.
+    File(&'a Path),
+    /// Rotations in each joint's rest frame.
+    Rotations(&'a [RestRotation]),
 }
 
 /// A dump written to its file.
@@ -78,7 +116,7 @@ fn streamed_memory(frames: usize, vertices: usize, joints: usize) -> u64 {
 pub(crate) fn eval_dump_to(
     asset: &Asset,
     label: &str,
-    opts: &DumpOptions<'_>,
+    opts: &Evaluation<'_>,
     output: impl AsRef<Path>,
     budget: &MemoryBudget,
 ) -> Result<DumpInfo, PipelineError> {
@@ -91,7 +129,8 @@ pub(crate) fn eval_dump_to(
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
     };
-    let (npz, clip) = evaluate(asset, label, opts, output, budget, dir)?;
+    let (dump, clip) = evaluate(asset, label, opts, budget, Some((output, dir)))?;
+    let npz = dump.finish(clip.is_some());
     rigport_export::write_atomic_with(output, |file| {
         npz.write_to(BufWriter::with_capacity(1 << 20, file))?
             .flush()
@@ -100,15 +139,35 @@ pub(crate) fn eval_dump_to(
     Ok(DumpInfo { clip })
 }
 
-/// The dump's arrays and the name of the clip sampled.
+/// The arrays of `asset` evaluated as `opts` asks, in memory, with the name of the clip
+/// sampled (`None` for a pose): the same frames, in the same rows, as the `.npz` that
+/// [`eval_dump_to`] writes.
+///
+/// # Errors
+/// As [`eval_dump_to`], but for the output's.
+pub(crate) fn eval_arrays(
+    asset: &Asset,
+    label: &str,
+    opts: &Evaluation<'_>,
+    budget: &MemoryBudget,
+) -> Result<(EvalArrays, Option<String>), PipelineError> {
+    let (dump, clip) = evaluate(asset, label, opts, budget, None)?;
+    let arrays = dump
+        .into_arrays()
+        .map_err(|e| PipelineError::step(format!("{label}: the evaluated frames"), e))?;
+    Ok((arrays, clip))
+}
+
+/// The dump filled with the frames and the name of the clip sampled. With `spill`
+/// (`(output, folder)`), the frames beyond [`SPILL_LIMIT`] bytes per array wait in unnamed
+/// temporary files in the folder; without, they stay in memory.
 fn evaluate(
     asset: &Asset,
     label: &str,
-    opts: &DumpOptions<'_>,
-    output: &Path,
+    opts: &Evaluation<'_>,
     budget: &MemoryBudget,
-    spill_dir: &Path,
-) -> Result<(NpzWriter, Option<String>), PipelineError> {
+    spill: Option<(&Path, &Path)>,
+) -> Result<(EvalDump, Option<String>), PipelineError> {
     let mut limited = None;
     if let Some(max) = opts.max_influences {
         let mut copy = asset.clone();
@@ -138,8 +197,14 @@ fn evaluate(
     let rig = Rig::new(asset).map_err(|e| PipelineError::step("the rig cannot be evaluated", e))?;
     let mut dump = EvalDump::new(asset, |m| rig.skin_of_mesh(m), method_name);
     // Beyond [`SPILL_LIMIT`] bytes per array, the frames wait in unnamed temporary files
-    // in `spill_dir`.
-    dump = dump.spill_into(spill_dir);
+    // in the spill folder.
+    let output = match spill {
+        Some((output, dir)) => {
+            dump = dump.spill_into(dir);
+            output
+        }
+        None => Path::new(label),
+    };
     let spill_err = |e| PipelineError::output(output, e);
     let mut posed = RigOutput::default();
     let clip = match opts.pose {
@@ -150,14 +215,18 @@ fn evaluate(
     };
     match clip {
         None => {
-            if opts.fps.is_some() {
+            if opts.fps.is_some() || opts.times.is_some() {
                 return Err(PipelineError::Invalid(format!(
-                    "{label}: a sampling rate needs a clip to sample; the rig has none"
+                    "{label}: a sampling rate or sample times need a clip to sample; the rig has none"
                 )));
             }
             let mut pose = Pose::rest(&asset.skeleton);
-            if let Some(path) = opts.pose {
-                pose.apply(&rigport_import::json::pose::read(path, &asset.skeleton)?);
+            match opts.pose {
+                Some(PoseSource::File(path)) => {
+                    pose.apply(&rigport_import::json::pose::read(path, &asset.skeleton)?);
+                }
+                Some(PoseSource::Rotations(rotations)) => pose.apply(rotations),
+                None => {}
             }
             rig.evaluate_with(&pose, method, &mut posed)?;
             dump.push(0.0, &posed.joint_model, &posed.positions)
@@ -167,9 +236,22 @@ fn evaluate(
             let compiled = CompiledClip::new(clip, &asset.skeleton).map_err(|e| {
                 PipelineError::step(format!("clip {:?} does not fit the skeleton", clip.name), e)
             })?;
-            let times = match opts.fps {
-                None => compiled.key_times(),
-                Some(fps) => {
+            let times = match (opts.times, opts.fps) {
+                (Some(_), Some(_)) => {
+                    return Err(PipelineError::Usage(
+                        "give sample times or a sampling rate, not both".into(),
+                    ));
+                }
+                (Some(times), None) => {
+                    if let Some(t) = times.iter().find(|t| !t.is_finite()) {
+                        return Err(PipelineError::Invalid(format!(
+                            "sample time {t}: expected a finite number of seconds"
+                        )));
+                    }
+                    times.to_vec()
+                }
+                (None, None) => compiled.key_times(),
+                (None, Some(fps)) => {
                     if !(fps.is_finite() && fps > 0.0) {
                         return Err(PipelineError::Invalid(format!(
                             "frame rate {fps}: expected a positive number"
@@ -180,7 +262,14 @@ fn evaluate(
             };
             let vertices: usize = asset.meshes.iter().map(|m| m.positions.len()).sum();
             let joints = asset.skeleton.len();
-            let needed = streamed_memory(times.len(), vertices, joints);
+            let needed = match spill {
+                Some(_) => streamed_memory(times.len(), vertices, joints),
+                // Held whole: every frame's arrays, and their copy as values.
+                None => frame_bytes(vertices, joints)
+                    .saturating_add(4)
+                    .saturating_mul(times.len() as u64)
+                    .saturating_mul(2),
+            };
             budget.check(
                 format_args!(
                     "{}: {} frames of {vertices} vertices and {joints} joints",
@@ -207,5 +296,5 @@ fn evaluate(
             }
         }
     }
-    Ok((dump.finish(clip.is_some()), clip.map(|c| c.name.clone())))
+    Ok((dump, clip.map(|c| c.name.clone())))
 }

@@ -7,11 +7,14 @@ use std::path::PathBuf;
 
 use rigport_model::SkinningMethod;
 
-use crate::dump::{DumpOptions, eval_dump_to};
+pub use crate::dump::{Evaluation, PoseSource};
+use crate::dump::{eval_arrays, eval_dump_to};
 use crate::load::Input;
 use crate::outputs::{check_not_read, extension};
 use crate::progress::Progress;
 use crate::{PipelineError, Report};
+pub use rigport_export::npz::EvalArrays;
+use rigport_model::{Asset, MemoryBudget};
 
 /// What `eval` evaluates, and where it writes.
 ///
@@ -84,10 +87,11 @@ pub fn run(
     let (plan, imported) = input.load_single(progress, "reading input")?;
     progress.warnings(&imported.warnings)?;
     let asset = &imported.asset;
-    let opts = DumpOptions {
-        pose: options.pose.as_deref(),
+    let opts = Evaluation {
+        pose: options.pose.as_deref().map(PoseSource::File),
         clip: options.clip.as_deref(),
         fps: options.fps,
+        times: None,
         max_influences: options.max_influences,
         skinning: options.skinning,
     };
@@ -103,4 +107,35 @@ pub fn run(
         asset.skeleton.len(),
         asset.meshes.len()
     )))
+}
+
+/// Evaluates `asset` as `request` asks and returns the arrays in memory (for a caller that
+/// keeps them, as the Python bindings do), with the name of the clip sampled (`None` for
+/// a pose): the same frames, row for row, that [`run`] writes to its `.npz` (both fill one
+/// `rigport_export::npz::EvalDump`). `label` names the asset in messages.
+///
+/// ```
+/// use rigport_pipeline::eval::{evaluate, Evaluation};
+/// use rigport_pipeline::{load::Input, progress::Silent, MemoryBudget};
+///
+/// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+/// let (plan, imported) = input.load_single(&Silent, "reading")?;
+/// let (arrays, clip) =
+///     evaluate(&imported.asset, &plan.label(), &Evaluation::default(), &MemoryBudget::UNLIMITED)?;
+/// assert!(clip.is_some() && arrays.frames > 1);
+/// assert_eq!(arrays.joint_world.len(), arrays.frames * arrays.joints * 16);
+/// assert_eq!(arrays.positions.len(), arrays.frames * arrays.vertices * 3);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// Nothing to skin, an unknown clip, a frame rate that is not positive, a pose file's
+/// errors, over `budget`, or a clip that does not fit the skeleton.
+pub fn evaluate(
+    asset: &Asset,
+    label: &str,
+    request: &Evaluation<'_>,
+    budget: &MemoryBudget,
+) -> Result<(EvalArrays, Option<String>), PipelineError> {
+    eval_arrays(asset, label, request, budget)
 }

@@ -81,11 +81,22 @@ impl Input {
         Ok(imported)
     }
 
-    /// Resolves and imports exactly one asset, as a step of `progress`.
+    /// Resolves and imports exactly one asset, as a step of `progress` named `step`: the
+    /// asset's plan (its label names it in messages) and the asset with its warnings.
+    ///
+    /// ```
+    /// use rigport_pipeline::{load::Input, progress::Silent};
+    ///
+    /// let input = Input::new(vec!["../../fixtures/bvh/end_sites.bvh".into()]);
+    /// let (plan, imported) = input.load_single(&Silent, "reading")?;
+    /// assert!(plan.label().ends_with("end_sites.bvh"), "{}", plan.label());
+    /// assert_eq!(imported.asset.skeleton.len(), 9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     ///
     /// # Errors
-    /// As [`single_plan`] and [`load`].
-    pub(crate) fn load_single(
+    /// The inputs do not make exactly one asset; as the import.
+    pub fn load_single(
         &self,
         progress: &dyn Progress,
         step: &str,

@@ -31,6 +31,8 @@ fn push_row_major(out: &mut Vec<f32>, m: &Mat4) {
 pub struct EvalDump {
     /// Per dumped vertex: (mesh, mesh vertex).
     vertices: Vec<(usize, usize)>,
+    /// Per mesh, per mesh vertex: its dumped row (the row of its source vertex).
+    mesh_rows: Vec<Vec<u32>>,
     rest_positions: Vec<f32>,
     influence_joints: Vec<i32>,
     influence_weights: Vec<f32>,
@@ -73,9 +75,27 @@ impl EvalDump {
         let mut vertices = Vec::new();
         let mut rest_positions = Vec::new();
         let mut rows: Vec<Vec<(i32, f32)>> = Vec::new();
+        let mut mesh_rows = Vec::with_capacity(asset.meshes.len());
         for (mi, mesh) in asset.meshes.iter().enumerate() {
             let skin = skin_of_mesh(mi).and_then(|s| asset.skins.get(s));
-            for &v in &mesh.first_vertex_of_source() {
+            let firsts = mesh.first_vertex_of_source();
+            // Every source vertex has a first vertex (`source_vertex` lists each), so each
+            // mesh vertex's source has a row.
+            let mut row_of_source = vec![u32::MAX; firsts.len()];
+            let mut next = vertices.len() as u32;
+            for (row, &v) in row_of_source.iter_mut().zip(&firsts) {
+                if v != u32::MAX {
+                    *row = next;
+                    next += 1;
+                }
+            }
+            mesh_rows.push(
+                mesh.source_vertex
+                    .iter()
+                    .map(|&s| row_of_source[s as usize])
+                    .collect(),
+            );
+            for &v in &firsts {
                 let Some(v) = (v != u32::MAX).then_some(v as usize) else {
                     continue;
                 };
@@ -105,6 +125,7 @@ impl EvalDump {
         }
         Self {
             vertices,
+            mesh_rows,
             rest_positions,
             influence_joints,
             influence_weights,
@@ -173,6 +194,30 @@ impl EvalDump {
         Ok(())
     }
 
+    /// The arrays themselves, for a caller that keeps them in memory (the Python
+    /// bindings): the same values [`EvalDump::finish`] writes, always with the frame axis.
+    ///
+    /// # Errors
+    /// Reading back a temporary file ([`EvalDump::spill_into`]); never in memory.
+    pub fn into_arrays(self) -> io::Result<EvalArrays> {
+        Ok(EvalArrays {
+            frames: self.frames,
+            vertices: self.vertices.len(),
+            mesh_rows: self.mesh_rows,
+            joints: self.names.len(),
+            max_influences: self.max_influences,
+            times: self.times.into_f32()?,
+            positions: self.positions.into_f32()?,
+            joint_world: self.joint_world.into_f32()?,
+            skin_matrices: self.skin_matrices.into_f32()?,
+            rest_positions: self.rest_positions,
+            joint_names: self.names,
+            influence_joints: self.influence_joints,
+            influence_weights: self.influence_weights,
+            skinning: self.skinning,
+        })
+    }
+
     /// The `.npz` arrays; with `frames`, the per-frame arrays get a leading frame axis and
     /// `times` is written.
     pub fn finish(self, frames: bool) -> NpzWriter {
@@ -209,4 +254,40 @@ impl EvalDump {
         npz.add("skinning", &[1], Data::Str(vec![self.skinning.to_string()]));
         npz
     }
+}
+
+/// The arrays of an [`EvalDump`] held in memory ([`EvalDump::into_arrays`]), flat and
+/// C-ordered, with the sizes that shape them: `F` frames, `V` vertices, `J` joints, `K`
+/// influences per vertex.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EvalArrays {
+    /// `F`.
+    pub frames: usize,
+    /// `V`.
+    pub vertices: usize,
+    /// Per mesh of the asset, per vertex of that mesh: its row in `positions` (the row of
+    /// its source vertex), so `positions[f][mesh_rows[m][v]]` is mesh `m`'s vertex `v`.
+    pub mesh_rows: Vec<Vec<u32>>,
+    /// `J`.
+    pub joints: usize,
+    /// `K`.
+    pub max_influences: usize,
+    /// `F` seconds.
+    pub times: Vec<f32>,
+    /// `F x V x 3`, model space.
+    pub positions: Vec<f32>,
+    /// `F x J x 4 x 4`, row-major.
+    pub joint_world: Vec<f32>,
+    /// `F x J x 4 x 4`, row-major.
+    pub skin_matrices: Vec<f32>,
+    /// `V x 3`.
+    pub rest_positions: Vec<f32>,
+    /// `J` names.
+    pub joint_names: Vec<String>,
+    /// `V x K`, zero-padded.
+    pub influence_joints: Vec<i32>,
+    /// `V x K`, zero-padded.
+    pub influence_weights: Vec<f32>,
+    /// `"lbs"` or `"dqs"`.
+    pub skinning: &'static str,
 }

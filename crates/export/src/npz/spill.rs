@@ -110,6 +110,19 @@ impl Spill {
         }
         sink.write_all(&self.memory)
     }
+
+    /// Every appended value, in order.
+    ///
+    /// # Errors
+    /// As [`Spill::copy_to`].
+    pub(crate) fn into_f32(self) -> io::Result<Vec<f32>> {
+        let mut bytes = Vec::with_capacity(usize::try_from(self.len).unwrap_or(0));
+        self.copy_to(&mut bytes)?;
+        Ok(bytes
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect())
+    }
 }
 
 #[cfg(test)]

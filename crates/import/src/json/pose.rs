@@ -63,6 +63,36 @@ pub fn read(path: &Path, skeleton: &Skeleton) -> Result<Vec<RestRotation>, JsonE
     entries_of(entries, skeleton, path, "")
 }
 
+/// Reads the text of a pose file for `skeleton`; `origin` names it in errors (a file, or
+/// what the text came from).
+///
+/// # Errors
+/// As [`read`], but for reading the file.
+///
+/// ```
+/// # use rigport_model::{Joint, Skeleton, Transform};
+/// let skeleton = Skeleton::new(vec![Joint {
+///     name: "root".into(),
+///     parent: None,
+///     rest_local: Transform::IDENTITY,
+/// }])
+/// .expect("one root");
+/// let origin = std::path::Path::new("pose");
+/// let pose = rigport_import::json::pose::parse(r#"{"root": {"quat": [0, 0, 0, 1]}}"#, origin, &skeleton)?;
+/// assert_eq!(pose.len(), 1);
+/// let err = rigport_import::json::pose::parse(r#"{"hips": {"quat": [0, 0, 0, 1]}}"#, origin, &skeleton);
+/// assert!(err.unwrap_err().to_string().starts_with("pose: at /hips"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn parse(
+    text: &str,
+    origin: &Path,
+    skeleton: &Skeleton,
+) -> Result<Vec<RestRotation>, JsonError> {
+    let entries: serde_json::Map<String, serde_json::Value> = super::parse(text, origin)?;
+    entries_of(entries, skeleton, origin, "")
+}
+
 /// The rotations of pose entries (joint name -> `{"quat"}` or `{"euler_deg", "order"}`),
 /// found at `json_path` (`""` for a whole file, `/keys/2/pose`) in `path`.
 pub(crate) fn entries_of(
