@@ -10,6 +10,11 @@
 #  7. clippy                 cargo clippy --workspace --all-targets --locked -- -D warnings
 #  8. output hashes          tools/output_hashes.sh (the demo and every corpus conversion
 #                            hash as recorded in tools/output_hashes.txt)
+#  8b. Python wheel         crates/python built by maturin (the test profile, the shared target
+#                            folder: the library crates step 8 compiled are reused), installed
+#                            into tools/.venv (and tools/.venv-blender), then pytest
+#                            crates/python/tests: the wheel against the CLI on the corpus, the
+#                            abi3 file under a second Python minor version, and inside Blender
 #  9. module circles         tools/module_cycles.py (no file of a crate imports one that
 #                            imports it back); tools/one_concept.py (each concept the model
 #                            defines -- skinning method, up axis, influence fit, output
@@ -36,6 +41,9 @@
 #     took 173 CPU-s in dev against 443 CPU-s in release (opt-level 3 for every
 #     dependency), and dev keeps debug assertions and overflow checks on.
 #   RIGPORT_NO_NEXTEST=1               use plain `cargo test` even if nextest is installed
+#   RIGPORT_SECOND_PYTHON=PATH         the Python (not 3.11) the abi3 wheel must also import
+#                                      under (default: the first of pyenv's 3.13, 3.12, 3.10,
+#                                      3.9, then python3.13 ... python3.9 on PATH)
 #   RIGPORT_NO_BLENDER=1               do not install bpy (tools/.venv-blender); the Blender
 #                                      tests then skip (and fail when CI is set)
 #   extra arguments are passed to the test runner, e.g. `bash tools/test.sh -E 'test(fk)'`
@@ -293,6 +301,56 @@ else
     "$(grep -m1 -oE '[0-9]+ of [0-9]+ outputs differ: .{0,80}' "$hash_log" || echo 'build failed')"
 fi
 rm -f "$hash_log"
+
+# ----------------------------------------------------- 8b Python wheel + pytest
+# maturin builds crates/python in the test profile into the shared target folder: the
+# library crates step 8 compiled (same features) are reused, only PyO3, numpy and the
+# bindings compile. The wheel goes into both venvs; pytest runs it against the CLI of step 8.
+CURRENT_STEP="Python wheel (maturin + pytest, $PROFILE)"
+banner "$CURRENT_STEP"
+t0=$SECONDS
+wheel_dir="$WORK/wheel"
+py_log="$WORK/pytest.log"
+py_rc=0
+# A second Python minor version for the abi3 check (the venvs are 3.11).
+second_python="${RIGPORT_SECOND_PYTHON:-}"
+if [[ -z "$second_python" ]]; then
+  pyenv_root="$(pyenv root 2>/dev/null || true)"
+  for minor in 13 12 10 9; do
+    for cand in "$pyenv_root"/versions/3."$minor".*/bin/python3 "$(command -v python3."$minor" 2>/dev/null || true)"; do
+      if [[ -x "$cand" ]] && "$cand" -c 'import sys; sys.exit(sys.version_info[:2] == (3, 11))' 2>/dev/null; then
+        second_python="$cand"; break 2
+      fi
+    done
+  done
+fi
+maturin_args=(build --locked --profile "$PROFILE" --strip -m crates/python/Cargo.toml --out "$wheel_dir"
+  --interpreter "$RIGPORT_PYTHON")
+if "$ROOT/tools/.venv/bin/maturin" "${maturin_args[@]}"; then
+  wheel="$(ls "$wheel_dir"/rigport-*.whl)"
+  PIP_DISABLE_PIP_VERSION_CHECK=1 "$RIGPORT_PYTHON" -m pip install --quiet --no-deps --force-reinstall "$wheel"
+  if [[ -n "${RIGPORT_BLENDER_PYTHON:-}" && -x "${RIGPORT_BLENDER_PYTHON:-}" ]]; then
+    PIP_DISABLE_PIP_VERSION_CHECK=1 "$RIGPORT_BLENDER_PYTHON" -m pip install --quiet --no-deps --force-reinstall "$wheel"
+  fi
+  set +e
+  RIGPORT_BIN="${CARGO_TARGET_DIR:-$ROOT/target}/$BIN_DIR/rigport" RIGPORT_WHEEL="$wheel" \
+    RIGPORT_SECOND_PYTHON="$second_python" \
+    "$RIGPORT_PYTHON" -m pytest -q -rs -p no:cacheprovider crates/python/tests 2>&1 | tee "$py_log"
+  py_rc=${PIPESTATUS[0]}
+  set -e
+else
+  py_rc=1
+  : > "$py_log"
+fi
+plain "$py_log"
+# "3 failed, 17 passed, 2 skipped, 4 warnings in 9.12s"
+line="$(grep -E '^=*\s*[0-9]+ (passed|failed)' "$py_log.plain" | tail -n 1 || true)"
+NOTE="$(sed -E 's/^=+ *//; s/ *=+$//' <<<"$line")"
+[[ "$line" =~ ([0-9]+)\ passed ]] && TOTAL_PASSED=$((TOTAL_PASSED + BASH_REMATCH[1]))
+[[ "$line" =~ ([0-9]+)\ failed ]] && TOTAL_FAILED=$((TOTAL_FAILED + BASH_REMATCH[1]))
+[[ "$line" =~ ([0-9]+)\ skipped ]] && TOTAL_SKIPPED=$((TOTAL_SKIPPED + BASH_REMATCH[1]))
+[[ -n "$line" ]] || NOTE="wheel build failed or pytest did not finish (exit $py_rc)"
+record "$CURRENT_STEP" "$( ((py_rc == 0)) && echo PASS || echo FAIL)" "$((SECONDS - t0))" "$NOTE"
 
 # --------------------------------------------------------- 9 module circles
 CURRENT_STEP="module circles (tools/module_cycles.py)"
