@@ -19,6 +19,8 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _rigport(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
+    // As the CLI does first: large buffers (frames, meshes) reuse freed memory.
+    rigport_pipeline::memory::raise_malloc_mmap_threshold();
     m.add_function(wrap_pyfunction!(asset::open, m)?)?;
     m.add_class::<asset::Asset>()?;
     m.add_class::<asset::Mesh>()?;
