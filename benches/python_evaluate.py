@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The Python bindings' overhead (issue 32): `rigport.open(...).evaluate(fps=25)` against
 `rigport eval`'s in-process time (`examples/eval_in_process.rs`: import, sampling,
-skinning, the `.npz` written) on the corpus' largest Pinocchio rig, `human_model1`
+skinning, the `.npz` written), and against the same work in Rust (`--in-memory`: the
+import and `rigport_pipeline::eval::evaluate`, no `.npz`: the bindings' own cost) on the corpus' largest Pinocchio rig, `human_model1`
 (13,336 vertices, 18 joints), keyed with the 100-frame "arms" clip (3.96 s at 25 fps;
 benches/render_gif.sh's clip) by `rigport animate`.
 
@@ -58,23 +59,29 @@ def main():
     frames = asset.evaluate(fps=25)
     print(f"arms.glb: {frames.positions.shape[0]} frames x {frames.positions.shape[1]} vertices, "
           f"{len(frames.joint_names)} joints")
-    ours, theirs = [], []
-    for _ in range(args.rounds):
+    ours, theirs, same = [], [], []
+
+    def rust(*flags):
         done = subprocess.run(
-            [target / "examples" / "eval_in_process", "--fps", "25", "--runs", str(args.runs), glb],
+            [target / "examples" / "eval_in_process", "--fps", "25", "--runs", str(args.runs), *flags, glb],
             check=True, capture_output=True, text=True,
         )
         line = done.stdout.strip()
-        theirs += [float(s) for s in line[line.index("(") + 1:-1].split()]
+        return [float(s) for s in line[line.index("(") + 1:-1].split()]
+
+    for _ in range(args.rounds):
+        theirs += rust()
+        same += rust("--in-memory")
         rigport.open(glb).evaluate(fps=25)  # warm-up
         for _ in range(args.runs):
             start = time.perf_counter()
             rigport.open(glb).evaluate(fps=25)
             ours.append(time.perf_counter() - start)
-    py, rs = statistics.median(ours), statistics.median(theirs)
+    py, rs, rm = statistics.median(ours), statistics.median(theirs), statistics.median(same)
     print(f"rigport eval in-process (import + evaluate + .npz): median {rs * 1000:.1f} ms of {len(theirs)} runs")
+    print(f"the same in Rust, arrays kept (import + evaluate):   median {rm * 1000:.1f} ms of {len(same)} runs")
     print(f"rigport.open(...).evaluate(fps=25) in Python:       median {py * 1000:.1f} ms of {len(ours)} runs")
-    print(f"ratio Python / eval: {py / rs:.3f}")
+    print(f"ratio Python / eval: {py / rs:.3f}; Python / the same in Rust: {py / rm:.3f}")
     return 0
 
 

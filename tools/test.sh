@@ -315,7 +315,7 @@ py_rc=0
 # A second Python minor version for the abi3 check (the venvs are 3.11).
 second_python="${RIGPORT_SECOND_PYTHON:-}"
 if [[ -z "$second_python" ]]; then
-  pyenv_root="$(pyenv root 2>/dev/null || true)"
+  pyenv_root="$(pyenv root 2>/dev/null || echo "${PYENV_ROOT:-$HOME/.pyenv}")"
   for minor in 13 12 10 9; do
     for cand in "$pyenv_root"/versions/3."$minor".*/bin/python3 "$(command -v python3."$minor" 2>/dev/null || true)"; do
       if [[ -x "$cand" ]] && "$cand" -c 'import sys; sys.exit(sys.version_info[:2] == (3, 11))' 2>/dev/null; then
@@ -350,6 +350,7 @@ NOTE="$(sed -E 's/^=+ *//; s/ *=+$//' <<<"$line")"
 [[ "$line" =~ ([0-9]+)\ failed ]] && TOTAL_FAILED=$((TOTAL_FAILED + BASH_REMATCH[1]))
 [[ "$line" =~ ([0-9]+)\ skipped ]] && TOTAL_SKIPPED=$((TOTAL_SKIPPED + BASH_REMATCH[1]))
 [[ -n "$line" ]] || NOTE="wheel build failed or pytest did not finish (exit $py_rc)"
+NOTE="$NOTE; second Python: ${second_python:-none found}"
 record "$CURRENT_STEP" "$( ((py_rc == 0)) && echo PASS || echo FAIL)" "$((SECONDS - t0))" "$NOTE"
 
 # --------------------------------------------------------- 9 module circles

@@ -15,7 +15,7 @@ use rigport_ik::footlock::{FootlockOptions, PinAt};
 use rigport_ik::retarget::RetargetOptions;
 use rigport_ik::{IkMethod, Lambda};
 use rigport_pipeline::PipelineError;
-use rigport_pipeline::load::{Input, Inputs};
+use rigport_pipeline::load::Input;
 use rigport_pipeline::render as render_pipeline;
 use rigport_pipeline::retime as retime_pipeline;
 use rigport_pipeline::write::Output;
@@ -305,7 +305,7 @@ fn retarget(
     let input = input_of(input)?;
     let onto_input = input_of(onto)?;
     let mut onto = input.clone();
-    onto.files = Inputs { ..onto_input.files };
+    onto.files = onto_input.files;
     let (output, root_motion) = write_options(output, options, true)?;
     let request = rigport_pipeline::retarget::RetargetRequest {
         onto,
