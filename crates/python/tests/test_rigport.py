@@ -214,6 +214,10 @@ def test_usage_and_output_errors(tmp_path):
         asset.write(tmp_path / "walk.usd")
     with pytest.raises(rigport.UsageError, match="skinning"):
         asset.evaluate(skinning="linear")
+    with pytest.raises(rigport.UsageError, match="not both"):
+        asset.evaluate(times=[0.1], fps=30.0)
+    with pytest.raises(rigport.InputError, match="sample time NaN"):
+        asset.evaluate(times=[float("nan")])
     with pytest.raises(rigport.UsageError, match="input_units"):
         rigport.open(corpus(BVH), input_units="furlongs")
     with pytest.raises(rigport.UsageError, match="one of"):
