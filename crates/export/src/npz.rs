@@ -21,7 +21,7 @@ use std::io::{self, Cursor, Seek, Write};
 mod dump;
 mod spill;
 
-pub use dump::{EvalArrays, EvalDump};
+pub use dump::{influence_row, padded, EvalArrays, EvalDump};
 pub use spill::SPILL_LIMIT;
 
 use spill::Spill;

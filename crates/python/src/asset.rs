@@ -144,8 +144,11 @@ impl Asset {
     #[getter]
     fn meshes(&self, py: Python<'_>) -> Vec<Mesh> {
         let asset = &self.imported.asset;
+        // The skin of each mesh as the evaluator picks it.
+        let rig = rigport_eval::Rig::new(asset).ok();
+        let skin = |index| rig.as_ref().and_then(|r| r.skin_of_mesh(index));
         (0..asset.meshes.len())
-            .map(|index| Mesh::of(py, asset, index))
+            .map(|index| Mesh::of(py, asset, index, skin(index)))
             .collect()
     }
 
@@ -327,8 +330,8 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// Mesh `index` of `asset` as arrays.
-    fn of(py: Python<'_>, asset: &rigport_model::Asset, index: usize) -> Self {
+    /// Mesh `index` of `asset` as arrays; `skin` is the binding that deforms it.
+    fn of(py: Python<'_>, asset: &rigport_model::Asset, index: usize, skin: Option<usize>) -> Self {
         {
             let mesh = &asset.meshes[index];
             let v = mesh.positions.len();
@@ -344,31 +347,15 @@ impl Mesh {
             let indices = Array2::from_shape_vec((mesh.triangles.len(), 3), triangles)
                 .unwrap_or_else(|_| Array2::zeros((0, 3)));
             // Skin weights as (joint, weight) rows over the skeleton's joints, zero-padded
-            // to the widest vertex: the binding's palette indices mapped to joints.
-            let skin = asset.skins.iter().find(|s| s.mesh.get() == index);
+            // to the widest vertex, as `rigport eval` dumps them.
+            let skin = skin.and_then(|s| asset.skins.get(s));
             let table: Vec<Vec<(i32, f32)>> = (0..v)
-                .map(|vi| match (skin, mesh.attached_to) {
-                    (Some(skin), _) if vi < skin.influences.vertex_count() => skin
-                        .influences
-                        .vertex(vi)
-                        .iter()
-                        .map(|i| (skin.joints[i.joint as usize].get() as i32, i.weight))
-                        .collect(),
-                    (None, Some(j)) => vec![(j.get() as i32, 1.0)],
-                    _ => Vec::new(),
+                .map(|vi| match skin {
+                    Some(skin) if vi >= skin.influences.vertex_count() => Vec::new(),
+                    _ => rigport_export::npz::influence_row(skin, mesh.attached_to, vi),
                 })
                 .collect();
-            let k = table.iter().map(Vec::len).max().unwrap_or(0);
-            let cell =
-                |row: &Vec<(i32, f32)>, slot: usize| row.get(slot).copied().unwrap_or((0, 0.0));
-            let joints: Vec<i32> = table
-                .iter()
-                .flat_map(|r| (0..k).map(|s| cell(r, s).0))
-                .collect();
-            let weights: Vec<f32> = table
-                .iter()
-                .flat_map(|r| (0..k).map(|s| cell(r, s).1))
-                .collect();
+            let (joints, weights, k) = rigport_export::npz::padded(&table);
             let joints =
                 Array2::from_shape_vec((v, k), joints).unwrap_or_else(|_| Array2::zeros((0, k)));
             Self {

@@ -186,6 +186,10 @@ def test_asset_data(tmp_path):
     rest = asset.evaluate()
     # (rest skinning rounds: within a few ulps)
     np.testing.assert_allclose(rest.positions[0][rest.rows[0]], mesh.positions, atol=1e-5)
+    # The mesh's influences are the dump's, row for row.
+    dumped_joints, dumped_weights = rest.influences
+    same_bits(dumped_joints[rest.rows[0]], joints, "influence joints")
+    same_bits(dumped_weights[rest.rows[0]], weights, "influence weights")
     gltf = rigport.open(corpus(GLTF))
     assert gltf.meters_per_unit == 1.0 and gltf.clips[0].name
 

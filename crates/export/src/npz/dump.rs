@@ -4,13 +4,62 @@ use std::io;
 use std::path::Path;
 
 use glam::{Mat4, Vec3};
-use rigport_model::Asset;
+use rigport_model::{Asset, JointIndex, SkinBinding};
 
 use super::{Data, NpzWriter, Spill};
 
 /// Row-major 4x4 (numpy's C order) of a column-vector matrix, so `M[j] @ p` works in numpy.
 fn push_row_major(out: &mut Vec<f32>, m: &Mat4) {
     out.extend_from_slice(&m.transpose().to_cols_array());
+}
+
+/// Vertex `v`'s influences as (skeleton joint, weight): through `skin` (the binding that
+/// deforms its mesh), else weight 1 on the joint the mesh is `attached_to`, else none.
+///
+/// ```
+/// use rigport_export::npz::influence_row;
+/// use rigport_model::JointIndex;
+///
+/// // A mesh without skin, attached to joint 3.
+/// assert_eq!(influence_row(None, Some(JointIndex(3)), 0), vec![(3, 1.0)]);
+/// assert!(influence_row(None, None, 0).is_empty());
+/// ```
+pub fn influence_row(
+    skin: Option<&SkinBinding>,
+    attached_to: Option<JointIndex>,
+    v: usize,
+) -> Vec<(i32, f32)> {
+    match (skin, attached_to) {
+        (Some(skin), _) => skin
+            .influences
+            .vertex(v)
+            .iter()
+            .map(|i| (skin.joints[i.joint as usize].0 as i32, i.weight))
+            .collect(),
+        (None, Some(j)) => vec![(j.0 as i32, 1.0)],
+        (None, None) => Vec::new(),
+    }
+}
+
+/// Rows of (joint, weight) as two row-major `rows x K` tables zero-padded to the widest
+/// row's `K`: (joints, weights, K).
+///
+/// ```
+/// let (joints, weights, k) = rigport_export::npz::padded(&[vec![(1, 0.5), (2, 0.5)], vec![(4, 1.0)]]);
+/// assert_eq!((joints, weights, k), (vec![1, 2, 4, 0], vec![0.5, 0.5, 1.0, 0.0], 2));
+/// ```
+pub fn padded(rows: &[Vec<(i32, f32)>]) -> (Vec<i32>, Vec<f32>, usize) {
+    let k = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let mut joints = Vec::with_capacity(rows.len() * k);
+    let mut weights = Vec::with_capacity(rows.len() * k);
+    for row in rows {
+        for slot in 0..k {
+            let (j, w) = row.get(slot).copied().unwrap_or((0, 0.0));
+            joints.push(j);
+            weights.push(w);
+        }
+    }
+    (joints, weights, k)
 }
 
 /// The arrays of a `rigport eval` dump, filled frame by frame: `times` (with frames),
@@ -101,28 +150,10 @@ impl EvalDump {
                 };
                 vertices.push((mi, v));
                 rest_positions.extend_from_slice(&mesh.positions[v].to_array());
-                rows.push(match (skin, mesh.attached_to) {
-                    (Some(skin), _) => skin
-                        .influences
-                        .vertex(v)
-                        .iter()
-                        .map(|i| (skin.joints[i.joint as usize].0 as i32, i.weight))
-                        .collect(),
-                    (None, Some(j)) => vec![(j.0 as i32, 1.0)],
-                    (None, None) => Vec::new(),
-                });
+                rows.push(influence_row(skin, mesh.attached_to, v));
             }
         }
-        let k = rows.iter().map(Vec::len).max().unwrap_or(0);
-        let mut influence_joints = Vec::with_capacity(rows.len() * k);
-        let mut influence_weights = Vec::with_capacity(rows.len() * k);
-        for row in &rows {
-            for slot in 0..k {
-                let (j, w) = row.get(slot).copied().unwrap_or((0, 0.0));
-                influence_joints.push(j);
-                influence_weights.push(w);
-            }
-        }
+        let (influence_joints, influence_weights, k) = padded(&rows);
         Self {
             vertices,
             mesh_rows,
