@@ -5,7 +5,8 @@
 #                       (npm three, for tools/three_eval.mjs and three_source_eval.mjs)
 #                       and @xmldom/xmldom (ColladaLoader's DOMParser in Node), pinned in
 #                       tools/package.json + tools/package-lock.json, `npm ci`
-#   tools/.venv         Python >= 3.11 venv with usd-core + numpy, pinned in
+#   tools/.venv         Python >= 3.11 venv with usd-core + numpy, and maturin + pytest
+#                       for the Python wheel (crates/python), pinned in
 #                       tools/requirements.txt
 #   tools/.venv-blender optional (--blender, or RIGPORT_SETUP_BLENDER=1): Python 3.11 venv
 #                       with Blender as a module (bpy, 373 MB wheel, 0.9 GB installed) and

@@ -31,7 +31,7 @@
 #
 # The Rust tests see:
 #   RIGPORT_GLTF_VALIDATOR  absolute path of tools/validate_gltf.mjs (run it with node)
-#   RIGPORT_PYTHON          absolute path of tools/.venv/bin/python (usd-core, numpy)
+#   RIGPORT_PYTHON          absolute path of tools/.venv/bin/python (usd-core, numpy, maturin, pytest; step 8b installs the rigport wheel into it)
 # Tests that need the corpus (../shared/corpus beside the repo) skip when it is
 # absent, unless CI is set.
 #
