@@ -270,3 +270,26 @@ def test_evaluate_releases_the_gil():
     worker.join()
     longest = max(b - a for a, b in zip(ticks, ticks[1:]))
     assert longest < 0.5 * alone, f"paused {longest:.3f} s of a {alone:.3f} s evaluation"
+
+
+@pytest.mark.parametrize(
+    "command, source, kwargs, flags, out",
+    [
+        ("footlock", BVH, {"pin_first": True}, ["--pin-first"], "locked.glb"),
+        ("sequence", BVH, {"crossfade": 2, "loop": True}, ["--crossfade", "2", "--loop"], "seq.glb"),
+        ("bake", GLTF, {"fps": 10.0, "skinning": "dqs"}, ["--fps", "10", "--skinning", "dqs"], "baked.glb"),
+        ("render", GLTF, {"size": "64x48", "frames": "0..3", "view": "three-quarter"},
+         ["--size", "64x48", "--frames", "0..3", "--view", "three-quarter"], "man.gif"),
+    ],
+)
+def test_command_functions_write_the_cli_bytes(tmp_path, cli, command, source, kwargs, flags, out):
+    source = corpus(source)
+    # An opened asset carries its input options (centimetres for the BVH, which states no
+    # unit) to the command.
+    units = {"input_units": "cm"} if source.suffix == ".bvh" else {}
+    asset = rigport.open(source, **units)
+    unit_flags = ["--input-units", "cm"] if units else []
+    cli(command, source, *unit_flags, *flags, "-o", tmp_path / f"cli-{out}")
+    report = getattr(rigport, command)(asset, tmp_path / f"py-{out}", **kwargs)
+    assert isinstance(report, rigport.Report)
+    assert (tmp_path / f"py-{out}").read_bytes() == (tmp_path / f"cli-{out}").read_bytes()
