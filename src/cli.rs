@@ -18,6 +18,7 @@ use crate::commands::render::RenderArgs;
 use crate::commands::retarget::RetargetArgs;
 use crate::commands::retime::RetimeArgs;
 use crate::commands::sequence::SequenceArgs;
+use crate::commands::verify::VerifyArgs;
 use crate::exit;
 
 /// Bring legacy character rigs and motion into glTF 2.0.
@@ -92,6 +93,9 @@ pub enum Command {
     Cloth(ClothArgs),
     /// Render rigs and clips to PNG contact sheets or GIF/APNG animations (CPU, headless).
     Render(RenderArgs),
+    /// Check that CANDIDATE plays like REFERENCE (any two formats), and show where not.
+    #[command(after_help = include_str!("../docs/help/verify.txt"))]
+    Verify(VerifyArgs),
     /// Write the built-in demo character (no input files needed).
     Demo(DemoArgs),
     /// Run many items from a JSON Lines manifest (or every asset of a folder), in-process

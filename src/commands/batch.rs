@@ -153,32 +153,10 @@ fn execute(
     item: &Item,
     outputs: &[PathBuf],
 ) -> Result<Vec<String>, ItemError> {
-    let input = |message: String| ItemError {
-        kind: FailureKind::Input,
-        message,
-    };
-    if !COMMANDS.contains(&item.command.as_str()) {
-        let expected = COMMANDS.join(", ");
-        let message = format!(
-            "command {:?} cannot run in a batch; expected one of {expected}",
-            item.command
-        );
-        return Err(input(message));
-    }
-    let [output] = outputs else {
-        return Err(input(format!("{} writes one output", item.command)));
-    };
-    let argv = item.command_line("rigport", output);
+    let argv = rigport_batch::command_line::argv("rigport", item, &COMMANDS, outputs)?;
     let captured = Arc::new(Mutex::new(Vec::new()));
     let result = match run_item(argv, deny_warnings, Arc::clone(&captured)) {
-        ItemRun::Unparsed(text) => {
-            let first = text.lines().next().unwrap_or_default();
-            return Err(input(format!(
-                "{}: {}",
-                item.command,
-                first.trim_start_matches("error: ")
-            )));
-        }
+        ItemRun::Unparsed(text) => return Err(rigport_batch::command_line::unparsed(item, &text)),
         ItemRun::Ran(result) => result,
     };
     let warnings = std::mem::take(&mut *captured.lock().unwrap_or_else(|e| e.into_inner()));

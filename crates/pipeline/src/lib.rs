@@ -68,6 +68,7 @@ pub mod root_motion;
 pub mod sequence;
 pub mod units;
 mod weights;
+pub mod verify;
 pub mod write;
 
 pub use animate::run as animate;
@@ -85,6 +86,7 @@ pub use report::Report;
 pub use retarget::run as retarget;
 pub use retime::run as retime;
 pub use sequence::run as sequence;
+pub use verify::run as verify;
 
 pub use error::{PipelineError, chain};
 pub use rigport_model::budget::{MemoryBudget, OverBudget};
