@@ -55,4 +55,5 @@ mod usd_import;
 mod usd_root_motion;
 mod usd_topology;
 mod usdz;
+mod verify;
 mod weights;

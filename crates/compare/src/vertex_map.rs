@@ -221,30 +221,41 @@ impl Grid {
     }
 
     /// The nearest point to `p` and every point within `tie` of that distance, searched in
-    /// growing shells of cells until no closer point can be left.
+    /// growing shells of cells (clamped to the grid) until no closer point can be left.
     fn nearest(&self, p: DVec3, points: &[DVec3], tie: f64) -> Vec<u32> {
-        let center = self.key(p);
+        let c = self.key(p);
         let mut best = f64::INFINITY;
         let mut found: Vec<(f64, u32)> = Vec::new();
-        let reach = self.dims.iter().copied().max().unwrap_or(1)
-            + center.iter().map(|c| c.abs()).max().unwrap_or(0);
-        for r in 0..=reach {
+        // The Chebyshev distance in cells from `c` to the grid, and to its far corner.
+        let gap = |k: usize| (-c[k]).max(c[k] - (self.dims[k] - 1)).max(0);
+        let far = |k: usize| c[k].abs().max((self.dims[k] - 1 - c[k]).abs());
+        let first = gap(0).max(gap(1)).max(gap(2));
+        let last = far(0).max(far(1)).max(far(2));
+        let visit = |key: [i64; 3], found: &mut Vec<(f64, u32)>, best: &mut f64| {
+            for &i in self.cells.get(&key).map_or(&[][..], Vec::as_slice) {
+                let d = points[i as usize].distance(p);
+                if d <= *best + tie {
+                    *best = best.min(d);
+                    found.push((d, i));
+                }
+            }
+        };
+        for r in first..=last {
             // Every point in shell r or beyond is at least (r - 1) cells away.
             if (r - 1) as f64 * self.cell > best + tie {
                 break;
             }
-            for dz in -r..=r {
-                for dy in -r..=r {
-                    for dx in -r..=r {
-                        if dx.abs().max(dy.abs()).max(dz.abs()) != r {
-                            continue;
+            let range = |k: usize| (c[k] - r).max(0)..=(c[k] + r).min(self.dims[k] - 1);
+            for z in range(2) {
+                for y in range(1) {
+                    if (z - c[2]).abs() == r || (y - c[1]).abs() == r {
+                        for x in range(0) {
+                            visit([x, y, z], &mut found, &mut best);
                         }
-                        let key = [center[0] + dx, center[1] + dy, center[2] + dz];
-                        for &i in self.cells.get(&key).map_or(&[][..], Vec::as_slice) {
-                            let d = points[i as usize].distance(p);
-                            if d <= best + tie {
-                                best = best.min(d);
-                                found.push((d, i));
+                    } else {
+                        for x in [c[0] - r, c[0] + r] {
+                            if (0..self.dims[0]).contains(&x) {
+                                visit([x, y, z], &mut found, &mut best);
                             }
                         }
                     }
@@ -257,6 +268,7 @@ impl Grid {
             .map(|(_, i)| i)
             .collect();
         out.sort_unstable();
+        out.dedup();
         out
     }
 }

@@ -39,6 +39,9 @@ pub struct DeviationPicture<'a> {
     pub marked: &'a [(usize, usize)],
 }
 
+/// A marked vertex's pixel centre in the picture (`None`: behind the camera or unknown).
+pub type MarkPixel = Option<[f32; 2]>;
+
 /// The colour of deviation fraction `u` of the scale (clamped to 0..1).
 ///
 /// ```
@@ -71,7 +74,7 @@ pub fn render_deviation(
     picture: &DeviationPicture<'_>,
     width: u32,
     height: u32,
-) -> Result<(Framebuffer, Vec<Option<[f32; 2]>>), RenderError> {
+) -> Result<(Framebuffer, Vec<MarkPixel>), RenderError> {
     if !(16..=8192).contains(&width) || !(16..=8192).contains(&height) {
         return Err(RenderError::Size { width, height });
     }

@@ -8,7 +8,7 @@ use rigport_compare::side::{Posed, Scratch, Side};
 use rigport_model::glam::Vec3;
 use rigport_render::deviation::{DeviationPicture, render_deviation};
 
-use super::{Findings, compile_clip, frame_of};
+use super::findings::{Findings, compile_clip, frame_of};
 use crate::PipelineError;
 use crate::outputs::write_file;
 

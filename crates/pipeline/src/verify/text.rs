@@ -5,8 +5,9 @@ use std::fmt::Write as _;
 use rigport_compare::deviation::{At, Deviation};
 use serde_json::{Value, json};
 
+use super::findings::{ClipResult, Findings};
+use super::options::Times;
 use super::picture::Mark;
-use super::{ClipResult, Findings, Times};
 
 /// Vertices beyond the tolerance listed in the text (all of them, up to
 /// [`JSON_VERTICES`], in the JSON).
