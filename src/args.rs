@@ -64,7 +64,7 @@ impl InputArgs {
                 auto_weights: self.weights.is_some(),
             },
             bone_mesh: !self.no_bone_mesh,
-            budget: crate::memory::budget(),
+            budget: rigport_pipeline::memory::installed(),
             units: self.input_units,
             force_units: self.force_units,
         }

@@ -39,13 +39,17 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 /// Parses and runs one `batch` item's command line (see [`batch::RunItem`]).
-fn run_item(argv: Vec<OsString>, deny_warnings: bool, captured: Captured) -> batch::ItemRun {
+fn run_item(
+    argv: Vec<OsString>,
+    deny_warnings: bool,
+    captured: Captured,
+) -> Result<Result<()>, String> {
     let cli = match Cli::try_parse_from(argv) {
         Ok(cli) => cli,
-        Err(e) => return batch::ItemRun::Unparsed(e.to_string()),
+        Err(e) => return Err(e.to_string()),
     };
     let ctx = Context::new(true, deny_warnings || cli.deny_warnings, Some(captured));
-    batch::ItemRun::Ran(run_command(ctx, cli.command))
+    Ok(run_command(ctx, cli.command))
 }
 
 /// Runs one command (also each item of `batch`, with a capturing context).

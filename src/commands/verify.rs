@@ -43,10 +43,7 @@ pub struct VerifyArgs {
 
 /// Runs `verify`: prints the report, and fails with [`Mismatch`] (exit 5) beyond `--tol`.
 pub fn run(ctx: &Context, args: &VerifyArgs) -> Result<()> {
-    let input = |path: &PathBuf| Input {
-        budget: crate::memory::budget(),
-        ..Input::new(vec![path.clone()])
-    };
+    let input = |path: &PathBuf| Input::new(vec![path.clone()]);
     let options = VerifyOptions {
         clips: Clips::from_flags(args.clip.as_deref(), args.all_clips),
         times: Times::from_flags(args.fps, args.at_keys),
@@ -61,11 +58,11 @@ pub fn run(ctx: &Context, args: &VerifyArgs) -> Result<()> {
         passed = verdict.passed;
         Ok(verdict.report)
     })?;
-    match passed {
-        true => Ok(()),
-        false => Err(Mismatch {
-            tolerance: args.tol,
+    anyhow::ensure!(
+        passed,
+        Mismatch {
+            tolerance: args.tol
         }
-        .into()),
-    }
+    );
+    Ok(())
 }

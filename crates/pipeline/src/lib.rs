@@ -67,8 +67,8 @@ pub mod retime;
 pub mod root_motion;
 pub mod sequence;
 pub mod units;
-mod weights;
 pub mod verify;
+mod weights;
 pub mod write;
 
 pub use animate::run as animate;

@@ -51,13 +51,14 @@ impl Input {
     /// ```
     /// let input = rigport_pipeline::load::Input::new(vec!["walk.bvh".into()]);
     /// assert!(input.bone_mesh);
+    /// // The process's budget (`memory::install`), unlimited when none was installed.
     /// assert_eq!(input.budget, rigport_pipeline::MemoryBudget::UNLIMITED);
     /// ```
     pub fn new(paths: Vec<PathBuf>) -> Self {
         Self {
             files: Inputs::new(paths),
             bone_mesh: true,
-            budget: MemoryBudget::UNLIMITED,
+            budget: crate::memory::installed(),
             units: None,
             force_units: false,
         }
