@@ -4,6 +4,7 @@
 //! shifted 3 frames, a clip missing) exit 5 with that fault named; the picture's colour
 //! scale and rings; and the Blender round trip where `bpy` is installed.
 
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use rigport_model::glam::Quat;
@@ -11,6 +12,7 @@ use rigport_model::{Asset, TrackTarget, UpAxis};
 use serde_json::Value;
 
 use crate::common::{corpus, rigport, rigport_ok, scratch, PINOCCHIO_RIGS};
+use crate::gltf_read;
 
 const WALK_BVH: &str = "4_bvh/cmu_cgspeed__nobuyuki83_delfem2/walk.bvh";
 const CESIUM: &str = "5_gltf/khronos_samples__nobuyuki83_delfem2/CesiumMan.glb";
@@ -384,45 +386,104 @@ fn the_picture_has_a_colour_scale_and_rings_the_changed_vertices() {
     assert_eq!(magenta_pixels, 0, "{w}x{h}");
 }
 
+/// `glb` imported into Blender and exported again as GLB (tools/blender/gltf_roundtrip.py).
+fn through_blender(bpy: &Path, glb: &Path) -> PathBuf {
+    let out = glb.with_extension("blender.glb");
+    crate::fbx_blender::run_script(
+        bpy,
+        "gltf_roundtrip.py",
+        &[glb.to_str().unwrap(), out.to_str().unwrap()],
+    );
+    out
+}
+
+/// Blender round trip (`bpy`, io_scene_gltf2 with its defaults): rigport's glb of the
+/// corpus CesiumMan, and of a Pinocchio rig with a walk retargeted onto it, imported into
+/// Blender and exported again, then verified against rigport's glb.
+/// - CesiumMan: at the key times both share (`--at-keys`) and every 1/120 s, within 1e-5 of
+///   the diagonal.
+/// - The Pinocchio rig (its walk resampled at Blender's 24 frames per second, so that the
+///   keys meet): the joints agree to 1e-5 at the keys, and the vertices `verify` names
+///   beyond 1e-5 are exactly among those with a weight under 1e-3, the weights Blender's
+///   exporter drops (Pinocchio's attachment keeps weights down to 1e-4). Every 1/120 s,
+///   Blender's clip ends on its last whole frame, short of the source's end: named as the
+///   worst frame.
 #[test]
 fn blender_round_trip_agrees_at_key_times() {
-    // Runs where the test venv has Blender's `bpy` module (RIGPORT_PYTHON, else
-    // tools/.venv/bin/python): CesiumMan and a Pinocchio rig exported by rigport, imported
-    // and re-exported as glTF by Blender, then verified against rigport's glb with
-    // --at-keys at 1e-5. Elsewhere it is skipped with a message.
-    let python = std::env::var_os("RIGPORT_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| crate::common::repo().join("tools/.venv/bin/python"));
-    let has_bpy = std::process::Command::new(&python)
-        .args(["-c", "import bpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has_bpy {
-        eprintln!(
-            "SKIPPED: Blender's bpy is not installed in {} (pip install bpy)",
-            python.display()
-        );
+    let Some(bpy) = crate::fbx_blender::blender_python() else {
         return;
-    }
-    let Some(source) = corpus(CESIUM) else {
+    };
+    let rig = PINOCCHIO_RIGS[3];
+    let (Some(cesium), Some(mesh), Some(skel), Some(att), Some(walk)) = (
+        corpus(CESIUM),
+        corpus(rig.1),
+        corpus(rig.2),
+        corpus(rig.3),
+        corpus(WALK_BVH),
+    ) else {
         return;
     };
     let dir = scratch();
     let glb = dir.path().join("cesium.glb");
-    convert(&[&source], &glb, &[]);
-    let blender = dir.path().join("cesium_blender.glb");
-    let script = format!(
-        "import bpy\nbpy.ops.wm.read_factory_settings(use_empty=True)\n\
-         bpy.ops.import_scene.gltf(filepath={:?})\n\
-         bpy.ops.export_scene.gltf(filepath={:?}, export_format='GLB')\n",
-        glb.to_str().unwrap(),
-        blender.to_str().unwrap()
+    convert(&[&cesium], &glb, &[]);
+    let blender = through_blender(&bpy, &glb);
+    for times in [&["--at-keys"][..], &["--fps", "120"]] {
+        let mut args = vec!["--all-clips", "--tol", "1e-5"];
+        args.extend_from_slice(times);
+        let (code, json) = verify(&glb, &blender, &args);
+        let worst = json["clips"][0]["vertices"]["max_relative"].as_f64();
+        eprintln!("CesiumMan through Blender, {times:?}: worst {worst:?} of the diagonal");
+        assert_eq!(code, 0, "{times:?}: {json:#}");
+    }
+
+    let r = |p: &Path| p.to_str().unwrap().to_string();
+    let moved = dir.path().join("model1_walk.glb");
+    let (m, s, a) = (r(&mesh), r(&skel), r(&att));
+    rigport_ok(&[
+        "retarget",
+        &r(&walk),
+        "--onto",
+        &m,
+        &s,
+        &a,
+        "-q",
+        "-o",
+        &r(&moved),
+    ]);
+    let glb = dir.path().join("model1_walk24.glb");
+    rigport_ok(&["retime", &r(&moved), "--fps", "24", "-q", "-o", &r(&glb)]);
+    let blender = through_blender(&bpy, &glb);
+    let (code, json) = verify(&glb, &blender, &["--at-keys", "--tol", "1e-5"]);
+    let clip = &json["clips"][0];
+    assert!(clip["times"].as_u64().unwrap_or(0) > 60, "{clip:#}");
+    let joints = clip["joint_positions"]["max_relative"].as_f64().unwrap();
+    assert!(
+        joints <= 1e-5,
+        "joints {joints:e} of the diagonal: {clip:#}"
     );
-    let ran = std::process::Command::new(&python)
-        .args(["-c", &script])
-        .status()
-        .unwrap();
-    assert!(ran.success());
-    let (code, json) = verify(&glb, &blender, &["--at-keys", "--all-clips"]);
-    assert_eq!(code, 0, "{json:#}");
+    let scene = gltf_read::read(&glb);
+    let small: HashSet<u64> = (scene.skins[0].influences.iter().enumerate())
+        .filter(|(_, row)| row.iter().any(|&(_, w)| w > 0.0 && w < 1e-3))
+        .map(|(v, _)| v as u64)
+        .collect();
+    let beyond = clip["vertices_beyond"].as_array().unwrap();
+    assert_eq!(code, 5, "Blender dropped weights under 1e-3: {clip:#}");
+    assert!(!beyond.is_empty());
+    for v in beyond {
+        let vertex = v["vertex"].as_u64().unwrap();
+        assert!(
+            small.contains(&vertex),
+            "vertex {vertex} has no weight under 1e-3: {v}"
+        );
+    }
+    eprintln!(
+        "model1 walk through Blender at the keys: joints {joints:.2e}, {} vertices beyond \
+         1e-5, all among the {} with a weight under 1e-3",
+        beyond.len(),
+        small.len()
+    );
+    let (_, json) = verify(&glb, &blender, &["--fps", "120", "--tol", "1e-5"]);
+    let worst = &json["clips"][0]["vertices"]["worst"];
+    let last = json["clips"][0]["times"].as_u64().unwrap() - 1;
+    assert_eq!(worst["frame"].as_u64(), Some(last), "{json:#}");
 }

@@ -6,13 +6,14 @@ use std::path::PathBuf;
 use crate::load::Input;
 
 /// The default tolerance: deviations up to this fraction of the reference's bounding-box
-/// diagonal pass (1e-5: what float32 data written and read back through glTF and USD
-/// keeps on every corpus asset, with room to spare).
+/// diagonal pass (1e-4: 0.2 mm on a 2 m character, below what a viewer shows; a file
+/// written and read back by rigport in any format keeps every corpus asset within 1e-5,
+/// which `--tol 1e-5` asks for).
 ///
 /// ```
-/// assert_eq!(rigport_pipeline::verify::DEFAULT_TOLERANCE, 1e-5);
+/// assert_eq!(rigport_pipeline::verify::DEFAULT_TOLERANCE, 1e-4);
 /// ```
-pub const DEFAULT_TOLERANCE: f64 = 1e-5;
+pub const DEFAULT_TOLERANCE: f64 = 1e-4;
 
 /// Which clips are compared.
 ///
@@ -88,7 +89,7 @@ impl Times {
 /// use rigport_pipeline::verify::{Clips, VerifyOptions};
 /// use rigport_pipeline::load::Input;
 /// let options = VerifyOptions::new(Input::new(vec!["walk.glb".into()]));
-/// assert_eq!((options.clips, options.tolerance), (Clips::First, 1e-5));
+/// assert_eq!((options.clips, options.tolerance), (Clips::First, 1e-4));
 /// ```
 #[derive(Clone, Debug)]
 pub struct VerifyOptions {
