@@ -36,11 +36,11 @@ pub struct UsageError(pub String);
 
 /// `verify`'s candidate differs beyond the tolerance (exit code 5).
 #[derive(Debug, thiserror::Error)]
-#[error("CANDIDATE differs from REFERENCE beyond --tol {tolerance:e}")]
-pub struct Mismatch {
+#[error("CANDIDATE differs from REFERENCE beyond --tol {0:e}")]
+pub struct Mismatch(
     /// The tolerance, a fraction of the reference's diagonal.
-    pub tolerance: f64,
-}
+    pub f64,
+);
 
 /// Marks warnings turned into an error by `--deny-warnings`.
 #[derive(Debug, thiserror::Error)]

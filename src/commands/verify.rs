@@ -18,6 +18,9 @@ pub struct VerifyArgs {
     pub reference: PathBuf,
     /// The file (or rig folder) to check against it.
     pub candidate: PathBuf,
+    /// AMC motions of an .asf REFERENCE (as `convert --motion`).
+    #[arg(long, value_name = "M.amc")]
+    pub motion: Vec<PathBuf>,
     /// The reference's clip to compare (default: the first).
     #[arg(long, value_name = "NAME", conflicts_with = "all_clips")]
     pub clip: Option<String>,
@@ -54,15 +57,12 @@ pub fn run(ctx: &Context, args: &VerifyArgs) -> Result<()> {
     };
     let mut passed = true;
     ctx.run(|progress| {
-        let verdict = rigport_pipeline::verify(&input(&args.reference), &options, progress)?;
+        let mut reference = input(&args.reference);
+        reference.files.motions.clone_from(&args.motion);
+        let verdict = rigport_pipeline::verify(&reference, &options, progress)?;
         passed = verdict.passed;
         Ok(verdict.report)
     })?;
-    anyhow::ensure!(
-        passed,
-        Mismatch {
-            tolerance: args.tol
-        }
-    );
+    anyhow::ensure!(passed, Mismatch(args.tol));
     Ok(())
 }

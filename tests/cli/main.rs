@@ -56,4 +56,5 @@ mod usd_root_motion;
 mod usd_topology;
 mod usdz;
 mod verify;
+mod verify_identity;
 mod weights;

@@ -91,7 +91,18 @@ pub(super) fn build(
             m.attached_to = attached_to;
             let index = MeshIndex(out.meshes.len() as u32);
             if let Some(skin) = skin {
-                out.skins.push(binding(skin, &m, index, skel));
+                let mut binding = binding(skin, &m, index, skel);
+                // As every importer: rows rescaled to sum to 1, as Blender deforms and as
+                // the writers store them (ufbx keeps the file's weights).
+                let (rows, max_row_sum_error) = binding.influences.normalize(1e-3);
+                if rows > 0 {
+                    warnings.push(Warning::WeightsRenormalized {
+                        source: format!("{}: {}", crate::Location::file(path), skin.element.name),
+                        rows,
+                        max_row_sum_error,
+                    });
+                }
+                out.skins.push(binding);
             }
             let channels = blend_shapes(mesh, &mut m, &to_space_f, path, warnings);
             if !channels.is_empty() {
