@@ -404,8 +404,9 @@ fn through_blender(bpy: &Path, glb: &Path) -> PathBuf {
 ///   the diagonal.
 /// - The Pinocchio rig (its walk resampled at Blender's 24 frames per second, so that the
 ///   keys meet): the joints agree to 1e-5 at the keys, and the vertices `verify` names
-///   beyond 1e-5 are exactly among those with a weight under 1e-3, the weights Blender's
-///   exporter drops (Pinocchio's attachment keeps weights down to 1e-4). Every 1/120 s,
+///   beyond 1e-5 are all among those with a weight of at most 1e-4, which Blender's
+///   exporter drops (`min_influence = 0.0001` in io_scene_gltf2's `primitive_extract.py`;
+///   Pinocchio's attachment keeps weights down to 1e-4). Every 1/120 s,
 ///   Blender's clip ends on its last whole frame, short of the source's end: named as the
 ///   worst frame.
 #[test]
@@ -463,22 +464,22 @@ fn blender_round_trip_agrees_at_key_times() {
     );
     let scene = gltf_read::read(&glb);
     let small: HashSet<u64> = (scene.skins[0].influences.iter().enumerate())
-        .filter(|(_, row)| row.iter().any(|&(_, w)| w > 0.0 && w < 1e-3))
+        .filter(|(_, row)| row.iter().any(|&(_, w)| w > 0.0 && w <= 1.0001e-4))
         .map(|(v, _)| v as u64)
         .collect();
     let beyond = clip["vertices_beyond"].as_array().unwrap();
-    assert_eq!(code, 5, "Blender dropped weights under 1e-3: {clip:#}");
+    assert_eq!(code, 5, "Blender dropped weights of at most 1e-4: {clip:#}");
     assert!(!beyond.is_empty());
     for v in beyond {
         let vertex = v["vertex"].as_u64().unwrap();
         assert!(
             small.contains(&vertex),
-            "vertex {vertex} has no weight under 1e-3: {v}"
+            "vertex {vertex} has no weight <= 1e-4: {v}"
         );
     }
     eprintln!(
         "model1 walk through Blender at the keys: joints {joints:.2e}, {} vertices beyond \
-         1e-5, all among the {} with a weight under 1e-3",
+         1e-5, all among the {} with a weight <= 1e-4",
         beyond.len(),
         small.len()
     );
