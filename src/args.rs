@@ -125,29 +125,6 @@ impl OutputArgs {
     }
 }
 
-/// A finite number that `ok` accepts, else "expected `expected`".
-fn number(text: &str, ok: fn(f32) -> bool, expected: &str) -> Result<f32, String> {
-    let v = text.trim().parse::<f32>().ok();
-    v.filter(|v| v.is_finite() && ok(*v))
-        .ok_or_else(|| format!("expected {expected}"))
-}
-
-/// A frame rate (`--fps`, `--amc-fps`): a positive, finite number of frames per second.
-pub fn frame_rate(text: &str) -> Result<f32, String> {
-    number(text, |v| v > 0.0, "a positive frame rate")
-}
-
-/// A distance that may be 0 (`--reduce-tolerance`, `--threshold`).
-pub fn distance(text: &str) -> Result<f32, String> {
-    number(text, |v| v >= 0.0, "a distance >= 0")
-}
-
-/// A number that may be 0 (`--lambda`).
-pub fn non_negative(text: &str) -> Result<f32, String> {
-    number(text, |v| v >= 0.0, "a number >= 0")
-}
-
-/// A positive distance or factor (`--tolerance`, `--speed`).
-pub fn positive(text: &str) -> Result<f32, String> {
-    number(text, |v| v > 0.0, "a positive number")
-}
+/// The value parsers of the numbers every command shares (`--fps`, `--amc-fps`:
+/// a frame rate; `--reduce-tolerance`, `--threshold`: a distance; `--lambda`; `--speed`).
+pub use rigport_pipeline::numbers::{distance, frame_rate, non_negative, positive};

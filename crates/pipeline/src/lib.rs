@@ -18,6 +18,8 @@
 //!   memory check, the influence fit (`truncate` or `refit`) and the writer chosen by the
 //!   output's extension;
 //! - [`memory`]: this process's memory budget;
+//! - [`numbers`]: the one check of each kind of number an option takes (frame rate,
+//!   distance, ...), the CLI's value parsers;
 //! - [`root_motion`]: the clips' travel kept, removed (in place) or moved onto a root
 //!   joint, for `convert`, `retarget` and `retime`;
 //! - [`units`]: the units of inputs that state none, and the warning for a skeleton too
@@ -58,6 +60,7 @@ pub mod inspect;
 mod keys;
 pub mod load;
 pub mod memory;
+pub mod numbers;
 mod outputs;
 pub mod progress;
 pub mod render;
