@@ -38,7 +38,8 @@ pub struct InputArgs {
     /// No bone mesh for skeleton-only inputs (ASF/AMC, BVH; by default each bone gets one).
     #[arg(long)]
     pub no_bone_mesh: bool,
-    /// Skin weights for a Pinocchio mesh and skeleton given without attachment: auto (bone heat).
+    /// Skin weights where the rig has none (a Pinocchio mesh and skeleton without attachment,
+    /// a CSCI 520 folder without weights): auto (bone heat).
     #[arg(long, value_name = "auto", value_parser = ["auto"])]
     pub weights: Option<String>,
     /// Unit of inputs that state none (BVH, OBJ/Pinocchio, CSCI 520): m, cm, mm, in, ft, metres

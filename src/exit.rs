@@ -34,13 +34,11 @@ pub struct OutputError {
 #[error("{0}")]
 pub struct UsageError(pub String);
 
-/// `verify`'s candidate differs beyond the tolerance (exit code 5).
+/// `verify`'s candidate differs beyond the tolerance (exit code 5), a fraction of the
+/// reference's diagonal.
 #[derive(Debug, thiserror::Error)]
 #[error("CANDIDATE differs from REFERENCE beyond --tol {0:e}")]
-pub struct Mismatch(
-    /// The tolerance, a fraction of the reference's diagonal.
-    pub f64,
-);
+pub struct Mismatch(pub f64);
 
 /// Marks warnings turned into an error by `--deny-warnings`.
 #[derive(Debug, thiserror::Error)]
@@ -133,6 +131,11 @@ pub fn warning_line(w: &Warning) -> String {
         } => format!(
             "{line}; for an ASF/AMC motion, give its frame rate with --amc-fps {fps} (`rigport retime --speed` slows a clip in another format)"
         ),
+        Warning::Incomplete { message, .. }
+            if message.ends_with(rigport_import::csci520::NO_WEIGHTS) =>
+        {
+            format!("{line} (--weights auto computes them)")
+        }
         Warning::NoContacts { .. } => format!(
             "{line}; the contact thresholds are `rigport footlock --height` and `--speed`"
         ),

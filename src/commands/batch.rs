@@ -64,9 +64,9 @@ pub type RunItem = fn(Vec<OsString>, bool, Captured) -> Result<Result<()>, Strin
 /// The commands an item may run: those that read inputs and write one output file. Files
 /// an item reads besides its inputs (retarget's `--onto` rig and `--map`, combine's motions, cloth's garment,
 /// ik's handles, animate's keys) go in its options.
-const COMMANDS: [&str; 12] = [
+const COMMANDS: [&str; 13] = [
     "convert", "animate", "retime", "sequence", "ik", "footlock", "retarget", "combine", "cloth",
-    "bake", "render", "eval",
+    "skin", "bake", "render", "eval",
 ];
 
 /// Runs `batch`.

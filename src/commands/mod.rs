@@ -17,6 +17,7 @@ pub mod render;
 pub mod retarget;
 pub mod retime;
 pub mod sequence;
+pub mod skin;
 pub mod verify;
 
 use std::ffi::OsString;
@@ -69,6 +70,7 @@ fn run_command(ctx: Context, command: Command) -> Result<()> {
         Command::Bake(args) => bake::run(&ctx, &args),
         Command::Cloth(args) => cloth::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
+        Command::Skin(args) => skin::run(&ctx, &args),
         Command::Verify(args) => verify::run(&ctx, &args),
         Command::Batch(_) | Command::BatchReport(_) => {
             Err(UsageError("a batch item cannot be a batch".into()).into())

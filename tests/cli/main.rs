@@ -44,6 +44,7 @@ mod refit;
 mod render;
 mod retarget;
 mod root_motion;
+mod skin;
 mod skinning;
 mod three;
 mod three_source;

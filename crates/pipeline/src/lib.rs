@@ -5,7 +5,8 @@
 //! Every command is `rigport_pipeline::COMMAND(input, options, &dyn Progress) ->
 //! Result<Report, PipelineError>`, one module each: [`convert()`], [`inspect()`],
 //! [`eval()`], [`animate()`], [`retime()`], [`sequence()`], [`ik()`], [`footlock()`],
-//! [`retarget()`], [`combine()`], [`bake()`], [`cloth()`], [`render()`], and [`demo()`] (no input).
+//! [`retarget()`], [`combine()`], [`bake()`], [`cloth()`], [`skin()`], [`render()`], [`verify()`], and [`demo()`]
+//! (no input).
 //! Each checks its output before any work, and gives [`progress::Progress::warnings`]
 //! everything lossy before writing, so a caller can refuse it ([`progress::Silent`] shows
 //! nothing and accepts all).
@@ -69,6 +70,7 @@ pub mod retarget;
 pub mod retime;
 pub mod root_motion;
 pub mod sequence;
+pub mod skin;
 pub mod units;
 pub mod verify;
 mod weights;
@@ -89,6 +91,7 @@ pub use report::Report;
 pub use retarget::run as retarget;
 pub use retime::run as retime;
 pub use sequence::run as sequence;
+pub use skin::run as skin;
 pub use verify::run as verify;
 
 pub use error::{PipelineError, chain};

@@ -65,6 +65,12 @@ pub fn install(budget: MemoryBudget) {
 
 /// The budget [`install`]ed, or [`MemoryBudget::UNLIMITED`] when none was (a library
 /// caller that sets none).
+///
+/// ```
+/// // No program installed one in this doctest: unlimited.
+/// let budget = rigport_pipeline::memory::installed();
+/// assert_eq!(budget, rigport_pipeline::MemoryBudget::UNLIMITED);
+/// ```
 pub fn installed() -> MemoryBudget {
     INSTALLED.get().copied().unwrap_or(MemoryBudget::UNLIMITED)
 }

@@ -60,3 +60,26 @@ pub fn non_negative(text: &str) -> Result<f32, String> {
 pub fn positive(text: &str) -> Result<f32, String> {
     number(text, |v| v > 0.0, "a positive number")
 }
+
+/// A point or offset: three finite numbers separated by commas (`X,Y,Z`).
+///
+/// ```
+/// use rigport_pipeline::numbers::point;
+/// use rigport_model::glam::Vec3;
+/// assert_eq!(point("0, -1.5,2"), Ok(Vec3::new(0.0, -1.5, 2.0)));
+/// assert!(point("1,2").is_err());
+/// ```
+///
+/// # Errors
+/// Not three finite numbers.
+pub fn point(text: &str) -> Result<rigport_model::glam::Vec3, String> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()
+        .unwrap_or_default();
+    match v.as_slice() {
+        &[x, y, z] => Ok(rigport_model::glam::Vec3::new(x, y, z)),
+        _ => Err("expected X,Y,Z: three numbers separated by commas".into()),
+    }
+}
