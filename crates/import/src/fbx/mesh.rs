@@ -6,11 +6,9 @@ use std::path::Path;
 
 use rigport_model::glam::{DMat4, Mat4, Vec2, Vec3};
 use rigport_model::{
-    Influence, Influences, MaterialIndex, Mesh, MeshIndex, MorphTarget, SkinBinding,
-    SkinningMethod, Warning,
+    Influence, Influences, MaterialIndex, Mesh, MeshIndex, SkinBinding, SkinningMethod, Warning,
 };
 
-use super::incomplete;
 use super::skeleton::{mat, Skel};
 use crate::names::unique;
 
@@ -18,8 +16,8 @@ use crate::names::unique;
 pub(super) struct Built {
     pub(super) meshes: Vec<rigport_model::Mesh>,
     pub(super) skins: Vec<SkinBinding>,
-    /// Per mesh with morph targets: the blend channels' element ids, one per target.
-    pub(super) channels: Vec<(MeshIndex, Vec<u32>)>,
+    /// Per mesh with morph targets: the blend channel span each target covers.
+    pub(super) channels: Vec<(MeshIndex, Vec<super::blend::Segment>)>,
 }
 
 /// Every mesh node's meshes (see the module table in `mod.rs`); the asset's checks run
@@ -104,7 +102,7 @@ pub(super) fn build(
                 }
                 out.skins.push(binding);
             }
-            let channels = blend_shapes(mesh, &mut m, &to_space_f, path, warnings);
+            let channels = super::blend::targets(mesh, &mut m, &to_space_f, path, warnings);
             if !channels.is_empty() {
                 out.channels.push((index, channels));
             }
@@ -272,58 +270,4 @@ fn binding(skin: &ufbx::SkinDeformer, m: &Mesh, mesh: MeshIndex, skel: &Skel) ->
             _ => SkinningMethod::Lbs,
         },
     }
-}
-
-/// The blend channels of `mesh` as morph targets of `m` (the channel's full-weight shape,
-/// offsets through `to_space`'s linear part); returns the channels' element ids.
-fn blend_shapes(
-    mesh: &ufbx::Mesh,
-    m: &mut Mesh,
-    to_space: &Mat4,
-    path: &Path,
-    warnings: &mut Vec<Warning>,
-) -> Vec<u32> {
-    let mut ids = Vec::new();
-    for deformer in mesh.blend_deformers.iter() {
-        for channel in deformer.channels.iter() {
-            let Some(shape) = channel.target_shape.as_ref() else {
-                continue;
-            };
-            if channel.keyframes.len() > 1 {
-                warnings.push(incomplete(
-                    path,
-                    &channel.element.name,
-                    format!(
-                        "the blend shape channel has {} in-between shapes: only its full-weight \
-                         shape is imported",
-                        channel.keyframes.len() - 1
-                    ),
-                ));
-            }
-            let mut by_point: HashMap<u32, Vec3> = HashMap::new();
-            for (point, offset) in shape
-                .offset_vertices
-                .iter()
-                .zip(shape.position_offsets.iter())
-            {
-                by_point.insert(
-                    *point,
-                    to_space.transform_vector3(super::skeleton::vec3(offset)),
-                );
-            }
-            let position_deltas = m
-                .source_vertex
-                .iter()
-                .map(|p| by_point.get(p).copied().unwrap_or(Vec3::ZERO))
-                .collect();
-            m.morph_targets.push(MorphTarget {
-                name: channel.element.name.to_string(),
-                position_deltas,
-                normal_deltas: None,
-            });
-            m.morph_weights.push(channel.weight as f32);
-            ids.push(channel.element.element_id);
-        }
-    }
-    ids
 }

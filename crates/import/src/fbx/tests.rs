@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use rigport_model::glam::Vec3;
 use rigport_testkit::corpus;
 
 use super::*;
@@ -290,4 +291,95 @@ fn skinned_points_sit_at_the_bind_pose_not_the_loaded_pose() {
         "{:?}",
         mesh.positions
     );
+}
+
+/// A triangle with one blend channel holding an in-between shape at 50% (vertex 1 up by
+/// 1) and its full shape at 100% (vertex 1 up by 1 and out by 2): the channel is piecewise
+/// linear in its weight. `DEFORM` is replaced by the channel's `DeformPercent`.
+const IN_BETWEEN: &str = "; FBX 7.4.0 project file
+FBXHeaderExtension:  {
+\tFBXHeaderVersion: 1003
+\tFBXVersion: 7400
+}
+Objects:  {
+\tGeometry: 10, \"Geometry::tri\", \"Mesh\" {
+\t\tVertices: *9 {
+\t\t\ta: 0,0,0,1,0,0,0,1,0
+\t\t}
+\t\tPolygonVertexIndex: *3 {
+\t\t\ta: 0,1,-3
+\t\t}
+\t}
+\tModel: 20, \"Model::tri\", \"Mesh\" {
+\t}
+\tGeometry: 60, \"Geometry::half\", \"Shape\" {
+\t\tVersion: 100
+\t\tIndexes: *1 {
+\t\t\ta: 1
+\t\t}
+\t\tVertices: *3 {
+\t\t\ta: 0,1,0
+\t\t}
+\t}
+\tGeometry: 61, \"Geometry::full\", \"Shape\" {
+\t\tVersion: 100
+\t\tIndexes: *1 {
+\t\t\ta: 1
+\t\t}
+\t\tVertices: *3 {
+\t\t\ta: 2,1,0
+\t\t}
+\t}
+\tDeformer: 70, \"Deformer::blend\", \"BlendShape\" {
+\t\tVersion: 100
+\t}
+\tDeformer: 80, \"SubDeformer::smile\", \"BlendShapeChannel\" {
+\t\tVersion: 100
+\t\tDeformPercent: DEFORM
+\t\tFullWeights: *2 {
+\t\t\ta: 50,100
+\t\t}
+\t\tProperties70:  {
+\t\t\tP: \"DeformPercent\", \"Number\", \"\", \"A\",DEFORM
+\t\t}
+\t}
+}
+Connections:  {
+\tC: \"OO\",20,0
+\tC: \"OO\",10,20
+\tC: \"OO\",70,10
+\tC: \"OO\",80,70
+\tC: \"OO\",60,80
+\tC: \"OO\",61,80
+}
+";
+
+#[test]
+fn in_between_shapes_blend_as_ufbx_evaluates_them() {
+    for percent in ["0", "25", "50", "75", "100", "130", "-20"] {
+        let text = IN_BETWEEN.replace("DEFORM", percent);
+        let imported = import_slice(text.as_bytes(), Path::new("x.fbx")).expect("imports");
+        assert!(imported.warnings.iter().all(|w| w.code() != "W004"), "{:?}", imported.warnings);
+        let mesh = &imported.asset.meshes[0];
+        assert_eq!(mesh.morph_targets.len(), 2, "one target per shape");
+        // The reference: ufbx's own blend of the channel at this weight.
+        let scene = ufbx::load_memory(text.as_bytes(), ufbx::LoadOpts::default()).unwrap();
+        let blend = &scene.blend_deformers[0];
+        for (v, &point) in mesh.source_vertex.iter().enumerate() {
+            let o = ufbx::get_blend_vertex_offset(blend, point as usize);
+            let expected = Vec3::new(o.x as f32, o.y as f32, o.z as f32);
+            let ours: Vec3 = (mesh.morph_targets.iter())
+                .zip(&mesh.morph_weights)
+                .map(|(t, &w)| t.position_deltas[v] * w)
+                .sum();
+            assert!(
+                ours.distance(expected) < 1e-5,
+                "{percent}%: vertex {v}: {ours} vs ufbx {expected}"
+            );
+            if percent == "75" && point == 1 {
+                // Halfway from the in-between (0, 1, 0) to the full shape (2, 1, 0).
+                assert!(ours.distance(Vec3::new(1.0, 1.0, 0.0)) < 1e-5, "{ours}");
+            }
+        }
+    }
 }
