@@ -293,9 +293,9 @@ fn skinned_points_sit_at_the_bind_pose_not_the_loaded_pose() {
     );
 }
 
-/// A triangle with one blend channel holding an in-between shape at 50% (vertex 1 up by
-/// 1) and its full shape at 100% (vertex 1 up by 1 and out by 2): the channel is piecewise
-/// linear in its weight. `DEFORM` is replaced by the channel's `DeformPercent`.
+/// A triangle with one blend channel holding an in-between shape at 50% (vertex 1 moved
+/// up by one unit) and its full shape at 100% (up by one and out by two): the channel is
+/// piecewise linear in its weight. `DEFORM` is replaced by the channel's `DeformPercent`.
 const IN_BETWEEN: &str = "; FBX 7.4.0 project file
 FBXHeaderExtension:  {
 \tFBXHeaderVersion: 1003
