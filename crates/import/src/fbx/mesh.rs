@@ -1,7 +1,6 @@
 //! Meshes: one model [`Mesh`] per material part of each mesh node, with its skin binding
 //! and blend shapes.
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use rigport_model::glam::{DMat4, Mat4, Vec2, Vec3};
@@ -144,7 +143,14 @@ fn geometry(mesh: &ufbx::Mesh, faces: &[u32], to_space: &Mat4, normal_m: &Mat4) 
     let mut out = Mesh::default();
     let mut uvs: Vec<Vec<Vec2>> = vec![Vec::new(); uv_sets.len()];
     let mut normal_values = Vec::new();
-    let mut seen: HashMap<Vec<u32>, u32> = HashMap::new();
+    // Corners made unique without hashing or allocating per corner (a Mixamo character
+    // has about 170k): per control point, the list of vertices made from it (`head`,
+    // `next`), each with its key (point, normal, UV indices) in `keys`, `stride` apiece.
+    let stride = 2 + uv_sets.len();
+    let mut head = vec![u32::MAX; mesh.vertex_position.values.len().max(1)];
+    let mut next: Vec<u32> = Vec::with_capacity(faces.len() * 3);
+    let mut keys: Vec<u32> = Vec::with_capacity(faces.len() * 3 * stride);
+    let mut key = vec![0u32; stride];
     let mut corner_vertex = |corner: usize, out: &mut Mesh, uvs: &mut Vec<Vec<Vec2>>| -> u32 {
         let point = mesh
             .vertex_position
@@ -152,17 +158,24 @@ fn geometry(mesh: &ufbx::Mesh, faces: &[u32], to_space: &Mat4, normal_m: &Mat4) 
             .get(corner)
             .copied()
             .unwrap_or(0);
-        let mut key = vec![point];
-        key.extend(normals.map(|n| n.indices.get(corner).copied().unwrap_or(0)));
-        key.extend(
-            uv_sets
-                .iter()
-                .map(|s| s.indices.get(corner).copied().unwrap_or(0)),
-        );
-        if let Some(&v) = seen.get(&key) {
-            return v;
+        key[0] = point;
+        key[1] = normals.map_or(0, |n| n.indices.get(corner).copied().unwrap_or(0));
+        for (slot, s) in key[2..].iter_mut().zip(&uv_sets) {
+            *slot = s.indices.get(corner).copied().unwrap_or(0);
+        }
+        let bucket = (point as usize).min(head.len() - 1);
+        let mut at = head[bucket];
+        while at != u32::MAX {
+            let k = at as usize * stride;
+            if keys[k..k + stride] == key[..] {
+                return at;
+            }
+            at = next[at as usize];
         }
         let v = out.positions.len() as u32;
+        next.push(head[bucket]);
+        head[bucket] = v;
+        keys.extend_from_slice(&key);
         let p = mesh.vertex_position.values.get(point as usize);
         out.positions.push(p.map_or(Vec3::ZERO, |p| {
             to_space.transform_point3(super::skeleton::vec3(p))
@@ -176,14 +189,13 @@ fn geometry(mesh: &ufbx::Mesh, faces: &[u32], to_space: &Mat4, normal_m: &Mat4) 
             normal_values.push(normal_m.transform_vector3(value).normalize_or(Vec3::Y));
         }
         for (set, (values, uv)) in uv_sets.iter().zip(uvs.iter_mut()).enumerate() {
-            let index = key[1 + usize::from(normals.is_some()) + set] as usize;
+            let index = key[2 + set] as usize;
             let t = values
                 .values
                 .get(index)
                 .map_or(Vec2::ZERO, |t| Vec2::new(t.x as f32, 1.0 - t.y as f32));
             uv.push(t);
         }
-        seen.insert(key, v);
         v
     };
     let mut tri = vec![0u32; mesh.max_face_triangles.max(1) * 3];
