@@ -33,18 +33,20 @@ const KNOWN: &[(&str, &str, Known)] = &[
     (
         "anims_with_full_rotations_between_keys.fbx",
         "usd",
-        Known::Within(5e-5, FLOAT_CHAIN),
+        Known::Within(2e-5, FLOAT_CHAIN),
     ),
     (
         "anims_with_full_rotations_between_keys.DAE",
         "usd",
-        Known::Within(5e-5, FLOAT_CHAIN),
+        Known::Within(2e-5, FLOAT_CHAIN),
     ),
 ];
 
-/// Why the 64-joint chain of equal rotations differs by 3.3e-5 of its diagonal in USD: each
-/// joint's own rotation agrees to 1e-6 radians (float32 rounding of the normalized
-/// quaternion), and 64 such roundings in the same direction add up at the chain's end.
+/// Why the 64-joint chain of equal rotations differs by 1.6e-5 of its diagonal in USD: its
+/// key times come back from USD time codes a few `f32` units in the last place off (verify
+/// takes such keys as one), and the joints' world matrices at the keys still differ by
+/// float rounding that 64 joints in a row add up; each joint's own rotation agrees to
+/// 7e-7 radians. The glb agrees within 1e-5. Not explained further.
 const FLOAT_CHAIN: &str = "float32 rounding along a 64-joint chain";
 
 /// What `label` converted to `ext` is held to (`None`: identity at 1e-5).

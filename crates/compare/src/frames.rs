@@ -29,6 +29,9 @@ pub struct Sampling<'c> {
     pub times: &'c [f32],
     /// Seconds added to each time for the candidate.
     pub offset: f32,
+    /// The candidate's own time for each of `times`, when it differs from `time + offset`
+    /// (its key at a time `f32` rounding moved off the reference's): `None` for all.
+    pub candidate_times: Option<&'c [f32]>,
 }
 
 /// Compares `reference` and `candidate` at every time of `sampling`.
@@ -56,7 +59,8 @@ pub fn compare_frames(
             let (mut rp, mut cp) = (Posed::default(), Posed::default());
             for (k, &t) in times.iter().enumerate() {
                 reference.evaluate(sampling.reference, t, true, &mut rs, &mut rp)?;
-                let tc = t + sampling.offset;
+                let own = sampling.candidate_times.and_then(|c| c.get(first + k));
+                let tc = own.copied().unwrap_or(t + sampling.offset);
                 candidate.evaluate(sampling.candidate, tc, true, &mut cs, &mut cp)?;
                 dev.add_frame(first + k, t, &rp, &cp, joints, meshes);
             }

@@ -225,11 +225,13 @@ fn compare_clip(
         compile_clip(cs.asset(), clips.1)?,
     );
     let times = times(rc.as_ref(), cc.as_ref(), options.times)?;
+    let own = cc.as_ref().map(|c| own_key_times(&times, &c.key_times()));
     let mut sampling = Sampling {
         reference: rc.as_ref(),
         candidate: cc.as_ref(),
         times: &times,
         offset: 0.0,
+        candidate_times: own.as_deref(),
     };
     let cannot = |e| failed("the clips cannot be compared", e);
     let deviation = compare_frames(rs, cs, pairs.0, pairs.1, &sampling).map_err(cannot)?;
@@ -260,6 +262,7 @@ fn compare_clip(
                 .collect();
             sampling.times = &shifted;
             sampling.offset = offset;
+            sampling.candidate_times = None;
             let deviation = compare_frames(rs, cs, pairs.0, pairs.1, &sampling).map_err(cannot)?;
             if measure(&deviation) <= within {
                 result = ClipResult {
@@ -292,6 +295,27 @@ pub(crate) fn compile_clip(
         .transpose()
 }
 
+/// Whether two key times are one key moved by `f32` rounding (a few units in the last
+/// place: a time written as a USD time code and read back, a clip start subtracted).
+fn same_key(a: f32, b: f32) -> bool {
+    (a - b).abs() <= 8.0 * f32::EPSILON * a.abs().max(b.abs()).max(1.0)
+}
+
+/// For each of `times`, the candidate's key at that time when it has one within rounding
+/// (evaluated there, not a rounding step into its next segment), else the time itself.
+fn own_key_times(times: &[f32], keys: &[f32]) -> Vec<f32> {
+    times
+        .iter()
+        .map(|&t| {
+            let at = keys.partition_point(|&k| k < t);
+            let near = [at.checked_sub(1), Some(at)].into_iter().flatten();
+            (near.filter_map(|i| keys.get(i).copied()))
+                .find(|&k| same_key(k, t))
+                .unwrap_or(t)
+        })
+        .collect()
+}
+
 /// The times to compare two clips at (`[0]` for the rest pose).
 fn times(
     reference: Option<&CompiledClip<'_>>,
@@ -301,7 +325,13 @@ fn times(
     let keys = |c: Option<&CompiledClip<'_>>| c.map(CompiledClip::key_times).unwrap_or_default();
     let (rk, ck) = (keys(reference), keys(candidate));
     let mut out = match kind {
-        Times::KeyUnion => [rk, ck].concat(),
+        // A candidate key within `f32` rounding of a reference key is that key.
+        Times::KeyUnion => {
+            let own: Vec<f32> = (ck.iter().copied())
+                .filter(|&c| !rk.iter().any(|&r| same_key(r, c)))
+                .collect();
+            [rk, own].concat()
+        }
         Times::AtKeys => {
             let shared: Vec<f32> = rk
                 .iter()
