@@ -19,6 +19,7 @@ pub mod interp;
 mod keyed;
 mod material;
 mod mesh;
+pub mod quantize;
 mod skeleton;
 mod skin;
 mod transform;

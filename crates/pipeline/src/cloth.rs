@@ -157,6 +157,7 @@ pub fn run(
             ..WriteOptions::default()
         },
         reduce_tolerance: None,
+        reduce: false,
     };
     let mut done = Report::logged(write_output(
         asset,

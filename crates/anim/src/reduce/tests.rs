@@ -1,5 +1,6 @@
 use super::*;
-use rigport_model::{Joint, MeshIndex};
+use glam::Quat;
+use rigport_model::{Interpolation, Joint, MeshIndex, TrackTarget};
 
 /// xorshift64*: deterministic test data without a dependency.
 struct Rng(u64);

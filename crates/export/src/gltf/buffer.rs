@@ -201,6 +201,27 @@ impl Builder {
         })
     }
 
+    /// A `SHORT` accessor with `normalized: true` (`data.len() / size` elements of `type_`),
+    /// read as `max(c / 32767, -1)` (glTF 2.0 §3.11): animation outputs, no bounds needed.
+    pub(crate) fn normalized_i16(&mut self, data: &[i16], type_: Type) -> Index<json::Accessor> {
+        let view = self.view(None, |bin| {
+            for v in data {
+                bin.extend_from_slice(&v.to_le_bytes());
+            }
+        });
+        let index = self.accessor(
+            view,
+            data.len() / type_.multiplicity(),
+            ComponentType::I16,
+            type_,
+            None,
+        );
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
+    }
+
     /// An unsigned-integer accessor (`data.len() / size` elements of `type_`), of `T`'s
     /// component type (`u8`, `u16` or `u32`).
     pub(crate) fn ints<T: IntComponent>(

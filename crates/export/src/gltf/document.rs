@@ -180,7 +180,13 @@ pub(crate) fn build(
         write_skin(&mut b, asset, si, skin, skeleton_node, &mut warnings);
     }
 
-    animation::write_animations(&mut b, asset, &mesh_nodes, &mut warnings);
+    animation::write_animations(
+        &mut b,
+        asset,
+        &mesh_nodes,
+        opts.rotations_i16,
+        &mut warnings,
+    );
 
     for (node, kids) in nodes.iter_mut().zip(children) {
         if !kids.is_empty() {

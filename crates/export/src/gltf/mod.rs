@@ -61,11 +61,19 @@ pub struct GltfOptions {
     /// actually uses a fifth influence). Many viewers read only the first set, which always
     /// holds each vertex's 4 largest weights. Default 4.
     pub max_influences: usize,
+    /// Write LINEAR and STEP rotation outputs as 16-bit normalized integers (`SHORT`,
+    /// `normalized: true`; core glTF 2.0 §3.11), each key rounded by
+    /// [`rigport_model::quantize::rotation_to_i16`], half the bytes of floats. Default
+    /// `false` (floats).
+    pub rotations_i16: bool,
 }
 
 impl Default for GltfOptions {
     fn default() -> Self {
-        Self { max_influences: 4 }
+        Self {
+            max_influences: 4,
+            rotations_i16: false,
+        }
     }
 }
 
@@ -307,6 +315,18 @@ pub fn prepare_gltf(
 }
 
 impl PreparedGltf {
+    /// The bytes [`PreparedGltf::write`] writes, over every file.
+    pub fn byte_len(&self) -> u64 {
+        match &self.files {
+            Files::Glb(glb) => glb.len() as u64,
+            Files::Split {
+                json, bin, images, ..
+            } => {
+                (json.len() + bin.len() + images.iter().map(|(_, b)| b.len()).sum::<usize>()) as u64
+            }
+        }
+    }
+
     /// Lossy or repairing steps taken, as [`Exported::warnings`].
     pub fn warnings(&self) -> &[Warning] {
         &self.warnings

@@ -368,6 +368,17 @@ fn prepare_usd_spilling_at(
 }
 
 impl PreparedUsd {
+    /// The bytes [`PreparedUsd::write`] writes, over every file; `None` for a long text
+    /// already staged beside the output.
+    pub fn byte_len(&self) -> Option<u64> {
+        let body = match &self.body {
+            Body::Text(text) => text.len(),
+            Body::Encoded(bytes) => bytes.len(),
+            Body::Staged { .. } => return None,
+        };
+        Some((body + self.images.iter().map(|i| i.bytes.len()).sum::<usize>()) as u64)
+    }
+
     /// Lossy or repairing steps taken, as [`ExportedUsd::warnings`].
     pub fn warnings(&self) -> &[Warning] {
         &self.warnings

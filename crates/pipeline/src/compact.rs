@@ -1,0 +1,228 @@
+//! Compact clips: every clip's keys reduced within a model-space bound on joints and on
+//! virtual points fixed to them (`rigport_anim::reduce`), with rotations as 16-bit
+//! normalized integers in glTF, and the report of what it saved ([`CompactReport`]).
+//!
+//! The bound is a distance in the rig's length unit; by default 1 mm
+//! ([`DEFAULT_TOLERANCE_M`]) converted with the asset's metres per unit (a rig that states
+//! no unit is taken to be in metres, as glTF export takes it). Virtual points sit at 3 cm
+//! ([`POINT_DISTANCE_M`], ACL's default shell distance) from every joint, farther for a
+//! joint that skins vertices farther than that (the farthest such vertex, in the joint's
+//! bind frame), so the bound covers the skinned mesh as ACL's metric does.
+
+use rigport_anim::reduce::metric::point_error;
+use rigport_anim::reduce::{ReduceOptions, reduce_clip};
+use rigport_model::{Asset, Clip};
+use serde::Serialize;
+
+use crate::PipelineError;
+
+/// The default bound: 1 mm.
+///
+/// ```
+/// use rigport_pipeline::compact::{DEFAULT_TOLERANCE_M, POINT_DISTANCE_M};
+/// // ACL's threshold (0.01 cm) is a tenth of the default bound; its points sit 30 times farther.
+/// assert_eq!(DEFAULT_TOLERANCE_M, 0.001);
+/// assert!((POINT_DISTANCE_M / DEFAULT_TOLERANCE_M - 30.0).abs() < 1e-9);
+/// ```
+pub const DEFAULT_TOLERANCE_M: f64 = 0.001;
+/// The distance of the virtual points from each joint: 3 cm, ACL's default.
+///
+/// ```
+/// assert_eq!(rigport_pipeline::compact::POINT_DISTANCE_M, 0.03);
+/// ```
+pub const POINT_DISTANCE_M: f64 = 0.03;
+
+/// What compacting one clip did. Errors are in the rig's length unit unless named `_cm`.
+///
+/// ```
+/// let clip = rigport_pipeline::compact::ClipReport { keys_before: 10, keys_after: 4, ..Default::default() };
+/// assert_eq!(serde_json::to_value(&clip)?["keys_after"], 4);
+/// # Ok::<(), serde_json::Error>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ClipReport {
+    /// The clip's name.
+    pub clip: String,
+    /// Keys over every track, before and after.
+    pub keys_before: usize,
+    /// See `keys_before`.
+    pub keys_after: usize,
+    /// The largest and mean model-space error of joints and their virtual points (at 3 cm,
+    /// or a skinned mesh's reach), over every original key time.
+    pub max_error: f32,
+    /// See `max_error`.
+    pub mean_error: f32,
+    /// ACL's metric: the largest and mean error of virtual points at 3 cm from every joint,
+    /// in centimetres (ACL's threshold is 0.01 cm).
+    pub acl_max_error_cm: f64,
+    /// See `acl_max_error_cm`.
+    pub acl_mean_error_cm: f64,
+}
+
+/// What compacting an asset's clips did ([`crate::write::write_output_report`]).
+///
+/// ```
+/// use rigport_pipeline::write::{write_output_report, Output};
+/// use rigport_pipeline::{progress::Silent, MemoryBudget};
+///
+/// let dir = tempfile::tempdir()?;
+/// let imported = rigport_import::bvh::import("../../fixtures/bvh/end_sites.bvh".as_ref())?;
+/// let output = Output { reduce: true, ..Output::new(dir.path().join("walk.glb")) };
+/// let (_, report) = write_output_report(imported.asset, imported.warnings, &output,
+///     &MemoryBudget::UNLIMITED, &Silent)?;
+/// let report = report.expect("reduced");
+/// // The default bound: 1 mm in a rig that states no unit (metres).
+/// assert_eq!(report.tolerance, 0.001);
+/// // The reduced clips are written only when they make the file no bigger.
+/// assert_eq!(report.reduced_written, report.bytes_after <= report.bytes_before);
+/// assert!(report.clips.iter().all(|c| c.max_error <= 0.001 && c.keys_after <= c.keys_before));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct CompactReport {
+    /// The bound, in the rig's length unit.
+    pub tolerance: f32,
+    /// Metres per rig unit (1 when the rig states none).
+    pub meters_per_unit: f64,
+    /// Whether rotations are written as 16-bit normalized integers.
+    pub rotations_i16: bool,
+    /// The output's size without and with the reduction, in bytes.
+    pub bytes_before: u64,
+    /// See `bytes_before`.
+    pub bytes_after: u64,
+    /// Whether the reduced clips were written (`false`: they made the file no smaller, and
+    /// the unreduced clips were written instead).
+    pub reduced_written: bool,
+    /// Per clip, in the asset's order.
+    pub clips: Vec<ClipReport>,
+}
+
+impl CompactReport {
+    /// One line per clip, then the sizes.
+    ///
+    /// ```
+    /// let report = rigport_pipeline::compact::CompactReport { bytes_before: 9, bytes_after: 4,
+    ///     reduced_written: true, ..Default::default() };
+    /// assert_eq!(report.lines(), ["compact: 9 -> 4 bytes (reduced clips written)"]);
+    /// ```
+    pub fn lines(&self) -> Vec<String> {
+        let mut lines: Vec<String> = self
+            .clips
+            .iter()
+            .map(|c| {
+                format!(
+                    "compact: clip {:?}: {} -> {} keys; error max {:.3e} mean {:.3e} (bound {:.3e}, rig units); ACL metric (3 cm points) max {:.4} mean {:.4} cm",
+                    c.clip, c.keys_before, c.keys_after, c.max_error, c.mean_error,
+                    self.tolerance, c.acl_max_error_cm, c.acl_mean_error_cm
+                )
+            })
+            .collect();
+        lines.push(format!(
+            "compact: {} -> {} bytes ({}{})",
+            self.bytes_before,
+            self.bytes_after,
+            if self.reduced_written {
+                "reduced clips written"
+            } else {
+                "unreduced clips written: the reduction made the file no smaller"
+            },
+            if self.rotations_i16 {
+                ", rotations as 16-bit integers"
+            } else {
+                ""
+            }
+        ));
+        lines
+    }
+}
+
+/// The bound in rig units: `tolerance` when given, else 1 mm in the asset's unit.
+pub(crate) fn tolerance_in_rig_units(asset: &Asset, tolerance: Option<f32>) -> f32 {
+    tolerance.unwrap_or_else(|| (DEFAULT_TOLERANCE_M / meters_per_unit(asset)) as f32)
+}
+
+/// Metres per rig unit, 1 when the asset states none (or a value that is not positive).
+fn meters_per_unit(asset: &Asset) -> f64 {
+    asset
+        .meters_per_unit
+        .filter(|m| m.is_finite() && *m > 0.0)
+        .unwrap_or(1.0)
+}
+
+/// Per joint: 3 cm in rig units, or the farthest vertex the joint skins (weight above
+/// zero), measured in its bind frame, when that is farther.
+fn point_distances(asset: &Asset) -> Vec<f32> {
+    let base = (POINT_DISTANCE_M / meters_per_unit(asset)) as f32;
+    let mut out = vec![base; asset.skeleton.len()];
+    for skin in &asset.skins {
+        let Some(mesh) = asset.meshes.get(skin.mesh.get()) else {
+            continue;
+        };
+        for (row, &p) in skin.influences.rows().zip(&mesh.positions) {
+            for influence in row.iter().filter(|i| i.weight > 0.0) {
+                let palette = influence.joint as usize;
+                let (Some(joint), Some(inv_bind)) =
+                    (skin.joints.get(palette), skin.inv_bind.get(palette))
+                else {
+                    continue;
+                };
+                let reach = inv_bind.transform_point3(p).length();
+                if let Some(d) = out.get_mut(joint.get()) {
+                    if reach.is_finite() {
+                        *d = d.max(reach);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The asset's clips reduced within `tolerance` (rig units), with their reports and
+/// whether rotations are measured (and so must be written) as 16-bit integers: asked by
+/// `rotations_i16`, and kept only when every clip's rounding fits the bound.
+///
+/// # Errors
+/// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
+pub(crate) fn compact_clips(
+    asset: &Asset,
+    tolerance: f32,
+    rotations_i16: bool,
+) -> Result<(Vec<Clip>, Vec<ClipReport>, bool), PipelineError> {
+    let points = point_distances(asset);
+    let acl_points = vec![(POINT_DISTANCE_M / meters_per_unit(asset)) as f32; points.len()];
+    let cm_per_unit = meters_per_unit(asset) * 100.0;
+    let mut i16 = rotations_i16;
+    'again: loop {
+        let options = ReduceOptions {
+            tolerance,
+            point_distance: points.clone(),
+            rotations_i16: i16,
+            uniform_rate: true,
+        };
+        let mut clips = Vec::with_capacity(asset.clips.len());
+        let mut reports = Vec::with_capacity(asset.clips.len());
+        for clip in &asset.clips {
+            let failed = |e| PipelineError::step(format!("cannot reduce clip {:?}", clip.name), e);
+            let (reduced, stats) = reduce_clip(clip, &asset.skeleton, &options).map_err(failed)?;
+            if i16 && !stats.rotations_i16 {
+                // One writer setting for the file: floats for every clip.
+                i16 = false;
+                continue 'again;
+            }
+            let acl =
+                point_error(clip, &reduced, &asset.skeleton, &acl_points, i16).map_err(failed)?;
+            reports.push(ClipReport {
+                clip: clip.name.clone(),
+                keys_before: stats.keys_before,
+                keys_after: stats.keys_after,
+                max_error: stats.max_error,
+                mean_error: stats.mean_error,
+                acl_max_error_cm: f64::from(acl.max) * cm_per_unit,
+                acl_mean_error_cm: f64::from(acl.mean) * cm_per_unit,
+            });
+            clips.push(reduced);
+        }
+        return Ok((clips, reports, i16));
+    }
+}
