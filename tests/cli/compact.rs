@@ -1,0 +1,192 @@
+//! Compact clips (issue 34) on the corpus's motion capture: every BVH and ASF/AMC clip
+//! reduced with the default bound (1 mm) is checked against the unreduced glb as three.js
+//! plays both (`tools/three_joints.mjs`: joints and virtual points at 3 cm, at every source
+//! frame), passes glTF-Validator, never grows the file at any setting, and reports ACL's
+//! metric within the bound. The sizes are printed beside gltfpack's (`tools/node_modules`,
+//! pinned in tools/package.json) for the record.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::common;
+
+/// The corpus's clips: (label, convert arguments).
+fn corpus_clips() -> Option<Vec<(String, Vec<String>)>> {
+    let mut clips = Vec::new();
+    let asf = common::corpus_section("3_acclaim_asf_amc")?;
+    for amc in asf
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "amc"))
+    {
+        let stem = amc.file_stem().and_then(|s| s.to_str()).expect("a name");
+        let subject = stem.split('_').next().expect("a subject");
+        let skeleton = asf
+            .iter()
+            .find(|p| {
+                p.extension().is_some_and(|e| e == "asf")
+                    && p.file_stem()
+                        .and_then(|s| s.to_str())
+                        .is_some_and(|s| s.split('-').next() == Some(subject))
+            })
+            .expect("the clip's skeleton");
+        clips.push((
+            stem.to_owned(),
+            vec![
+                skeleton.display().to_string(),
+                "--motion".into(),
+                amc.display().to_string(),
+            ],
+        ));
+    }
+    for bvh in common::corpus_section("4_bvh")?
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "bvh"))
+    {
+        let stem = bvh.file_stem().and_then(|s| s.to_str()).expect("a name");
+        // Centimetre captures become centimetres, so that 1 mm means 1 mm.
+        clips.push((
+            stem.to_owned(),
+            vec![
+                bvh.display().to_string(),
+                "--input-units".into(),
+                "auto".into(),
+            ],
+        ));
+    }
+    Some(clips)
+}
+
+/// `rigport convert ARGS -o OUT EXTRA...` and its `--json` report (when reduced).
+fn convert(args: &[String], out: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut all: Vec<&str> = vec!["convert"];
+    all.extend(args.iter().map(String::as_str));
+    all.extend(["-o", out.to_str().expect("utf-8 path"), "--json"]);
+    all.extend(extra);
+    let run = common::rigport(&all);
+    assert!(
+        run.status.success(),
+        "rigport {all:?}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_slice(&run.stdout).expect("the --json report")
+}
+
+/// `node tools/three_joints.mjs REFERENCE CANDIDATE`: the largest joint and virtual-point
+/// error in metres, as three.js plays both files.
+fn three_error(reference: &Path, candidate: &Path) -> serde_json::Value {
+    let out = Command::new("node")
+        .arg(common::repo().join("tools/three_joints.mjs"))
+        .arg(reference)
+        .arg(candidate)
+        .output()
+        .expect("node runs");
+    assert!(
+        out.status.success(),
+        "three_joints {}: {}",
+        candidate.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("three_joints JSON")
+}
+
+/// gltfpack's output size for `input` with `flags` (`None`: gltfpack is not installed).
+fn gltfpack_size(input: &Path, out: &Path, flags: &[&str]) -> Option<u64> {
+    let cli = common::repo().join("tools/node_modules/gltfpack/cli.js");
+    if !cli.exists() {
+        return None;
+    }
+    let run = Command::new("node")
+        .arg(cli)
+        .arg("-i")
+        .arg(input)
+        .arg("-o")
+        .arg(out)
+        .args(flags)
+        .output()
+        .expect("node runs");
+    assert!(
+        run.status.success(),
+        "gltfpack {flags:?} on {}",
+        input.display()
+    );
+    Some(std::fs::metadata(out).expect("gltfpack output").len())
+}
+
+fn size(path: &Path) -> u64 {
+    std::fs::metadata(path).expect("written").len()
+}
+
+/// The 1 mm bound holds as three.js plays the files (joints and 3 cm points at every
+/// source frame), the report's ACL metric is within it, the file validates, and no setting
+/// makes any corpus file bigger than the unreduced one.
+#[test]
+fn corpus_clips_compact_within_1_mm_and_never_grow() {
+    let Some(clips) = corpus_clips() else { return };
+    let installed = common::repo()
+        .join("tools/node_modules/three/package.json")
+        .exists();
+    let Some(()) = common::require("three.js (bash tools/setup.sh)", installed.then_some(()))
+    else {
+        return;
+    };
+    let dir = common::scratch();
+    let mut table = vec![format!(
+        "{:<28} {:>9} {:>9} {:>9} {:>9} {:>10} {:>10}",
+        "clip", "plain", "1 mm", "gltfpack", "keys", "max mm", "ACL cm"
+    )];
+    for (label, args) in &clips {
+        let at = |name: &str| -> PathBuf { dir.path().join(format!("{label}_{name}.glb")) };
+        let plain = at("plain");
+        assert!(
+            convert(args, &plain, &[]).is_null(),
+            "no reduction, no report"
+        );
+        let reduced = at("reduced");
+        let report = convert(args, &reduced, &["--reduce-tolerance"]);
+        common::assert_valid(&reduced);
+        // The bound, in the glb's metres (the rig's unit times metres per unit).
+        let bound = report["tolerance"].as_f64().expect("tolerance")
+            * report["meters_per_unit"].as_f64().expect("unit");
+        assert!(
+            (bound - 0.001).abs() < 1e-9,
+            "{label}: the default is 1 mm, not {bound}"
+        );
+        let played = three_error(&plain, &reduced);
+        let max = played["max"].as_f64().expect("max");
+        // f32 arithmetic in three.js against rigport's: a micrometre.
+        assert!(
+            max <= bound + 1e-6,
+            "{label}: three.js plays {played} (bound {bound})"
+        );
+        assert_eq!(played["missing"], 0, "{label}: same nodes");
+        for clip in report["clips"].as_array().expect("clips") {
+            let acl = clip["acl_max_error_cm"].as_f64().expect("ACL max");
+            assert!(acl <= 0.1 + 1e-6, "{label}: ACL metric {acl} cm over 1 mm");
+            assert!(clip["max_error"].as_f64() <= report["tolerance"].as_f64());
+            assert!(clip["keys_after"].as_u64() <= clip["keys_before"].as_u64());
+        }
+        assert!(size(&reduced) <= size(&plain), "{label}: {report}");
+        // No setting grows a file.
+        for extra in [&["--reduce-tolerance=0"][..], &["--reduce-tolerance=1"]] {
+            let other = at("other");
+            convert(args, &other, extra);
+            assert!(
+                size(&other) <= size(&plain),
+                "{label} {extra:?} grew the file"
+            );
+        }
+        let packed = gltfpack_size(&plain, &at("gltfpack"), &[]);
+        let keys = &report["clips"][0];
+        table.push(format!(
+            "{label:<28} {:>9} {:>9} {:>9} {:>4}/{:<5} {:>9.3} {:>10.4}",
+            size(&plain),
+            size(&reduced),
+            packed.map_or("-".into(), |s| s.to_string()),
+            keys["keys_after"],
+            keys["keys_before"],
+            max * 1000.0,
+            keys["acl_max_error_cm"].as_f64().unwrap_or(f64::NAN),
+        ));
+    }
+    eprintln!("{}", table.join("\n"));
+}
