@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use rigport_model::{InfluencesFit, SkinningMethod, UpAxis};
+use rigport_model::{Compression, InfluencesFit, SkinningMethod, UpAxis};
 use std::str::FromStr as _;
 
 use rigport_pipeline::load::{Input, Inputs};
@@ -92,6 +92,9 @@ pub struct OutputArgs {
     /// skins) stay within D (rig units; without D, 1 mm) of the full clip at every key time.
     #[arg(long, value_name = "D", value_parser = distance)]
     pub reduce_tolerance: Option<Option<f32>>,
+    /// glTF compression: meshopt (EXT_meshopt_compression, required; reduces keys as above).
+    #[arg(long, value_enum, value_name = "C", default_value_t = Compression::None)]
+    pub compress: Compression,
     /// Skinning method a .usda declares (primvars:skel:skinningMethod; default: each skin's
     /// own, as the source declares it). glTF is always LBS; use `rigport bake --skinning
     /// dqs` to bake DQS into a glTF.
@@ -119,6 +122,7 @@ impl OutputArgs {
                 up_axis: self.up_axis,
                 meters_per_unit: self.meters_per_unit,
                 morphs_as_points: false,
+                compression: self.compress,
             },
             reduce_tolerance: self.reduce_tolerance.flatten(),
             reduce: self.reduce_tolerance.is_some(),

@@ -112,13 +112,21 @@ fn gltfpack_size(input: &Path, out: &Path, flags: &[&str]) -> Option<u64> {
     Some(std::fs::metadata(out).expect("gltfpack output").len())
 }
 
+/// The JSON chunk of a `.glb`.
+fn gltf_json(glb: &Path) -> serde_json::Value {
+    let bytes = std::fs::read(glb).expect("written");
+    let len = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
+    serde_json::from_slice(&bytes[20..20 + len]).expect("glb JSON")
+}
+
 fn size(path: &Path) -> u64 {
     std::fs::metadata(path).expect("written").len()
 }
 
 /// The 1 mm bound holds as three.js plays the files (joints and 3 cm points at every
-/// source frame), the report's ACL metric is within it, the file validates, and no setting
-/// makes any corpus file bigger than the unreduced one.
+/// source frame), with and without `--compress meshopt`; the report's ACL metric is within
+/// it, the files validate, and no setting makes any corpus file bigger than the unreduced
+/// one.
 #[test]
 fn corpus_clips_compact_within_1_mm_and_never_grow() {
     let Some(clips) = corpus_clips() else { return };
@@ -131,8 +139,17 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
     };
     let dir = common::scratch();
     let mut table = vec![format!(
-        "{:<28} {:>9} {:>9} {:>9} {:>9} {:>10} {:>10}",
-        "clip", "plain", "1 mm", "gltfpack", "keys", "max mm", "ACL cm"
+        "{:<26} {:>7} {:>7} {:>8} {:>7} {:>8} {:>11} {:>7} {:>7} {:>7}",
+        "clip",
+        "plain",
+        "1 mm",
+        "gltfpack",
+        "meshopt",
+        "gp -cc",
+        "keys",
+        "max mm",
+        "mo mm",
+        "ACL cm"
     )];
     for (label, args) in &clips {
         let at = |name: &str| -> PathBuf { dir.path().join(format!("{label}_{name}.glb")) };
@@ -175,16 +192,43 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
                 "{label} {extra:?} grew the file"
             );
         }
+        // EXT_meshopt_compression: same bound, as three.js (with its meshopt decoder)
+        // plays it; declared required; never bigger than the plain file.
+        let meshopt = at("meshopt");
+        let report_mo = convert(args, &meshopt, &["--compress", "meshopt"]);
+        common::assert_valid(&meshopt);
+        let played_mo = three_error(&plain, &meshopt);
+        let max_mo = played_mo["max"].as_f64().expect("max");
+        assert!(max_mo <= bound + 1e-6, "{label} meshopt: {played_mo}");
+        assert_eq!(report_mo["compression"], "meshopt");
+        assert!(size(&meshopt) <= size(&plain), "{label}: {report_mo}");
+        // Written compressed, the extension is required; else the plain file was written.
+        let required = gltf_json(&meshopt)["extensionsRequired"]
+            .as_array()
+            .is_some_and(|r| r.iter().any(|e| e == "EXT_meshopt_compression"));
+        assert_eq!(
+            required,
+            report_mo["reduced_written"] == true,
+            "{label}: {report_mo}"
+        );
+        if !required {
+            assert_eq!(size(&meshopt), size(&plain), "{label}: the plain file");
+        }
         let packed = gltfpack_size(&plain, &at("gltfpack"), &[]);
+        let packed_cc = gltfpack_size(&plain, &at("gltfpack_cc"), &["-cc"]);
         let keys = &report["clips"][0];
+        let show = |s: Option<u64>| s.map_or("-".into(), |s| s.to_string());
         table.push(format!(
-            "{label:<28} {:>9} {:>9} {:>9} {:>4}/{:<5} {:>9.3} {:>10.4}",
+            "{label:<26} {:>7} {:>7} {:>8} {:>7} {:>8} {:>5}/{:<5} {:>7.3} {:>7.3} {:>7.4}",
             size(&plain),
             size(&reduced),
-            packed.map_or("-".into(), |s| s.to_string()),
+            show(packed),
+            size(&meshopt),
+            show(packed_cc),
             keys["keys_after"],
             keys["keys_before"],
             max * 1000.0,
+            max_mo * 1000.0,
             keys["acl_max_error_cm"].as_f64().unwrap_or(f64::NAN),
         ));
     }

@@ -32,12 +32,14 @@ use rigport_model::{Clip, JointIndex, Skeleton, Track, Transform};
 use rigport_eval::LocalToModelJob;
 
 mod channel;
+mod codec;
 mod curve;
 mod error;
 mod loosen;
 pub mod metric;
 mod simplify;
 
+pub use codec::Codec;
 pub use error::{ReduceError, TrackProblem};
 
 use channel::{collect_channels, Channel, Kind};
@@ -59,14 +61,14 @@ pub struct ReduceStats {
     /// The mean over joints and original key times of that distance (the largest of a
     /// joint's points at each time).
     pub mean_error: f32,
-    /// Whether the error was measured on rotations rounded to 16-bit normalized components
-    /// ([`ReduceOptions::rotations_i16`]): `false` when asked but the rounding alone would
-    /// exceed the tolerance, so rotations must be written as floats.
-    pub rotations_i16: bool,
+    /// Whether the error was measured on values as [`ReduceOptions::codec`] stores them:
+    /// `false` when asked but the codec alone would exceed the tolerance, so the values
+    /// must be written exactly (as floats).
+    pub coded: bool,
 }
 
 /// What [`reduce_clip`] holds to.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct ReduceOptions {
     /// The largest model-space distance allowed, in the skeleton's length unit.
     pub tolerance: f32,
@@ -76,9 +78,9 @@ pub struct ReduceOptions {
     /// skeleton: no virtual points (0) for the joints left out, and a leaf's rotation held
     /// at one parent-bone length instead, unverified ([`reduce`]).
     pub point_distance: Vec<f32>,
-    /// Measure LINEAR and STEP rotations as 16-bit normalized components
-    /// ([`rigport_model::quantize`]), the way a glTF writer that stores them so is read.
-    pub rotations_i16: bool,
+    /// How the writer stores LINEAR and STEP key values (`None`: exactly), so that the
+    /// error is measured on what a reader gets ([`Codec::I16`]: 16-bit rotations).
+    pub codec: Option<Codec>,
     /// Also try a lower uniform rate per track (every k-th key), kept when it needs fewer
     /// bytes than key removal (a key's value without a time of its own).
     pub uniform_rate: bool,
@@ -117,7 +119,7 @@ pub fn reduce(
 /// clip at every original key time, as the values are written.
 ///
 /// ```
-/// use rigport_anim::reduce::{reduce_clip, ReduceOptions};
+/// use rigport_anim::reduce::{reduce_clip, Codec, ReduceOptions};
 /// use rigport_model::glam::{Quat, Vec3};
 /// use rigport_model::{Clip, Interpolation, Joint, JointIndex, Skeleton, Track, TrackTarget, Transform};
 ///
@@ -134,9 +136,9 @@ pub fn reduce(
 ///     interpolation: Interpolation::Linear, times, values };
 /// let clip = Clip { name: "swing".into(), tracks: vec![track] };
 /// let options = ReduceOptions { tolerance: 0.001, point_distance: vec![0.03; 2],
-///     rotations_i16: true, uniform_rate: true };
+///     codec: Some(Codec::I16), uniform_rate: true };
 /// let (reduced, stats) = reduce_clip(&clip, &skeleton, &options)?;
-/// assert!(stats.keys_after < 10 && stats.max_error <= 0.001 && stats.rotations_i16);
+/// assert!(stats.keys_after < 10 && stats.max_error <= 0.001 && stats.coded);
 /// assert_eq!(reduced.tracks[0].times.last(), Some(&1.0));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
@@ -193,14 +195,14 @@ fn reduce_impl(
         return Err(ReduceError::Tolerance { tolerance });
     }
     let keys_before: usize = clip.tracks.iter().map(|t| t.times.len()).sum();
-    let mut i16 = options.rotations_i16;
+    let mut codec = options.codec;
     let mut reducer = loop {
-        let channels = collect_channels(clip, skeleton, i16, options.uniform_rate)?;
+        let channels = collect_channels(clip, skeleton, codec.as_ref(), options.uniform_rate)?;
         let mut reducer = Reducer::new(skeleton, options, tuning, channels)?;
-        // Rounding rotations is the one error that restoring tracks cannot undo: measure
-        // it alone first, and write floats when it does not fit.
-        if i16 && reducer.errors()?.0.iter().any(|&e| e > tolerance) {
-            i16 = false;
+        // The codec's rounding is the one error that restoring tracks cannot undo: measure
+        // it alone first, and write exact values when it does not fit.
+        if codec.is_some() && reducer.errors()?.0.iter().any(|&e| e > tolerance) {
+            codec = None;
             continue;
         }
         reducer.set_local_tolerances();
@@ -221,7 +223,7 @@ fn reduce_impl(
             keys_after,
             max_error,
             mean_error,
-            rotations_i16: i16,
+            coded: codec.is_some(),
         },
     ))
 }

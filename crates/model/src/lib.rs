@@ -28,7 +28,7 @@ mod warning;
 pub use asset::{find_clip, Asset, AssetError, NoSuchClip};
 pub use budget::{MemoryBudget, OverBudget};
 pub use clip::{Clip, Interpolation, Track, TrackTarget};
-pub use format::{OutputFormat, OutputFormatError};
+pub use format::{Compression, OutputFormat, OutputFormatError};
 pub use frame::{SceneFrame, UpAxis};
 pub use handle::{HandleSet, HandleSolver, HandleTrack, RootMotion, RotationLimit};
 pub use index::{JointIndex, MeshIndex};

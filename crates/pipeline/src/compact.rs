@@ -10,8 +10,8 @@
 //! bind frame), so the bound covers the skinned mesh as ACL's metric does.
 
 use rigport_anim::reduce::metric::point_error;
-use rigport_anim::reduce::{ReduceOptions, reduce_clip};
-use rigport_model::{Asset, Clip};
+use rigport_anim::reduce::{Codec, ReduceOptions, reduce_clip};
+use rigport_model::{Asset, Clip, Compression};
 use serde::Serialize;
 
 use crate::PipelineError;
@@ -84,8 +84,11 @@ pub struct CompactReport {
     pub tolerance: f32,
     /// Metres per rig unit (1 when the rig states none).
     pub meters_per_unit: f64,
-    /// Whether rotations are written as 16-bit normalized integers.
+    /// Whether key values are written as the compression stores them (16-bit rotations; with
+    /// meshopt, its filters), as the error was measured; `false`: exact floats.
     pub rotations_i16: bool,
+    /// The compression the file is written with.
+    pub compression: String,
     /// The output's size without and with the reduction, in bytes.
     pub bytes_before: u64,
     /// See `bytes_before`.
@@ -178,26 +181,38 @@ fn point_distances(asset: &Asset) -> Vec<f32> {
     out
 }
 
+/// How a glTF writer with `compression` stores key values: 16-bit rotations, or
+/// meshoptimizer's quaternion and exponential filters.
+pub(crate) fn codec(compression: Compression) -> Codec {
+    match compression {
+        Compression::None => Codec::I16,
+        Compression::Meshopt => Codec {
+            rotation: rigport_export::meshopt_rotation_as_written,
+            vector: Some(rigport_export::meshopt_vector_as_written),
+        },
+    }
+}
+
 /// The asset's clips reduced within `tolerance` (rig units), with their reports and
-/// whether rotations are measured (and so must be written) as 16-bit integers: asked by
-/// `rotations_i16`, and kept only when every clip's rounding fits the bound.
+/// whether key values are measured (and so must be written) through `codec`: kept only
+/// when every clip's rounding fits the bound.
 ///
 /// # Errors
 /// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
 pub(crate) fn compact_clips(
     asset: &Asset,
     tolerance: f32,
-    rotations_i16: bool,
+    codec: Option<Codec>,
 ) -> Result<(Vec<Clip>, Vec<ClipReport>, bool), PipelineError> {
     let points = point_distances(asset);
     let acl_points = vec![(POINT_DISTANCE_M / meters_per_unit(asset)) as f32; points.len()];
     let cm_per_unit = meters_per_unit(asset) * 100.0;
-    let mut i16 = rotations_i16;
+    let mut codec = codec;
     'again: loop {
         let options = ReduceOptions {
             tolerance,
             point_distance: points.clone(),
-            rotations_i16: i16,
+            codec,
             uniform_rate: true,
         };
         let mut clips = Vec::with_capacity(asset.clips.len());
@@ -205,13 +220,13 @@ pub(crate) fn compact_clips(
         for clip in &asset.clips {
             let failed = |e| PipelineError::step(format!("cannot reduce clip {:?}", clip.name), e);
             let (reduced, stats) = reduce_clip(clip, &asset.skeleton, &options).map_err(failed)?;
-            if i16 && !stats.rotations_i16 {
-                // One writer setting for the file: floats for every clip.
-                i16 = false;
+            if codec.is_some() && !stats.coded {
+                // One writer setting for the file: exact values for every clip.
+                codec = None;
                 continue 'again;
             }
-            let acl =
-                point_error(clip, &reduced, &asset.skeleton, &acl_points, i16).map_err(failed)?;
+            let acl = point_error(clip, &reduced, &asset.skeleton, &acl_points, codec.as_ref())
+                .map_err(failed)?;
             reports.push(ClipReport {
                 clip: clip.name.clone(),
                 keys_before: stats.keys_before,
@@ -223,6 +238,6 @@ pub(crate) fn compact_clips(
             });
             clips.push(reduced);
         }
-        return Ok((clips, reports, i16));
+        return Ok((clips, reports, codec.is_some()));
     }
 }

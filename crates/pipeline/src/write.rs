@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use rigport_deform::refit::{self, asset::AssetRefit, asset::PoseSet};
 use rigport_export::{GltfOptions, PreparedGltf, PreparedUsd, UsdOptions};
 use rigport_model::{
-    Asset, InfluencesFit, MemoryBudget, OutputFormat, OverBudget, SkinningMethod, UpAxis, Warning,
+    Asset, Compression, InfluencesFit, MemoryBudget, OutputFormat, OverBudget, SkinningMethod,
+    UpAxis, Warning,
 };
 
 use crate::PipelineError;
@@ -49,6 +50,9 @@ pub struct WriteOptions {
     /// A `.usda` writes unskinned morph-animated meshes as `points.timeSamples`
     /// ([`UsdOptions::morphs_as_points`]).
     pub morphs_as_points: bool,
+    /// glTF compression beyond the core ([`GltfOptions::compression`]); it reduces the
+    /// clips (as [`Output::reduce`]) so that the error is measured as stored. glTF only.
+    pub compression: Compression,
 }
 
 /// Where and how a command writes its asset.
@@ -121,7 +125,9 @@ impl Output {
     /// assert!(Output { reduce: true, ..Output::new("a.glb") }.reduces());
     /// ```
     pub fn reduces(&self) -> bool {
-        self.reduce || self.reduce_tolerance.is_some()
+        self.reduce
+            || self.reduce_tolerance.is_some()
+            || self.options.compression != Compression::None
     }
 }
 
@@ -189,11 +195,21 @@ pub fn write_output_report(
     let path = &output.path;
     let format = output.format()?;
     let mut compacted = None;
+    if output.options.compression != Compression::None && !format.is_gltf() {
+        return Err(PipelineError::Invalid(format!(
+            "{}: compression is a glTF extension ({}); USD stores what the reduction keeps as time samples",
+            path.display(),
+            output.options.compression.extension().unwrap_or("none")
+        )));
+    }
     if output.reduces() {
         let tolerance = compact::tolerance_in_rig_units(&asset, output.reduce_tolerance);
-        // 16-bit rotations are a glTF encoding; USD writes floats.
+        // 16-bit rotations and meshopt filters are glTF encodings; USD writes floats.
+        let codec = format
+            .is_gltf()
+            .then(|| compact::codec(output.options.compression));
         let (clips, reports, rotations_i16) = step(progress, "reducing keys", || {
-            compact::compact_clips(&asset, tolerance, format.is_gltf())
+            compact::compact_clips(&asset, tolerance, codec)
         })?;
         let original = std::mem::replace(&mut asset.clips, clips);
         compacted = Some((
@@ -202,6 +218,7 @@ pub fn write_output_report(
                 tolerance,
                 meters_per_unit: asset.meters_per_unit.unwrap_or(1.0),
                 rotations_i16,
+                compression: format!("{:?}", output.options.compression).to_lowercase(),
                 clips: reports,
                 ..CompactReport::default()
             },
@@ -241,10 +258,15 @@ pub fn write_output_report(
     let mut report = None;
     let mut unreduced_asset = None;
     if let Some((original, mut compact_report)) = compacted {
-        // A reduced clip never makes the file bigger: build the unreduced one to compare.
+        // A reduced clip never makes the file bigger: build the plain one to compare.
         let mut unreduced = asset.clone();
         unreduced.clips = original;
-        let plain = prepare(&unreduced, path, format, opts, false)?;
+        // The file the command writes without reduction or compression.
+        let plain_options = WriteOptions {
+            compression: Compression::None,
+            ..*opts
+        };
+        let plain = prepare(&unreduced, path, format, &plain_options, false)?;
         compact_report.bytes_after = prepared.byte_len().unwrap_or(0);
         compact_report.bytes_before = plain.byte_len().unwrap_or(u64::MAX);
         compact_report.reduced_written = compact_report.bytes_after <= compact_report.bytes_before;
@@ -473,6 +495,7 @@ pub(crate) fn prepare(
             let opts = GltfOptions {
                 max_influences: opts.max_influences.unwrap_or(4),
                 rotations_i16,
+                compression: opts.compression,
             };
             PreparedFile::Gltf(rigport_export::prepare_gltf(asset, path, &opts).map_err(failed)?)
         }

@@ -2,9 +2,9 @@
 //! values a reader sees.
 
 use glam::Quat;
-use rigport_model::quantize::rotation_as_i16;
 use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget};
 
+use super::codec::Codec;
 use super::curve::quat_at;
 use super::error::{ReduceError, TrackProblem};
 
@@ -62,11 +62,11 @@ impl Channel<'_> {
 }
 
 /// Validates every joint track and keeps the first per joint and property.
-/// With `i16`, LINEAR and STEP rotations are read as 16-bit normalized components.
+/// With a `codec`, LINEAR and STEP values are read as it stores them.
 pub(super) fn collect_channels<'a>(
     clip: &'a Clip,
     skeleton: &Skeleton,
-    i16: bool,
+    codec: Option<&Codec>,
     decimate: bool,
 ) -> Result<Vec<Channel<'a>>, ReduceError> {
     let joints = skeleton.len();
@@ -134,18 +134,16 @@ pub(super) fn collect_channels<'a>(
         if std::mem::replace(&mut slot[kind.slot()], true) {
             continue;
         }
-        let rounded = i16 && kind == Kind::Rotation && per_key == 4;
-        let as_written = rounded.then(|| {
-            let mut written = track.clone();
-            for chunk in written.values.chunks_exact_mut(4) {
-                let q = rotation_as_i16([chunk[0], chunk[1], chunk[2], chunk[3]]);
-                chunk.copy_from_slice(&q);
-            }
+        let cubic = track.interpolation == Interpolation::CubicSpline;
+        let as_written = codec
+            .filter(|_| !cubic)
+            .and_then(|codec| as_written(track, kind, codec));
+        if let Some(written) = as_written.as_ref().filter(|_| kind == Kind::Rotation) {
             for (q, chunk) in quats.iter_mut().zip(written.values.chunks_exact(4)) {
                 *q = quat_at(chunk, 0);
             }
-            written
-        });
+        }
+        let rounded = as_written.is_some() && kind == Kind::Rotation;
         out.push(Channel {
             joint: joint.get(),
             kind,
@@ -162,4 +160,25 @@ pub(super) fn collect_channels<'a>(
         });
     }
     Ok(out)
+}
+
+/// A LINEAR or STEP track's values as `codec` stores them (`None`: stored exactly).
+pub(super) fn as_written(track: &Track, kind: Kind, codec: &Codec) -> Option<Track> {
+    let mut written = track.clone();
+    match kind {
+        Kind::Rotation => {
+            for chunk in written.values.chunks_exact_mut(4) {
+                let q = (codec.rotation)([chunk[0], chunk[1], chunk[2], chunk[3]]);
+                chunk.copy_from_slice(&q);
+            }
+        }
+        Kind::Translation | Kind::Scale => {
+            let vector = codec.vector?;
+            for chunk in written.values.chunks_exact_mut(3) {
+                let v = vector([chunk[0], chunk[1], chunk[2]]);
+                chunk.copy_from_slice(&v);
+            }
+        }
+    }
+    Some(written)
 }

@@ -3,11 +3,10 @@
 //! key time. With one distance for every joint, 3 cm, this is ACL's error metric (virtual
 //! vertices at a "shell distance" from each bone; ACL's `docs/error_metrics.md`).
 
-use rigport_model::quantize::rotation_as_i16;
 use rigport_model::{Clip, Interpolation, Skeleton};
 
-use super::channel::{collect_channels, Kind};
-use super::{ReduceError, ReduceOptions, Reducer, Tuning};
+use super::channel::{as_written, collect_channels};
+use super::{Codec, ReduceError, ReduceOptions, Reducer, Tuning};
 
 /// The largest and the mean model-space error.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -21,11 +20,11 @@ pub struct PointError {
 
 /// The error of `reduced` (the same tracks as `original`, with fewer keys) against
 /// `original`, with virtual points at `point_distance[j]` from each joint `j` (see
-/// [`ReduceOptions::point_distance`]); with `rotations_i16`, the reduced clip's LINEAR and
-/// STEP rotations are read as 16-bit normalized components, as a writer stores them.
+/// [`ReduceOptions::point_distance`]); with a `codec`, the reduced clip's LINEAR and STEP
+/// values are read as the writer stores them.
 ///
 /// ```
-/// use rigport_anim::reduce::{metric::point_error, reduce_clip, ReduceOptions};
+/// use rigport_anim::reduce::{metric::point_error, reduce_clip, Codec, ReduceOptions};
 /// use rigport_model::glam::{Quat, Vec3};
 /// use rigport_model::{Clip, Interpolation, Joint, JointIndex, Skeleton, Track, TrackTarget, Transform};
 ///
@@ -37,9 +36,9 @@ pub struct PointError {
 ///     target: TrackTarget::Rotation(JointIndex(0)), interpolation: Interpolation::Linear,
 ///     times, values }] };
 /// let options = ReduceOptions { tolerance: 1e-4, point_distance: vec![0.03],
-///     rotations_i16: true, uniform_rate: true };
+///     codec: Some(Codec::I16), uniform_rate: true };
 /// let (reduced, stats) = reduce_clip(&clip, &skeleton, &options)?;
-/// let acl = point_error(&clip, &reduced, &skeleton, &[0.03], true)?;
+/// let acl = point_error(&clip, &reduced, &skeleton, &[0.03], Some(&Codec::I16))?;
 /// assert_eq!(acl.max, stats.max_error);
 /// assert!(acl.max <= 1e-4 && acl.mean <= acl.max);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -53,11 +52,11 @@ pub fn point_error(
     reduced: &Clip,
     skeleton: &Skeleton,
     point_distance: &[f32],
-    rotations_i16: bool,
+    codec: Option<&Codec>,
 ) -> Result<PointError, ReduceError> {
     // Validates the reduced clip's tracks too.
-    collect_channels(reduced, skeleton, false, false)?;
-    let channels = collect_channels(original, skeleton, false, false)?;
+    collect_channels(reduced, skeleton, None, false)?;
+    let channels = collect_channels(original, skeleton, None, false)?;
     let options = ReduceOptions {
         point_distance: point_distance.to_vec(),
         ..ReduceOptions::default()
@@ -72,16 +71,9 @@ pub fn point_error(
                 clip: reduced.name.clone(),
                 track: chan.track,
             })?;
-        let mut track = track.clone();
-        if rotations_i16
-            && chan.kind == Kind::Rotation
-            && track.interpolation != Interpolation::CubicSpline
-        {
-            for key in track.values.chunks_exact_mut(4) {
-                let q = rotation_as_i16([key[0], key[1], key[2], key[3]]);
-                key.copy_from_slice(&q);
-            }
-        }
+        let coded = (codec.filter(|_| track.interpolation != Interpolation::CubicSpline))
+            .and_then(|codec| as_written(track, chan.kind, codec));
+        let track = coded.unwrap_or_else(|| track.clone());
         chan.reduced = Some(track);
     }
     let (errors, mean) = reducer.errors()?;

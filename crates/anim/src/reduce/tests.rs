@@ -631,7 +631,7 @@ fn spins_and_steps_over_180_degrees_keep_their_direction() {
         ReduceOptions {
             tolerance: 1e-3,
             point_distance: vec![0.03; 2],
-            rotations_i16: true,
+            codec: Some(Codec::I16),
             uniform_rate: true,
         },
         ReduceOptions {
@@ -702,16 +702,16 @@ fn bound_holds_with_points_rotations_i16_and_uniform_rates() {
         let options = ReduceOptions {
             tolerance,
             point_distance: points.clone(),
-            rotations_i16: true,
+            codec: Some(Codec::I16),
             uniform_rate: true,
         };
         let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
-        assert!(stats.rotations_i16);
+        assert!(stats.coded);
         assert!(stats.max_error <= tolerance, "{stats:?}");
         assert!(stats.keys_after < stats.keys_before, "{stats:?}");
         assert_subset(&clip, &reduced);
-        let measured =
-            metric::point_error(&clip, &reduced, &skeleton, &points, true).expect("measures");
+        let measured = metric::point_error(&clip, &reduced, &skeleton, &points, Some(&Codec::I16))
+            .expect("measures");
         assert_eq!(measured.max, stats.max_error);
         assert!(measured.mean <= measured.max);
         // Joints alone, without rounding, by the naive reference: within the bound too
@@ -730,10 +730,10 @@ fn rounding_that_exceeds_the_bound_falls_back_to_floats() {
     let options = ReduceOptions {
         tolerance: 1e-7,
         point_distance: vec![0.03; skeleton.len()],
-        rotations_i16: true,
+        codec: Some(Codec::I16),
         uniform_rate: true,
     };
     let (_, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
-    assert!(!stats.rotations_i16);
+    assert!(!stats.coded);
     assert!(stats.max_error <= 1e-7, "{stats:?}");
 }

@@ -124,7 +124,7 @@ pub(crate) fn write_animations(
                 Some(&acc) => acc,
                 None => {
                     // Sampler inputs require min/max (ANIMATION_SAMPLER_INPUT_ACCESSOR_WITHOUT_BOUNDS).
-                    let acc = b.floats(&times, Type::Scalar, None, Bounds::MinMax);
+                    let acc = b.animation_floats(&times, Type::Scalar, Bounds::MinMax);
                     inputs.insert(key, acc);
                     acc
                 }
@@ -143,9 +143,9 @@ pub(crate) fn write_animations(
                     Constancy::Constant => track.key_value(0).repeat(times.len()),
                     _ => track.values.clone(),
                 };
-                b.normalized_i16(&i16_rotations(&raw), type_)
+                b.animation_rotations(&raw, i16_rotations)
             } else {
-                b.floats(&values, type_, None, Bounds::None)
+                b.animation_floats(&values, type_, Bounds::None)
             };
             let sampler = Index::push(
                 &mut samplers,

@@ -6,6 +6,8 @@ use json::buffer::Target;
 use json::validation::{Checked, USize64};
 use json::Index;
 
+use super::meshopt::{self, Compressed, Filter};
+
 /// Buffer views start on multiples of this (glTF 2.0 §3.6.2.4: an accessor's offset must be
 /// a multiple of its component size, at most 4; vertex attributes need 4-byte alignment).
 const VIEW_ALIGN: usize = 4;
@@ -16,6 +18,12 @@ pub(crate) struct Builder {
     pub root: json::Root,
     /// The buffer's bytes, little-endian.
     pub bin: Vec<u8>,
+    /// With `EXT_meshopt_compression`: the compressed views so far (animation data goes
+    /// through [`Builder::animation_floats`] and [`Builder::animation_rotations`]).
+    pub compressed: Option<Compressed>,
+    /// Compressed three-component animation outputs go through the `EXPONENTIAL` filter
+    /// (set when the key reducer measured it; else they are stored exactly).
+    pub filter_vectors: bool,
 }
 
 /// Per-component bounds of float data, for `accessor.min` / `accessor.max`.
@@ -35,6 +43,8 @@ impl Builder {
                 ..Default::default()
             },
             bin: Vec::new(),
+            compressed: None,
+            filter_vectors: false,
         }
     }
 
@@ -220,6 +230,83 @@ impl Builder {
             accessor.normalized = true;
         }
         index
+    }
+
+    /// A compressed view of `raw` (filtered bytes, elements of `stride` bytes) in the
+    /// fallback buffer (buffer 1), its encoded bytes appended to `bin`; `None` when the
+    /// export is not compressed.
+    fn compressed_view(
+        &mut self,
+        raw: &[u8],
+        stride: usize,
+        filter: Filter,
+    ) -> Option<Index<json::buffer::View>> {
+        let compressed = self.compressed.as_mut()?;
+        let index = self.root.buffer_views.len();
+        let (offset, len) = compressed.push(&mut self.bin, index, raw, stride, filter);
+        Some(self.root.push(json::buffer::View {
+            buffer: Index::new(1),
+            byte_length: USize64::from(len),
+            byte_offset: (offset > 0).then(|| USize64::from(offset)),
+            byte_stride: None,
+            name: None,
+            target: None,
+            extensions: None,
+            extras: None,
+        }))
+    }
+
+    /// An animation sampler's float accessor (key times, translations, scales, weights):
+    /// as [`Builder::floats`] (no target), or compressed when the export is; three-component
+    /// outputs then go through the `EXPONENTIAL` filter (what
+    /// [`super::meshopt::vector_as_written`] returns is what a reader gets), the rest as
+    /// they are.
+    pub(crate) fn animation_floats(
+        &mut self,
+        data: &[f32],
+        type_: Type,
+        bounds: Bounds,
+    ) -> Index<json::Accessor> {
+        let width = type_.multiplicity();
+        let (raw, filter) = if width == 3 && self.filter_vectors && matches!(bounds, Bounds::None) {
+            (meshopt::exponential(data), Filter::Exponential)
+        } else {
+            (meshopt::floats(data), Filter::None)
+        };
+        if self.compressed.is_none() {
+            return self.floats(data, type_, None, bounds);
+        }
+        let Some(view) = self.compressed_view(&raw, 4 * width, filter) else {
+            return self.floats(data, type_, None, bounds);
+        };
+        let bounds = match bounds {
+            Bounds::None => None,
+            Bounds::MinMax => Some(min_max(data, width)),
+        };
+        self.accessor(view, data.len() / width, ComponentType::F32, type_, bounds)
+    }
+
+    /// Rotation outputs of LINEAR or STEP keys (flat xyzw, as in the track) as 16-bit
+    /// normalized components: compressed through the `QUATERNION` filter when the export
+    /// is, else each key rounded ([`rigport_model::quantize::rotation_to_i16`]) and signs
+    /// made continuous by `i16_keys`.
+    pub(crate) fn animation_rotations(
+        &mut self,
+        values: &[f32],
+        i16_keys: impl FnOnce(&[f32]) -> Vec<i16>,
+    ) -> Index<json::Accessor> {
+        if self.compressed.is_some() {
+            let raw = meshopt::quaternions(values);
+            if let Some(view) = self.compressed_view(&raw, 8, Filter::Quaternion) {
+                let index =
+                    self.accessor(view, values.len() / 4, ComponentType::I16, Type::Vec4, None);
+                if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+                    accessor.normalized = true;
+                }
+                return index;
+            }
+        }
+        self.normalized_i16(&i16_keys(values), Type::Vec4)
     }
 
     /// An unsigned-integer accessor (`data.len() / size` elements of `type_`), of `T`'s

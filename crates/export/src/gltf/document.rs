@@ -37,6 +37,9 @@ pub(crate) struct Built {
     pub bin: Vec<u8>,
     /// Lossy or repairing steps taken.
     pub warnings: Vec<Warning>,
+    /// With [`rigport_model::Compression::Meshopt`]: the compressed views, which the
+    /// caller declares ([`super::finish_json`]).
+    pub compressed: Option<super::meshopt::Compressed>,
 }
 
 /// Builds the glTF document for `asset`.
@@ -87,6 +90,10 @@ pub(crate) fn build(
         version: "2.0".into(),
         ..Default::default()
     });
+    if opts.compression == rigport_model::Compression::Meshopt {
+        b.compressed = Some(super::meshopt::Compressed::default());
+        b.filter_vectors = opts.rotations_i16;
+    }
     let skeleton = &asset.skeleton;
     let joint_count = skeleton.len();
 
@@ -211,6 +218,7 @@ pub(crate) fn build(
         root: b.root,
         bin: b.bin,
         warnings,
+        compressed: b.compressed,
     })
 }
 
