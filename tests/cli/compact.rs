@@ -202,6 +202,20 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
         assert!(max_mo <= bound + 1e-6, "{label} meshopt: {played_mo}");
         assert_eq!(report_mo["compression"], "meshopt");
         assert!(size(&meshopt) <= size(&plain), "{label}: {report_mo}");
+        // The mesh (vertex data through the codec, exactly) loads as the plain file's.
+        let ((_, rest_plain), (_, rest_mo)) = (
+            crate::three::three_eval(&plain, &[]).expect("three.js"),
+            crate::three::three_eval(&meshopt, &[]).expect("three.js"),
+        );
+        assert_eq!(
+            rest_plain.numbers.len(),
+            rest_mo.numbers.len(),
+            "{label}: vertices"
+        );
+        let worst = (rest_plain.numbers.iter().zip(&rest_mo.numbers))
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{label}: meshopt mesh moved by {worst}");
         // Written compressed, the extension is required; else the plain file was written.
         let required = gltf_json(&meshopt)["extensionsRequired"]
             .as_array()

@@ -120,12 +120,8 @@ impl Builder {
             Bounds::None => None,
             Bounds::MinMax => Some(min_max(data, width)),
         };
-        let view = self.view(target, |bin| {
-            bin.reserve(data.len() * 4);
-            for v in data {
-                bin.extend_from_slice(&v.to_le_bytes());
-            }
-        });
+        let raw: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.vertex_view(target, &raw, 4 * width);
         self.accessor(view, data.len() / width, ComponentType::F32, type_, bounds)
     }
 
@@ -240,6 +236,7 @@ impl Builder {
         raw: &[u8],
         stride: usize,
         filter: Filter,
+        target: Option<Target>,
     ) -> Option<Index<json::buffer::View>> {
         let compressed = self.compressed.as_mut()?;
         let index = self.root.buffer_views.len();
@@ -250,10 +247,27 @@ impl Builder {
             byte_offset: (offset > 0).then(|| USize64::from(offset)),
             byte_stride: None,
             name: None,
-            target: None,
+            target: target.map(Checked::Valid),
             extensions: None,
             extras: None,
         }))
+    }
+
+    /// A view of vertex data `raw` (elements of `stride` bytes): compressed (no filter,
+    /// exact) when the export is and `target` is `ARRAY_BUFFER` with a stride the codec
+    /// takes (a multiple of 4), else as it is.
+    fn vertex_view(
+        &mut self,
+        target: Option<Target>,
+        raw: &[u8],
+        stride: usize,
+    ) -> Index<json::buffer::View> {
+        if target == Some(Target::ArrayBuffer) && stride % 4 == 0 {
+            if let Some(view) = self.compressed_view(raw, stride, Filter::None, target) {
+                return view;
+            }
+        }
+        self.view(target, |bin| bin.extend_from_slice(raw))
     }
 
     /// An animation sampler's float accessor (key times, translations, scales, weights):
@@ -276,7 +290,7 @@ impl Builder {
         if self.compressed.is_none() {
             return self.floats(data, type_, None, bounds);
         }
-        let Some(view) = self.compressed_view(&raw, 4 * width, filter) else {
+        let Some(view) = self.compressed_view(&raw, 4 * width, filter, None) else {
             return self.floats(data, type_, None, bounds);
         };
         let bounds = match bounds {
@@ -297,7 +311,7 @@ impl Builder {
     ) -> Index<json::Accessor> {
         if self.compressed.is_some() {
             let raw = meshopt::quaternions(values);
-            if let Some(view) = self.compressed_view(&raw, 8, Filter::Quaternion) {
+            if let Some(view) = self.compressed_view(&raw, 8, Filter::Quaternion, None) {
                 let index =
                     self.accessor(view, values.len() / 4, ComponentType::I16, Type::Vec4, None);
                 if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
@@ -317,11 +331,12 @@ impl Builder {
         type_: Type,
         target: Option<Target>,
     ) -> Index<json::Accessor> {
-        let view = self.view(target, |bin| {
-            for v in data {
-                v.put_le(bin);
-            }
-        });
+        let mut raw = Vec::with_capacity(data.len() * 4);
+        for v in data {
+            v.put_le(&mut raw);
+        }
+        let stride = raw.len() / (data.len() / type_.multiplicity()).max(1);
+        let view = self.vertex_view(target, &raw, stride);
         self.accessor(
             view,
             data.len() / type_.multiplicity(),

@@ -8,7 +8,7 @@
 //! Rotations go through the `QUATERNION` filter (three components of K bits and the index of
 //! the fourth, decoded to 16-bit normalized components), translations and scales through
 //! the `EXPONENTIAL` filter (a K-bit mantissa and an 8-bit exponent per component); key
-//! times are encoded without a filter, exactly.
+//! times and vertex attributes are encoded without a filter, exactly.
 
 /// Bits per quaternion component (the filter allows 4 to 16): 16, the precision of plain
 /// 16-bit normalized rotations.
