@@ -19,6 +19,7 @@ use crate::test_assets;
 use crate::Problem;
 
 mod animation;
+mod compression;
 mod files;
 mod skin;
 
