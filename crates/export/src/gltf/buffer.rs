@@ -290,14 +290,56 @@ impl Builder {
         if self.compressed.is_none() {
             return self.floats(data, type_, None, bounds);
         }
-        let Some(view) = self.compressed_view(&raw, 4 * width, filter, None) else {
-            return self.floats(data, type_, None, bounds);
-        };
         let bounds = match bounds {
             Bounds::None => None,
             Bounds::MinMax => Some(min_max(data, width)),
         };
-        self.accessor(view, data.len() / width, ComponentType::F32, type_, bounds)
+        self.grouped(&raw, 4 * width, filter, ComponentType::F32, type_, bounds)
+    }
+
+    /// An accessor over `raw` (filtered bytes, elements of `stride`) in the compressed
+    /// animation group of its stride and filter: one view per group, written by
+    /// [`Builder::finish_groups`] (fewer, larger views: less JSON, better compression).
+    fn grouped(
+        &mut self,
+        raw: &[u8],
+        stride: usize,
+        filter: Filter,
+        component: ComponentType,
+        type_: Type,
+        bounds: Option<(json::Value, json::Value)>,
+    ) -> Index<json::Accessor> {
+        // The view is set by `finish_groups`; 0 until then.
+        let index = self.accessor(Index::new(0), raw.len() / stride, component, type_, bounds);
+        if let Some(compressed) = self.compressed.as_mut() {
+            let offset = compressed.group(stride, filter, raw, index.value());
+            if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+                accessor.byte_offset = (offset > 0).then(|| USize64::from(offset));
+            }
+        }
+        index
+    }
+
+    /// Writes each compressed animation group as one view and points its accessors at it.
+    pub(crate) fn finish_groups(&mut self) {
+        let Some(groups) = self
+            .compressed
+            .as_mut()
+            .map(|c| std::mem::take(&mut c.groups))
+        else {
+            return;
+        };
+        for group in groups {
+            let Some(view) = self.compressed_view(&group.raw, group.stride, group.filter, None)
+            else {
+                continue;
+            };
+            for accessor in group.accessors {
+                if let Some(a) = self.root.accessors.get_mut(accessor) {
+                    a.buffer_view = Some(view);
+                }
+            }
+        }
     }
 
     /// Rotation outputs of LINEAR or STEP keys (flat xyzw, as in the track) as 16-bit
@@ -311,14 +353,18 @@ impl Builder {
     ) -> Index<json::Accessor> {
         if self.compressed.is_some() {
             let raw = meshopt::quaternions(values);
-            if let Some(view) = self.compressed_view(&raw, 8, Filter::Quaternion, None) {
-                let index =
-                    self.accessor(view, values.len() / 4, ComponentType::I16, Type::Vec4, None);
-                if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-                    accessor.normalized = true;
-                }
-                return index;
+            let index = self.grouped(
+                &raw,
+                8,
+                Filter::Quaternion,
+                ComponentType::I16,
+                Type::Vec4,
+                None,
+            );
+            if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+                accessor.normalized = true;
             }
+            return index;
         }
         self.normalized_i16(&i16_keys(values), Type::Vec4)
     }

@@ -214,6 +214,7 @@ pub(crate) fn build(
 
     let pad = b.bin.len().wrapping_neg() % 4;
     b.bin.resize(b.bin.len() + pad, 0);
+    b.finish_groups();
     Ok(Built {
         root: b.root,
         bin: b.bin,

@@ -151,15 +151,60 @@ pub(crate) struct CompressedView {
     pub extension: serde_json::Value,
 }
 
+/// Animation data of one stride and filter, gathered into one view.
+#[derive(Clone, Debug)]
+pub(crate) struct Group {
+    pub stride: usize,
+    pub filter: Filter,
+    /// The filtered bytes, accessor after accessor.
+    pub raw: Vec<u8>,
+    /// The accessors that read it (indices in `accessors`).
+    pub accessors: Vec<usize>,
+}
+
 /// The state of a compressed export: views written so far and the fallback buffer's size.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Compressed {
     pub views: Vec<CompressedView>,
+    /// Animation groups not yet written.
+    pub groups: Vec<Group>,
     /// Bytes of the fallback buffer (buffer 1): the decoded views, 4-byte aligned.
     pub fallback_len: usize,
 }
 
 impl Compressed {
+    /// Appends `raw` to the group of `stride` and `filter` for `accessor`; returns its byte
+    /// offset in the group.
+    pub(crate) fn group(
+        &mut self,
+        stride: usize,
+        filter: Filter,
+        raw: &[u8],
+        accessor: usize,
+    ) -> usize {
+        let at = match self
+            .groups
+            .iter()
+            .position(|g| g.stride == stride && g.filter == filter)
+        {
+            Some(at) => at,
+            None => {
+                self.groups.push(Group {
+                    stride,
+                    filter,
+                    raw: Vec::new(),
+                    accessors: Vec::new(),
+                });
+                self.groups.len() - 1
+            }
+        };
+        let group = &mut self.groups[at];
+        let offset = group.raw.len();
+        group.raw.extend_from_slice(raw);
+        group.accessors.push(accessor);
+        offset
+    }
+
     /// Encodes `raw` (filtered bytes, `count` elements of `stride`) into `bin` (4-byte
     /// aligned) and returns the fallback range `(byte_offset, byte_length)` of the view the
     /// caller pushes as `view`.

@@ -92,6 +92,15 @@ fn decode_bytes(encoded: &[u8], count: usize, stride: usize) -> Vec<u8> {
     }
 }
 
+/// The bytes accessor `a` reads from `json` / `bin` (plain views), `count * size`.
+fn accessor_bytes(json: &Value, bin: &[u8], a: usize, size: usize) -> Vec<u8> {
+    let accessor = &json["accessors"][a];
+    let view = accessor["bufferView"].as_u64().expect("view") as usize;
+    let at = accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let count = accessor["count"].as_u64().expect("count") as usize;
+    view_bytes(json, bin, view)[at..at + count * size].to_vec()
+}
+
 #[test]
 fn meshopt_views_decode_to_the_plain_files_data() {
     let plain = export(true, Compression::None);
@@ -108,18 +117,26 @@ fn meshopt_views_decode_to_the_plain_files_data() {
     assert_eq!(mj["extensionsUsed"], serde_json::json!([name]));
     assert_eq!(mj["buffers"][1]["extensions"][name]["fallback"], true);
     assert!(mj["buffers"][1].get("uri").is_none());
-    let views = mj["bufferViews"].as_array().expect("views");
+    let accessors = mj["accessors"].as_array().expect("accessors");
     assert_eq!(
-        views.len(),
-        pj["bufferViews"].as_array().expect("views").len()
+        accessors.len(),
+        pj["accessors"].as_array().expect("accessors").len()
     );
     let (plain_bin, packed_bin) = (bin(&plain), bin(&packed));
     let mut filters = std::collections::BTreeSet::new();
-    for (v, view) in views.iter().enumerate() {
+    for (a, accessor) in accessors.iter().enumerate() {
+        let Some(v) = accessor["bufferView"].as_u64().map(|v| v as usize) else {
+            continue; // sparse without a base view
+        };
+        let view = &mj["bufferViews"][v];
         let Some(ext) = view["extensions"].get(name) else {
+            let size = view_bytes(&mj, packed_bin, v).len();
+            let count = accessor["count"].as_u64().expect("count") as usize;
+            let element = size / count.max(1);
             assert_eq!(
-                view_bytes(&mj, packed_bin, v),
-                view_bytes(&pj, plain_bin, v)
+                accessor_bytes(&mj, packed_bin, a, element),
+                accessor_bytes(&pj, plain_bin, a, element),
+                "accessor {a}"
             );
             continue;
         };
@@ -130,47 +147,59 @@ fn meshopt_views_decode_to_the_plain_files_data() {
         let count = ext["count"].as_u64().expect("count") as usize;
         let stride = ext["byteStride"].as_u64().expect("stride") as usize;
         assert_eq!(ext["mode"], "ATTRIBUTES");
-        let expected = view_bytes(&pj, plain_bin, v);
         let filter = ext["filter"].as_str().unwrap_or("NONE");
         filters.insert(filter.to_owned());
+        let offset = accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let n = accessor["count"].as_u64().expect("count") as usize;
+        let expected = accessor_bytes(&pj, plain_bin, a, stride);
         match (filter, stride) {
             ("NONE", _) => {
-                assert_eq!(decode_bytes(encoded, count, stride), expected, "view {v}");
+                let all = decode_bytes(encoded, count, stride);
+                assert_eq!(
+                    all[offset..offset + n * stride],
+                    expected[..],
+                    "accessor {a}"
+                );
             }
             ("QUATERNION", 8) => {
                 let mut rows: Vec<[i16; 4]> =
                     ::meshopt::decode_vertex_buffer(encoded, count).expect("decodes");
                 ::meshopt::decode_filter_quat(&mut rows);
+                let rows = &rows[offset / 8..offset / 8 + n];
                 for (k, (row, plain)) in rows.iter().zip(expected.chunks_exact(8)).enumerate() {
                     let plain: [i16; 4] = std::array::from_fn(|c| {
                         i16::from_le_bytes([plain[2 * c], plain[2 * c + 1]])
                     });
-                    let (a, b) = (rotation_from_i16(*row), rotation_from_i16(plain));
+                    let (x, y) = (rotation_from_i16(*row), rotation_from_i16(plain));
                     // The same rotation (up to sign) within the 16-bit grid's steps.
                     let near = |s: f32| {
-                        a.iter()
-                            .zip(&b)
-                            .all(|(x, y)| (x - s * y).abs() <= 2.0 / 32767.0)
+                        x.iter()
+                            .zip(&y)
+                            .all(|(p, q)| (p - s * q).abs() <= 2.0 / 32767.0)
                     };
-                    assert!(near(1.0) || near(-1.0), "view {v} key {k}: {a:?} vs {b:?}");
+                    assert!(
+                        near(1.0) || near(-1.0),
+                        "accessor {a} key {k}: {x:?} vs {y:?}"
+                    );
                 }
             }
             ("EXPONENTIAL", 12) => {
                 let mut rows: Vec<[u32; 3]> =
                     ::meshopt::decode_vertex_buffer(encoded, count).expect("decodes");
                 ::meshopt::decode_filter_exp(&mut rows);
+                let rows = &rows[offset / 12..offset / 12 + n];
                 for (row, plain) in rows.iter().flatten().zip(expected.chunks_exact(4)) {
-                    let (a, b) = (
+                    let (x, y) = (
                         f32::from_bits(*row),
                         f32::from_le_bytes(plain.try_into().expect("4")),
                     );
                     assert!(
-                        (a - b).abs() <= b.abs() / (1 << 19) as f32,
-                        "view {v}: {a} vs {b}"
+                        (x - y).abs() <= y.abs() / (1 << 19) as f32,
+                        "accessor {a}: {x} vs {y}"
                     );
                 }
             }
-            other => panic!("view {v}: unexpected {other:?}"),
+            other => panic!("accessor {a}: unexpected {other:?}"),
         }
     }
     assert!(
