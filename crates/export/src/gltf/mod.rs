@@ -465,7 +465,9 @@ fn finish_json(
     root.buffers
         .push(buffer_entry(compressed.fallback_len, None));
     let fallback = root.buffers.len() - 1;
-    let mut value = serde_json::to_value(&root)?;
+    // Through the serialized text, not `to_value`: `f32` fields keep their shortest form
+    // (`to_value` widens them to `f64` digits).
+    let mut value: serde_json::Value = serde_json::from_slice(&root.to_vec()?)?;
     if let Some(buffer) = value.pointer_mut(&format!("/buffers/{fallback}")) {
         buffer["extensions"] = serde_json::json!({ name.clone(): { "fallback": true } });
     }
