@@ -494,7 +494,7 @@ pub(crate) fn prepare(
         OutputFormat::Glb | OutputFormat::Gltf => {
             let opts = GltfOptions {
                 max_influences: opts.max_influences.unwrap_or(4),
-                rotations_i16,
+                compact: rotations_i16,
                 compression: opts.compression,
             };
             PreparedFile::Gltf(rigport_export::prepare_gltf(asset, path, &opts).map_err(failed)?)

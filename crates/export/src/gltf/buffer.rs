@@ -369,6 +369,21 @@ impl Builder {
         self.normalized_i16(&i16_keys(values), Type::Vec4)
     }
 
+    /// An `UNSIGNED_BYTE` accessor with `normalized: true` (read as `c / 255`), for vertex
+    /// weights.
+    pub(crate) fn normalized_u8(
+        &mut self,
+        data: &[u8],
+        type_: Type,
+        target: Option<Target>,
+    ) -> Index<json::Accessor> {
+        let index = self.ints(data, type_, target);
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
+    }
+
     /// An unsigned-integer accessor (`data.len() / size` elements of `type_`), of `T`'s
     /// component type (`u8`, `u16` or `u32`).
     pub(crate) fn ints<T: IntComponent>(

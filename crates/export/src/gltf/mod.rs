@@ -62,14 +62,15 @@ pub struct GltfOptions {
     /// actually uses a fifth influence). Many viewers read only the first set, which always
     /// holds each vertex's 4 largest weights. Default 4.
     pub max_influences: usize,
-    /// Write LINEAR and STEP rotation outputs as 16-bit normalized integers (`SHORT`,
-    /// `normalized: true`; core glTF 2.0 §3.11), each key rounded by
-    /// [`rigport_model::quantize::rotation_to_i16`], half the bytes of floats. Default
-    /// `false` (floats).
-    pub rotations_i16: bool,
+    /// Write compactly, as a key reducer measured it: LINEAR and STEP rotation outputs as
+    /// 16-bit normalized integers (`SHORT`, `normalized: true`; core glTF 2.0 §3.11), each
+    /// key rounded by [`rigport_model::quantize::rotation_to_i16`], half the bytes of
+    /// floats; and a skin's weights as normalized bytes when every weight is exactly
+    /// `k / 255` (a bone mesh's 0 and 1: lossless, a quarter of the bytes). Default `false`.
+    pub compact: bool,
     /// Compression beyond core glTF: with [`Compression::Meshopt`], animation data is
     /// written through `EXT_meshopt_compression` (declared required): with
-    /// `rotations_i16`, rotations through its `QUATERNION` filter and translations and
+    /// `compact`, rotations through its `QUATERNION` filter and translations and
     /// scales through its `EXPONENTIAL` filter ([`crate::meshopt_rotation_as_written`],
     /// [`crate::meshopt_vector_as_written`] say what a reader gets), else exact floats.
     /// Default none.
@@ -80,7 +81,7 @@ impl Default for GltfOptions {
     fn default() -> Self {
         Self {
             max_influences: 4,
-            rotations_i16: false,
+            compact: false,
             compression: Compression::None,
         }
     }

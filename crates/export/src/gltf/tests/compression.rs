@@ -7,9 +7,9 @@ use rigport_model::{Compression, TrackTarget};
 use super::*;
 use crate::test_assets;
 
-fn export(rotations_i16: bool, compression: Compression) -> Vec<u8> {
+fn export(compact: bool, compression: Compression) -> Vec<u8> {
     let options = GltfOptions {
-        rotations_i16,
+        compact,
         compression,
         ..Default::default()
     };
@@ -206,4 +206,65 @@ fn meshopt_views_decode_to_the_plain_files_data() {
         filters.contains("QUATERNION") && filters.contains("EXPONENTIAL"),
         "{filters:?}"
     );
+}
+
+/// Weights that are exactly `k / 255` (here: every vertex on one joint, as a bone mesh) are
+/// normalized bytes in a compact export, read back as the same weights; other weights stay
+/// floats.
+#[test]
+fn exact_weights_are_normalized_bytes_in_compact_exports() {
+    let mut asset = test_assets::rig();
+    let weights_of = |glb: &[u8]| -> (u64, Vec<[f32; 4]>) {
+        let json = glb_json(glb);
+        let accessor = json["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"]
+            .as_u64()
+            .expect("WEIGHTS_0");
+        let (doc, buffers) = import(glb);
+        let primitive = doc
+            .meshes()
+            .next()
+            .expect("mesh")
+            .primitives()
+            .next()
+            .expect("primitive");
+        let reader = primitive.reader(|b| Some(&buffers[b.index()]));
+        let weights = reader
+            .read_weights(0)
+            .expect("weights")
+            .into_f32()
+            .collect();
+        (
+            json["accessors"][accessor as usize]["componentType"]
+                .as_u64()
+                .expect("type"),
+            weights,
+        )
+    };
+    let options = |compact| GltfOptions {
+        compact,
+        ..Default::default()
+    };
+    // The rig's blended weights are not all k/255: floats either way.
+    let blended = to_glb(&asset, &options(true)).expect("export").glb;
+    assert_eq!(weights_of(&blended).0, 5126);
+    // Every vertex on its nearest palette joint with weight 1.
+    let rows: Vec<Vec<rigport_model::Influence>> = asset.skins[0]
+        .influences
+        .rows()
+        .map(|row| {
+            let top = row.iter().max_by(|a, b| a.weight.total_cmp(&b.weight));
+            top.map(|t| {
+                vec![rigport_model::Influence {
+                    joint: t.joint,
+                    weight: 1.0,
+                }]
+            })
+            .unwrap_or_default()
+        })
+        .collect();
+    asset.skins[0].influences = rigport_model::Influences::from_rows(rows);
+    let plain = weights_of(&to_glb(&asset, &options(false)).expect("export").glb);
+    let compact = weights_of(&to_glb(&asset, &options(true)).expect("export").glb);
+    assert_eq!((plain.0, compact.0), (5126, 5121));
+    assert_eq!(plain.1, compact.1);
 }
