@@ -132,8 +132,9 @@ pub enum Compression {
     /// Core glTF only: every viewer reads the file.
     #[default]
     None,
-    /// `EXT_meshopt_compression` (declared required): animation data through meshoptimizer's
-    /// vertex codec with its quaternion and exponential filters; three.js, Babylon.js and
+    /// `EXT_meshopt_compression` (declared required): animation data and vertex attributes
+    /// through meshoptimizer's vertex codec, rotations with its quaternion filter and
+    /// translations and scales with its exponential filter; three.js, Babylon.js and
     /// gltfpack decode it.
     Meshopt,
 }
