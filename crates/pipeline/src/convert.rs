@@ -66,7 +66,7 @@ pub struct ConvertOptions {
 /// ```
 ///
 /// # Errors
-/// As the import and [`write_output`]; the output is checked before any work.
+/// As the import and [`write_output_report`]; the output is checked before any work.
 pub fn run(
     input: &Input,
     options: &ConvertOptions,
