@@ -11,7 +11,7 @@
 
 use rigport_anim::reduce::metric::point_error;
 use rigport_anim::reduce::{Codec, ReduceOptions, reduce_clip};
-use rigport_model::{Asset, Clip, Compression};
+use rigport_model::{Asset, Clip, Compression, Interpolation, JointIndex, Skeleton, TrackTarget};
 use serde::Serialize;
 
 use crate::PipelineError;
@@ -239,5 +239,128 @@ pub(crate) fn compact_clips(
             clips.push(reduced);
         }
         return Ok((clips, reports, codec.is_some()));
+    }
+}
+
+/// Moves every joint property that every clip holds at one value (LINEAR or STEP keys all
+/// bit for bit equal, in every clip) into the rest pose, so that the glTF writer drops its
+/// tracks (a property without a channel keeps its node's value, glTF 2.0 §3.11). Returns
+/// the skeleton as it was when something moved, `None` when nothing did. A rest rotation is
+/// the clips' value normalized.
+pub(crate) fn constants_into_rest(asset: &mut Asset) -> Option<Skeleton> {
+    if asset.clips.is_empty() {
+        return None;
+    }
+    let mut joints = asset.skeleton.joints().to_vec();
+    let mut moved = false;
+    for (j, joint) in joints.iter_mut().enumerate() {
+        let at = JointIndex(j as u32);
+        for target in [
+            TrackTarget::Translation(at),
+            TrackTarget::Rotation(at),
+            TrackTarget::Scale(at),
+        ] {
+            let Some(value) = held_value(&asset.clips, target) else {
+                continue;
+            };
+            let rest = &mut joint.rest_local;
+            match (target, value.as_slice()) {
+                (TrackTarget::Translation(_), &[x, y, z]) => {
+                    rest.translation = rigport_model::glam::Vec3::new(x, y, z);
+                }
+                (TrackTarget::Scale(_), &[x, y, z]) => {
+                    rest.scale = rigport_model::glam::Vec3::new(x, y, z);
+                }
+                (TrackTarget::Rotation(_), &[x, y, z, w]) => {
+                    let q = rigport_model::glam::Quat::from_xyzw(x, y, z, w);
+                    if q.length() == 0.0 || !q.is_finite() {
+                        continue;
+                    }
+                    rest.rotation = q.normalize();
+                }
+                _ => continue,
+            }
+            moved = true;
+        }
+    }
+    if !moved {
+        return None;
+    }
+    let mut skeleton = Skeleton::new(joints).ok()?;
+    skeleton.set_limits(asset.skeleton.limits().iter().cloned());
+    Some(std::mem::replace(&mut asset.skeleton, skeleton))
+}
+
+/// The one value every clip's (first) track for `target` holds at every key, if any.
+fn held_value(clips: &[Clip], target: TrackTarget) -> Option<Vec<f32>> {
+    let mut value: Option<&[f32]> = None;
+    for clip in clips {
+        let track = clip.tracks.iter().find(|t| t.target == target)?;
+        let c = track.components();
+        if track.interpolation == Interpolation::CubicSpline || c == 0 {
+            return None;
+        }
+        let first = track.values.get(..c)?;
+        if !track.values.chunks_exact(c).all(|k| k == first) || value.is_some_and(|v| v != first) {
+            return None;
+        }
+        value = Some(first);
+    }
+    value.map(<[f32]>::to_vec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn walk() -> Asset {
+        let path = std::path::Path::new("../../fixtures/bvh/end_sites.bvh");
+        match rigport_import::bvh::import(path) {
+            Ok(imported) => imported.asset,
+            Err(e) => panic!("fixture: {e}"),
+        }
+    }
+
+    /// A rotation every clip holds at one value goes into the rest pose; one that a clip
+    /// changes, or that one clip does not animate, stays.
+    #[test]
+    fn properties_every_clip_holds_move_into_the_rest_pose() {
+        let mut asset = walk();
+        let (ti, joint) = asset.clips[0]
+            .tracks
+            .iter()
+            .enumerate()
+            .find_map(|(ti, t)| match t.target {
+                TrackTarget::Rotation(j) => Some((ti, j)),
+                _ => None,
+            })
+            .expect("a rotation track");
+        let held = [0.0f32, 0.6, 0.0, 0.8];
+        let keys = asset.clips[0].tracks[ti].times.len();
+        asset.clips[0].tracks[ti].values = held.repeat(keys);
+        asset.clips.push(asset.clips[0].clone());
+        let before = asset.skeleton.clone();
+        let mut moved = asset.clone();
+        assert_eq!(constants_into_rest(&mut moved), Some(before.clone()));
+        let rest = moved.skeleton.joint(joint).rest_local.rotation;
+        assert!(
+            rest.abs_diff_eq(rigport_model::glam::Quat::from_array(held), 1e-7),
+            "{rest}"
+        );
+        // Everything else is as it was.
+        for (a, b) in moved.skeleton.joints().iter().zip(before.joints()) {
+            if a.name != before.joint(joint).name {
+                assert_eq!(a, b);
+            }
+        }
+        // One clip holds another value at one key: nothing moves.
+        let mut changed = asset.clone();
+        changed.clips[1].tracks[ti].values[0] = 0.1;
+        assert_eq!(constants_into_rest(&mut changed), None);
+        assert_eq!(changed.skeleton, before);
+        // One clip does not animate it: nothing moves.
+        let mut missing = asset.clone();
+        missing.clips[1].tracks.remove(ti);
+        assert_eq!(constants_into_rest(&mut missing), None);
     }
 }

@@ -212,8 +212,13 @@ pub fn write_output_report(
             compact::compact_clips(&asset, tolerance, codec)
         })?;
         let original = std::mem::replace(&mut asset.clips, clips);
+        // glTF drops a channel at its node's value; USD samples every joint anyway.
+        let skeleton = format
+            .is_gltf()
+            .then(|| compact::constants_into_rest(&mut asset))
+            .flatten();
         compacted = Some((
-            original,
+            (original, skeleton),
             CompactReport {
                 tolerance,
                 meters_per_unit: asset.meters_per_unit.unwrap_or(1.0),
@@ -257,10 +262,13 @@ pub fn write_output_report(
     })?;
     let mut report = None;
     let mut unreduced_asset = None;
-    if let Some((original, mut compact_report)) = compacted {
+    if let Some(((original, skeleton), mut compact_report)) = compacted {
         // A reduced clip never makes the file bigger: build the plain one to compare.
         let mut unreduced = asset.clone();
         unreduced.clips = original;
+        if let Some(skeleton) = skeleton {
+            unreduced.skeleton = skeleton;
+        }
         // The file the command writes without reduction or compression.
         let plain_options = WriteOptions {
             compression: Compression::None,
