@@ -257,3 +257,43 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
     }
     eprintln!("{}", table.join("\n"));
 }
+
+/// The sizes compared are the files' own, a long USD text staged beside the output
+/// included: the written file is the smaller of the two, and the plain one is the size a
+/// conversion without reduction writes.
+#[test]
+fn reduced_and_plain_sizes_are_the_written_files_even_when_usd_text_is_staged() {
+    let dir = common::scratch();
+    let bvh = common::repo().join("fixtures/bvh/end_sites.bvh");
+    let bvh = bvh.to_str().expect("utf-8 path");
+    for ext in ["usda", "glb"] {
+        let plain = dir.path().join(format!("plain.{ext}"));
+        let reduced = dir.path().join(format!("reduced.{ext}"));
+        let run = |out: &Path, extra: &[&str]| {
+            let mut args = vec!["convert", bvh, "-o", out.to_str().expect("utf-8"), "--json"];
+            args.extend(extra);
+            let run = Command::new(env!("CARGO_BIN_EXE_rigport"))
+                .args(&args)
+                // Spill any USD text past 1 kB to a file beside the output.
+                .env("RIGPORT_TEST_USD_SPILL_BYTES", "1000")
+                .output()
+                .expect("rigport runs");
+            assert!(
+                run.status.success(),
+                "{}",
+                String::from_utf8_lossy(&run.stderr)
+            );
+            serde_json::from_slice::<serde_json::Value>(&run.stdout).expect("JSON")
+        };
+        run(&plain, &[]);
+        let report = run(&reduced, &["--reduce-tolerance=0.01"]);
+        let (before, after) = (
+            report["bytes_before"].as_u64(),
+            report["bytes_after"].as_u64(),
+        );
+        assert_eq!(before, Some(size(&plain)), "{ext}: {report}");
+        let written = before.min(after).expect("sizes");
+        assert_eq!(size(&reduced), written, "{ext}: {report}");
+        assert_eq!(report["reduced_written"], after <= before, "{ext}");
+    }
+}

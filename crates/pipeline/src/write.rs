@@ -275,8 +275,8 @@ pub fn write_output_report(
             ..*opts
         };
         let plain = prepare(&unreduced, path, format, &plain_options, false)?;
-        compact_report.bytes_after = prepared.byte_len().unwrap_or(0);
-        compact_report.bytes_before = plain.byte_len().unwrap_or(u64::MAX);
+        compact_report.bytes_after = prepared.byte_len();
+        compact_report.bytes_before = plain.byte_len();
         compact_report.reduced_written = compact_report.bytes_after <= compact_report.bytes_before;
         if !compact_report.reduced_written {
             warnings.push(Warning::Note {
@@ -451,10 +451,10 @@ enum PreparedFile {
 }
 
 impl Prepared {
-    /// The bytes [`Prepared::write`] writes (`None`: not known before writing).
-    pub(crate) fn byte_len(&self) -> Option<u64> {
+    /// The bytes [`Prepared::write`] writes.
+    pub(crate) fn byte_len(&self) -> u64 {
         match &self.file {
-            PreparedFile::Gltf(p) => Some(p.byte_len()),
+            PreparedFile::Gltf(p) => p.byte_len(),
             PreparedFile::Usd(p) => p.byte_len(),
         }
     }
