@@ -297,3 +297,24 @@ fn reduced_and_plain_sizes_are_the_written_files_even_when_usd_text_is_staged() 
         assert_eq!(report["reduced_written"], after <= before, "{ext}");
     }
 }
+
+/// The corpus's glTF samples (skinned meshes, morph targets, cubic splines) never get a
+/// bigger file from a reduction, with or without meshopt, and validate.
+#[test]
+fn gltf_samples_never_grow() {
+    let dir = common::scratch();
+    for sample in common::GLTF_SAMPLES {
+        let Some(input) = common::corpus(sample) else {
+            return;
+        };
+        let args = vec![input.display().to_string()];
+        let plain = dir.path().join("plain.glb");
+        assert!(convert(&args, &plain, &[]).is_null());
+        for extra in [&["--reduce-tolerance"][..], &["--compress", "meshopt"]] {
+            let out = dir.path().join("compact.glb");
+            let report = convert(&args, &out, extra);
+            assert!(size(&out) <= size(&plain), "{sample} {extra:?}: {report}");
+            common::assert_valid(&out);
+        }
+    }
+}
