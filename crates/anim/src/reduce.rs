@@ -608,16 +608,20 @@ impl<'a> Reducer<'a> {
         let result = self.for_each_frame(false, |ti, _, model| {
             let base = ti * n * 4;
             for (j, ((m, e), &r)) in model.iter().zip(errors.iter_mut()).zip(&radius).enumerate() {
-                let now = points_of(m, r);
                 let at = base + 4 * j;
                 let Some(was) = original.get(at..at + 4) else {
                     continue;
                 };
-                let worst = now
-                    .iter()
-                    .zip(was)
-                    .map(|(a, b)| a.distance(*b))
-                    .fold(0.0f32, f32::max);
+                // Without virtual points the joint alone (its points coincide with it).
+                let worst = if r > 0.0 {
+                    let now = points_of(m, r);
+                    now.iter()
+                        .zip(was)
+                        .map(|(a, b)| a.distance(*b))
+                        .fold(0.0f32, f32::max)
+                } else {
+                    m.w_axis.truncate().distance(was[0])
+                };
                 sum += f64::from(worst);
                 *e = e.max(worst);
             }

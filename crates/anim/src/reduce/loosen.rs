@@ -8,7 +8,7 @@
 
 use super::{ReduceError, Reducer};
 
-/// Rounds of loosening.
+/// Rounds of loosening at most (a round that saves under 1% of the keys is the last).
 const ROUNDS: usize = 6;
 /// A subtree loosens when its largest error is below this fraction of the bound.
 const SLACK: f32 = 0.8;
@@ -25,10 +25,17 @@ impl Reducer<'_> {
         let tol = self.tolerance;
         let n = self.parents.len();
         let mut frozen = vec![false; self.channels.len()];
+        let kept = |r: &Self| -> usize {
+            r.channels
+                .iter()
+                .map(|c| c.kept.as_ref().map_or(c.original.times.len(), Vec::len))
+                .sum()
+        };
         for _ in 0..ROUNDS {
             if tol <= 0.0 {
                 break;
             }
+            let before = kept(self);
             // The largest error in each joint's subtree (parents come first).
             let mut sub = errors.clone();
             for j in (0..n).rev() {
@@ -105,6 +112,10 @@ impl Reducer<'_> {
                         }
                     }
                 }
+            }
+            // A round that saved under 1% of the keys is the last.
+            if kept(self) * 100 > before * 99 {
+                break;
             }
         }
         Ok((errors.iter().copied().fold(0.0, f32::max), mean))

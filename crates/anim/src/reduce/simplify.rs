@@ -31,16 +31,37 @@ pub(super) fn simplify(chan: &Channel) -> Vec<usize> {
     if !chan.decimate {
         return removed;
     }
-    // Every key (step 1) shares its times with the other full-rate channels.
-    let step = largest_step(&curve, n).unwrap_or(1);
-    let uniform: Vec<usize> = uniform_keys(n, step);
-    // Bytes per key: its value, plus a time of its own for key removal.
+    // Bytes per key: its value, plus a time of its own for key removal. A uniform rate
+    // needs more keys than key removal (which keeps the fewest it can), so only steps up to
+    // key removal's mean spacing can pass, and only those down to where the uniform keys
+    // cost as much as key removal's can win: that range is all that is tried.
     let value = chan.value_bytes;
-    if uniform.len() * value <= removed.len() * (value + 4) {
-        uniform
+    let budget = removed.len() * (value + 4);
+    let widest = ((n - 1) / (removed.len() - 1).max(1)).min(MAX_STEP);
+    let step = (2..=widest)
+        .rev()
+        .take_while(|&step| uniform_len(n, step) * value <= budget)
+        .find(|&step| fits_uniform(&curve, n, step))
+        // Every key (step 1) shares its times with the other full-rate channels.
+        .unwrap_or(1);
+    if uniform_len(n, step) * value <= budget {
+        uniform_keys(n, step)
     } else {
         removed
     }
+}
+
+/// How many keys [`uniform_keys`] keeps.
+fn uniform_len(n: usize, step: usize) -> usize {
+    (n - 1) / step.max(1) + 1 + usize::from((n - 1) % step.max(1) != 0)
+}
+
+/// Whether every `step`-th key (and the last) reproduces every original key within the
+/// limit.
+fn fits_uniform(curve: &Curve, n: usize, step: usize) -> bool {
+    uniform_keys(n, step)
+        .windows(2)
+        .all(|w| curve.fits(w[0], w[1]))
 }
 
 /// Keys `0, step, 2 step, ...` and the last.
@@ -156,12 +177,20 @@ fn remove_keys(curve: &Curve, n: usize) -> Vec<usize> {
     (0..n).filter(|&k| keep[k]).collect()
 }
 
-/// The largest step `k` in `2..=MAX_STEP` whose uniform keys ([`uniform_keys`]) reproduce
-/// every original key within the limit, `None` when no step does.
-fn largest_step(curve: &Curve, n: usize) -> Option<usize> {
-    (2..=MAX_STEP.min(n - 1)).rev().find(|&step| {
-        uniform_keys(n, step)
-            .windows(2)
-            .all(|w| curve.fits(w[0], w[1]))
-    })
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniform_len_counts_uniform_keys() {
+        for n in 2..40 {
+            for step in 1..12 {
+                assert_eq!(
+                    uniform_len(n, step),
+                    uniform_keys(n, step).len(),
+                    "{n} {step}"
+                );
+            }
+        }
+    }
 }
