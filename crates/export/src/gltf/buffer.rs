@@ -254,15 +254,15 @@ impl Builder {
     }
 
     /// A view of vertex data `raw` (elements of `stride` bytes): compressed (no filter,
-    /// exact) when the export is and `target` is `ARRAY_BUFFER` with a stride the codec
-    /// takes (a multiple of 4), else as it is.
+    /// exact) when the export is and `target` is `ARRAY_BUFFER` with a stride the writer
+    /// compresses ([`meshopt::STRIDES`]), else as it is.
     fn vertex_view(
         &mut self,
         target: Option<Target>,
         raw: &[u8],
         stride: usize,
     ) -> Index<json::buffer::View> {
-        if target == Some(Target::ArrayBuffer) && stride % 4 == 0 {
+        if target == Some(Target::ArrayBuffer) && meshopt::STRIDES.contains(&stride) {
             if let Some(view) = self.compressed_view(raw, stride, Filter::None, target) {
                 return view;
             }

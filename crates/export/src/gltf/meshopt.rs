@@ -16,6 +16,8 @@ pub(crate) const QUAT_BITS: i32 = 16;
 /// Mantissa bits of the exponential filter (1 to 24): 20, a relative error of 2^-20
 /// (a micrometre at a metre), far under the bounds reduction uses.
 pub(crate) const EXP_BITS: i32 = 20;
+/// The element sizes this writer compresses (the codec takes multiples of 4 up to 256).
+pub(crate) const STRIDES: [usize; 4] = [4, 8, 12, 16];
 /// The vertex codec version `EXT_meshopt_compression` defines.
 const CODEC_VERSION: i32 = 0;
 
@@ -81,11 +83,10 @@ impl Filter {
     }
 }
 
-/// The encoded bytes of `count` elements of `stride` bytes, `raw` being their filtered
-/// (pre-codec) bytes, little-endian.
-///
-/// # Errors
-/// None in practice; the codec reports only buffer sizes it computes itself.
+/// The encoded bytes of elements of `stride` bytes (4, 8, 12 or 16: [`STRIDES`]), `raw`
+/// being their filtered (pre-codec) bytes, little-endian. The codec reports no error but
+/// for sizes it computes itself; an empty result would only make the view unreadable, and
+/// the tests decode every view.
 fn encode(raw: &[u8], stride: usize) -> Vec<u8> {
     // The codec wants elements of one size: feed it as [u8; stride] rows through u32
     // words (every stride here is a multiple of 4).
@@ -104,6 +105,7 @@ fn encode(raw: &[u8], stride: usize) -> Vec<u8> {
             meshopt::encode_vertex_buffer_level(&rows, 2, Some(CODEC_VERSION))
         }
         _ => {
+            debug_assert_eq!(stride, 16, "strides are STRIDES");
             let rows: Vec<[u32; 4]> = words
                 .chunks_exact(4)
                 .map(|c| [c[0], c[1], c[2], c[3]])
