@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use rigport_model::{InfluencesFit, SkinningMethod, UpAxis};
+use rigport_model::{Compression, InfluencesFit, SkinningMethod, UpAxis};
 use std::str::FromStr as _;
 
 use rigport_pipeline::load::{Input, Inputs};
@@ -89,10 +89,13 @@ pub struct OutputArgs {
     /// frames (or a range-of-motion pose set) and prints both deviations.
     #[arg(long, value_enum, default_value_t = InfluencesFit::Truncate)]
     pub influences_fit: InfluencesFit,
-    /// Remove animation keys while every joint's world position stays within D (in the
-    /// rig's length unit) of the full clip at every original key time.
+    /// Reduce animation keys while every joint and points 3 cm from it (or the vertices it
+    /// skins) stay within D (rig units; without D, 1 mm) of the full clip at every key time.
     #[arg(long, value_name = "D", value_parser = distance)]
-    pub reduce_tolerance: Option<f32>,
+    pub reduce_tolerance: Option<Option<f32>>,
+    /// glTF compression: meshopt (EXT_meshopt_compression, required; reduces keys as above).
+    #[arg(long, value_enum, value_name = "C", default_value_t = Compression::None)]
+    pub compress: Compression,
     /// Skinning method a .usda declares (primvars:skel:skinningMethod; default: each skin's
     /// own, as the source declares it). glTF is always LBS; use `rigport bake --skinning
     /// dqs` to bake DQS into a glTF.
@@ -120,8 +123,10 @@ impl OutputArgs {
                 up_axis: self.up_axis,
                 meters_per_unit: self.meters_per_unit,
                 morphs_as_points: false,
+                compression: self.compress,
             },
-            reduce_tolerance: self.reduce_tolerance,
+            reduce_tolerance: self.reduce_tolerance.flatten(),
+            reduce: self.reduce_tolerance.is_some(),
         }
     }
 }

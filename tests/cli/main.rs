@@ -16,6 +16,7 @@ mod cloth_trust;
 mod collada;
 mod combine;
 mod common;
+mod compact;
 mod csci520;
 mod demo;
 mod eval_plays;

@@ -170,6 +170,7 @@ pub fn run(
             ..WriteOptions::default()
         },
         reduce_tolerance: None,
+        reduce: false,
     };
     let mut done = Report::logged(write_output(
         asset,

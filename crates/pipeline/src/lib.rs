@@ -50,6 +50,7 @@ mod asset_report;
 pub mod bake;
 pub mod cloth;
 pub mod combine;
+pub mod compact;
 pub mod convert;
 pub mod demo;
 mod dump;
