@@ -13,7 +13,7 @@
 //!
 //! Measured (dev build; BENCHMARKS.md has the table): rigport L1 0.006-0.068, posed mean
 //! 0.03-0.22%, max 0.5-4.6% of the height, below Blender's on every rig and score (Blender
-//! L1 0.035-0.278, mean 0.14-0.72%, max 1.3-6.0%); about 14 s in all.
+//! L1 0.035-0.278, mean 0.14-0.72%, max 1.3-6.0%); 11 s in all, 5 s without Blender.
 //!
 //! Skips with a message when `../shared/corpus` is absent, and holds rigport to the absolute
 //! bounds alone when Blender's `bpy` is absent; either fails when `CI` is set.
