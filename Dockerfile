@@ -5,7 +5,9 @@
 #
 # Stage 1 builds the CLI in release mode from this checkout (Cargo.lock pinned); stage 2
 # copies only the binary. rigport reads and writes files and links no system library
-# beyond the C library, so the runtime needs nothing else. Not built in CI (see README).
+# beyond the C and C++ runtimes (libstdc++ for meshoptimizer, `--compress meshopt`), both
+# in bookworm-slim (apt itself needs libstdc++6), so the runtime needs nothing else. Not
+# built in CI (see README).
 FROM rust:1-bookworm AS build
 WORKDIR /src
 COPY . .

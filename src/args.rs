@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use rigport_model::{InfluencesFit, SkinningMethod, UpAxis};
+use rigport_model::{Compression, InfluencesFit, SkinningMethod, UpAxis};
 use std::str::FromStr as _;
 
 use rigport_pipeline::load::{Input, Inputs};
@@ -38,7 +38,8 @@ pub struct InputArgs {
     /// No bone mesh for skeleton-only inputs (ASF/AMC, BVH; by default each bone gets one).
     #[arg(long)]
     pub no_bone_mesh: bool,
-    /// Skin weights for a Pinocchio mesh and skeleton given without attachment: auto (bone heat).
+    /// Skin weights where the rig has none (a Pinocchio mesh and skeleton without attachment,
+    /// a CSCI 520 folder without weights): auto (bone heat).
     #[arg(long, value_name = "auto", value_parser = ["auto"])]
     pub weights: Option<String>,
     /// Unit of inputs that state none (BVH, OBJ/Pinocchio, CSCI 520): m, cm, mm, in, ft, metres
@@ -64,7 +65,7 @@ impl InputArgs {
                 auto_weights: self.weights.is_some(),
             },
             bone_mesh: !self.no_bone_mesh,
-            budget: crate::memory::budget(),
+            budget: rigport_pipeline::memory::installed(),
             units: self.input_units,
             force_units: self.force_units,
         }
@@ -88,10 +89,13 @@ pub struct OutputArgs {
     /// frames (or a range-of-motion pose set) and prints both deviations.
     #[arg(long, value_enum, default_value_t = InfluencesFit::Truncate)]
     pub influences_fit: InfluencesFit,
-    /// Remove animation keys while every joint's world position stays within D (in the
-    /// rig's length unit) of the full clip at every original key time.
+    /// Reduce animation keys while every joint and points 3 cm from it (or the vertices it
+    /// skins) stay within D (rig units; without D, 1 mm) of the full clip at every key time.
     #[arg(long, value_name = "D", value_parser = distance)]
-    pub reduce_tolerance: Option<f32>,
+    pub reduce_tolerance: Option<Option<f32>>,
+    /// glTF compression: meshopt (EXT_meshopt_compression, required; reduces keys as above).
+    #[arg(long, value_enum, value_name = "C", default_value_t = Compression::None)]
+    pub compress: Compression,
     /// Skinning method a .usda declares (primvars:skel:skinningMethod; default: each skin's
     /// own, as the source declares it). glTF is always LBS; use `rigport bake --skinning
     /// dqs` to bake DQS into a glTF.
@@ -119,35 +123,14 @@ impl OutputArgs {
                 up_axis: self.up_axis,
                 meters_per_unit: self.meters_per_unit,
                 morphs_as_points: false,
+                compression: self.compress,
             },
-            reduce_tolerance: self.reduce_tolerance,
+            reduce_tolerance: self.reduce_tolerance.flatten(),
+            reduce: self.reduce_tolerance.is_some(),
         }
     }
 }
 
-/// A finite number that `ok` accepts, else "expected `expected`".
-fn number(text: &str, ok: fn(f32) -> bool, expected: &str) -> Result<f32, String> {
-    let v = text.trim().parse::<f32>().ok();
-    v.filter(|v| v.is_finite() && ok(*v))
-        .ok_or_else(|| format!("expected {expected}"))
-}
-
-/// A frame rate (`--fps`, `--amc-fps`): a positive, finite number of frames per second.
-pub fn frame_rate(text: &str) -> Result<f32, String> {
-    number(text, |v| v > 0.0, "a positive frame rate")
-}
-
-/// A distance that may be 0 (`--reduce-tolerance`, `--threshold`).
-pub fn distance(text: &str) -> Result<f32, String> {
-    number(text, |v| v >= 0.0, "a distance >= 0")
-}
-
-/// A number that may be 0 (`--lambda`).
-pub fn non_negative(text: &str) -> Result<f32, String> {
-    number(text, |v| v >= 0.0, "a number >= 0")
-}
-
-/// A positive distance or factor (`--tolerance`, `--speed`).
-pub fn positive(text: &str) -> Result<f32, String> {
-    number(text, |v| v > 0.0, "a positive number")
-}
+/// The value parsers of the numbers every command shares (`--fps`, `--amc-fps`:
+/// a frame rate; `--reduce-tolerance`, `--threshold`: a distance; `--lambda`; `--speed`).
+pub use rigport_pipeline::numbers::{distance, frame_rate, non_negative, positive};

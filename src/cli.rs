@@ -3,22 +3,7 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::commands::animate::AnimateArgs;
-use crate::commands::bake::BakeArgs;
-use crate::commands::batch::{BatchArgs, BatchReportArgs};
-use crate::commands::cloth::ClothArgs;
-use crate::commands::combine::CombineArgs;
-use crate::commands::convert::ConvertArgs;
-use crate::commands::demo::DemoArgs;
-use crate::commands::eval::EvalArgs;
-use crate::commands::footlock::FootlockArgs;
-use crate::commands::ik::IkArgs;
-use crate::commands::inspect::InspectArgs;
-use crate::commands::render::RenderArgs;
-use crate::commands::retarget::RetargetArgs;
-use crate::commands::retime::RetimeArgs;
-use crate::commands::sequence::SequenceArgs;
-use crate::exit;
+use crate::{commands, exit};
 
 /// Bring legacy character rigs and motion into glTF 2.0.
 #[derive(Debug, Parser)]
@@ -51,9 +36,9 @@ fn parse_memory_size(text: &str) -> Result<u64, String> {
 pub enum Command {
     /// Convert a rig to glTF (.glb, or .gltf + .bin).
     #[command(after_help = include_str!("../docs/help/convert.txt"))]
-    Convert(ConvertArgs),
+    Convert(commands::convert::ConvertArgs),
     /// Describe rigs: joints with parents, meshes, influence histogram, clips.
-    Inspect(InspectArgs),
+    Inspect(commands::inspect::InspectArgs),
     /// Pose a rig, or play one of its clips, and dump the skinned result as .npz for numpy.
     #[command(
         after_help = format!(
@@ -62,42 +47,47 @@ pub enum Command {
             rigport_export::npz::EVAL_DUMP_FORMAT
         )
     )]
-    Eval(EvalArgs),
+    Eval(commands::eval::EvalArgs),
     /// Keyframe a rig from a JSON file of poses and write it with the clip.
     #[command(after_help = rigport_import::json::keys::FORMAT)]
-    Animate(AnimateArgs),
+    Animate(commands::animate::AnimateArgs),
     /// Re-time a clip (resample, speed, warp curve, reverse, trim), baked to linear keys.
     #[command(after_help = include_str!("../docs/help/root_motion.txt"))]
-    Retime(RetimeArgs),
+    Retime(commands::retime::RetimeArgs),
     /// Put a motion (BVH, ASF/AMC, glTF clip) onto another rig: joints mapped by the body
     /// roles both skeletons' structure shows or --map, rotations transferred relative to
     /// each rest pose, hips scaled.
     #[command(after_help = include_str!("../docs/help/retarget.txt"))]
-    Retarget(RetargetArgs),
+    Retarget(commands::retarget::RetargetArgs),
     /// Put many motions onto one rig as named clips (taken or retargeted), in one file.
     #[command(override_usage = "rigport combine [OPTIONS] RIG MOTION... -o OUT")]
     #[command(after_help = include_str!("../docs/help/combine.txt"))]
-    Combine(CombineArgs),
+    Combine(commands::combine::CombineArgs),
     /// Play clips one after another with crossfades, optionally as a seamless loop.
-    Sequence(SequenceArgs),
+    Sequence(commands::sequence::SequenceArgs),
     /// Solve IK handles moving over time, one pose per frame, baked into a clip.
     #[command(after_help = rigport_import::json::handles::FORMAT)]
-    Ik(IkArgs),
+    Ik(commands::ik::IkArgs),
     /// Hold mocap feet still while they touch the ground (two-bone IK on the legs).
     #[command(after_help = include_str!("../docs/help/footlock.txt"))]
-    Footlock(FootlockArgs),
+    Footlock(commands::footlock::FootlockArgs),
     /// Bake a skinning result (DQS) into a glTF every viewer plays back exactly.
-    Bake(BakeArgs),
+    Bake(commands::bake::BakeArgs),
     /// Simulate a garment (XPBD cloth) on the animated body and bake it into the file.
-    Cloth(ClothArgs),
+    Cloth(commands::cloth::ClothArgs),
+    /// Skin weights by bone heat for a mesh and a skeleton: attachment.out or a rig.
+    Skin(commands::skin::SkinArgs),
     /// Render rigs and clips to PNG contact sheets or GIF/APNG animations (CPU, headless).
-    Render(RenderArgs),
+    Render(commands::render::RenderArgs),
+    /// Check that CANDIDATE plays like REFERENCE (any two formats), and show where not.
+    #[command(after_help = include_str!("../docs/help/verify.txt"))]
+    Verify(commands::verify::VerifyArgs),
     /// Write the built-in demo character (no input files needed).
-    Demo(DemoArgs),
+    Demo(commands::demo::DemoArgs),
     /// Run many items from a JSON Lines manifest (or every asset of a folder), in-process
     /// on --jobs threads; shards, resume and a per-item report (docs/scale.md).
     #[command(after_help = include_str!("../docs/help/batch.txt"))]
-    Batch(BatchArgs),
+    Batch(commands::batch::BatchArgs),
     /// Merge batch reports (the shards of one run) and print the summary table.
-    BatchReport(BatchReportArgs),
+    BatchReport(commands::batch::BatchReportArgs),
 }

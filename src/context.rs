@@ -99,6 +99,16 @@ impl Context {
         !self.quiet && self.captured.is_none() && std::io::stderr().is_terminal()
     }
 
+    /// A bar of `total` steps drawn with indicatif's `template`; hidden unless [`Self::draws`].
+    pub fn bar(&self, total: usize, template: &str) -> indicatif::ProgressBar {
+        if !self.draws() {
+            return indicatif::ProgressBar::hidden();
+        }
+        let style = indicatif::ProgressStyle::with_template(template)
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+        indicatif::ProgressBar::new(total as u64).with_style(style)
+    }
+
     fn set_bar(&self, bar: Option<indicatif::ProgressBar>) {
         let mut slot = self.bar.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(old) = slot.take() {
@@ -128,14 +138,8 @@ impl Progress for Context {
             return;
         }
         let mut slot = self.bar.lock().unwrap_or_else(|e| e.into_inner());
-        let bar = slot.get_or_insert_with(|| {
-            let bar = indicatif::ProgressBar::new(total as u64);
-            let template = format!("{what} {{bar:30}} {{pos}}/{{len}}, ETA {{eta}}");
-            if let Ok(style) = indicatif::ProgressStyle::with_template(&template) {
-                bar.set_style(style);
-            }
-            bar
-        });
+        let template = format!("{what} {{bar:30}} {{pos}}/{{len}}, ETA {{eta}}");
+        let bar = slot.get_or_insert_with(|| self.bar(total, &template));
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     }

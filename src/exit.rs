@@ -2,7 +2,6 @@
 //! line (the libraries name no flag).
 
 use rigport_deform::cloth::ClothError;
-use rigport_ik::retarget::RetargetError;
 use rigport_import::detect::{DetectError, PinocchioFile};
 use rigport_model::Warning;
 use rigport_pipeline::PipelineError;
@@ -16,6 +15,8 @@ pub const USAGE: u8 = 2;
 pub const OUTPUT: u8 = 3;
 /// Warnings were reported and `--deny-warnings` was given.
 pub const DENIED_WARNINGS: u8 = 4;
+/// `verify`: the candidate differs from the reference beyond `--tol`.
+pub const MISMATCH: u8 = 5;
 
 /// The exit-code table shown by `--help`.
 pub const HELP: &str = include_str!("../docs/help/exit_codes.txt");
@@ -32,6 +33,12 @@ pub struct OutputError {
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct UsageError(pub String);
+
+/// `verify`'s candidate differs beyond the tolerance (exit code 5), a fraction of the
+/// reference's diagonal.
+#[derive(Debug, thiserror::Error)]
+#[error("CANDIDATE differs from REFERENCE beyond --tol {0:e}")]
+pub struct Mismatch(pub f64);
 
 /// Marks warnings turned into an error by `--deny-warnings`.
 #[derive(Debug, thiserror::Error)]
@@ -76,7 +83,7 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
                 "{over}; raise it with --max-memory if the machine has the memory"
             )
         }
-        err if is_partial_map(&err) => {
+        err if err.is_partial_map() => {
             return anyhow::Error::msg(format!(
                 "{:#}; to retarget anyway, pass --allow-partial",
                 anyhow::Error::from(err)
@@ -113,18 +120,6 @@ pub fn command_line(err: PipelineError) -> anyhow::Error {
     anyhow::Error::msg(message)
 }
 
-/// Whether a retarget failed on a partial joint map (`RetargetError::PartialMap`).
-fn is_partial_map(err: &PipelineError) -> bool {
-    let mut cur: Option<&(dyn std::error::Error + 'static)> = Some(err);
-    while let Some(e) = cur {
-        if let Some(RetargetError::PartialMap(_)) = e.downcast_ref::<RetargetError>() {
-            return true;
-        }
-        cur = e.source();
-    }
-    false
-}
-
 /// A warning as the command line prints it: [`Warning::labelled`], and for the warnings
 /// whose cure is a flag, the flag (the libraries name none).
 pub fn warning_line(w: &Warning) -> String {
@@ -136,6 +131,11 @@ pub fn warning_line(w: &Warning) -> String {
         } => format!(
             "{line}; for an ASF/AMC motion, give its frame rate with --amc-fps {fps} (`rigport retime --speed` slows a clip in another format)"
         ),
+        Warning::Incomplete { message, .. }
+            if message.ends_with(rigport_import::csci520::NO_WEIGHTS) =>
+        {
+            format!("{line} (--weights auto computes them)")
+        }
         Warning::NoContacts { .. } => format!(
             "{line}; the contact thresholds are `rigport footlock --height` and `--speed`"
         ),
@@ -153,6 +153,8 @@ pub fn code_for(err: &anyhow::Error) -> u8 {
     // anyhow's downcast sees context values at every layer as well as the root error.
     if err.downcast_ref::<DeniedWarnings>().is_some() {
         DENIED_WARNINGS
+    } else if err.downcast_ref::<Mismatch>().is_some() {
+        MISMATCH
     } else if err.downcast_ref::<OutputError>().is_some() {
         OUTPUT
     } else if err.downcast_ref::<UsageError>().is_some() {

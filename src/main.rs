@@ -9,20 +9,23 @@ mod cli;
 mod commands;
 mod context;
 mod exit;
-mod memory;
 
 use std::process::ExitCode;
 
 use clap::Parser;
+use rigport_pipeline::memory::{install, process_budget, shared_budget};
+
+const BATCH_SHARE: &str = "the batch's --jobs items in flight";
 
 fn main() -> ExitCode {
     rigport_pipeline::memory::raise_malloc_mmap_threshold();
     let cli = cli::Cli::parse();
-    match &cli.command {
+    let whole = process_budget(cli.max_memory, "--max-memory");
+    install(match &cli.command {
         // Items run side by side on `--jobs` threads: each gets its share of the budget.
-        cli::Command::Batch(args) => memory::set_shared(cli.max_memory, args.jobs.unwrap_or(0)),
-        _ => memory::set(cli.max_memory),
-    }
+        cli::Command::Batch(a) => shared_budget(whole, a.jobs.unwrap_or(0), BATCH_SHARE),
+        _ => whole,
+    });
     if !matches!(cli.command, cli::Command::Inspect(_)) {
         rigport_atomic::interrupt::remove_temp_files_on_interrupt();
     }

@@ -3,6 +3,7 @@
 # repo that git ignores:
 #   tools/node_modules  Khronos glTF-Validator (npm gltf-validator), three.js
 #                       (npm three, for tools/three_eval.mjs and three_source_eval.mjs)
+#                       and gltfpack (npm gltfpack, the compact-clips peer)
 #                       and @xmldom/xmldom (ColladaLoader's DOMParser in Node), pinned in
 #                       tools/package.json + tools/package-lock.json, `npm ci`
 #   tools/.venv         Python >= 3.11 venv with usd-core + numpy, and maturin + pytest

@@ -40,6 +40,7 @@ import process from 'node:process';
 
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
 
 import { npy } from './npy.mjs';
 
@@ -137,6 +138,9 @@ async function main() {
 
   const loader = new GLTFLoader();
   loader.register(textureRecorder);
+  // EXT_meshopt_compression files (rigport's --compress meshopt) decode as three's apps do.
+  await MeshoptDecoder.ready;
+  loader.setMeshoptDecoder(MeshoptDecoder);
   const gltf = await loader.parseAsync(data, '');
   const scene = gltf.scene;
   const clips = gltf.animations;

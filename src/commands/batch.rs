@@ -54,26 +54,19 @@ pub struct BatchReportArgs {
     pub output: Option<PathBuf>,
 }
 
-/// How one item's command line went (see [`RunItem`]).
-pub enum ItemRun {
-    /// The arguments do not parse: clap's message.
-    Unparsed(String),
-    /// The command ran, with this result.
-    Ran(Result<()>),
-}
-
 /// Parses one item's command line (`rigport COMMAND ...`) and runs it in-process with a
-/// quiet context that collects its warnings into `captured`; with `deny_warnings` (or the
+/// quiet context that collects its warnings into `captured`: the command's result, or
+/// clap's message when the arguments do not parse; with `deny_warnings` (or the
 /// item's own flag) a warning fails it. Passed in by the dispatcher (`commands::run_item`):
 /// command modules do not import each other, the dispatcher or the top-level parser.
-pub type RunItem = fn(Vec<OsString>, bool, Captured) -> ItemRun;
+pub type RunItem = fn(Vec<OsString>, bool, Captured) -> Result<Result<()>, String>;
 
 /// The commands an item may run: those that read inputs and write one output file. Files
 /// an item reads besides its inputs (retarget's `--onto` rig and `--map`, combine's motions, cloth's garment,
 /// ik's handles, animate's keys) go in its options.
-const COMMANDS: [&str; 12] = [
+const COMMANDS: [&str; 13] = [
     "convert", "animate", "retime", "sequence", "ik", "footlock", "retarget", "combine", "cloth",
-    "bake", "render", "eval",
+    "skin", "bake", "render", "eval",
 ];
 
 /// Runs `batch`.
@@ -98,9 +91,10 @@ pub fn run(ctx: &Context, args: &BatchArgs, run_item: RunItem) -> Result<()> {
         resume: args.resume,
         version: env!("CARGO_PKG_VERSION").into(),
     };
-    let bar = progress_bar(
-        ctx,
-        items.iter().filter(|i| shard.contains(i.index)).count(),
+    let total = items.iter().filter(|i| shard.contains(i.index)).count();
+    let bar = ctx.bar(
+        total,
+        "{wide_bar} {pos}/{len} items, {per_sec}, ETA {eta}, {msg}",
     );
     let deny = ctx.deny_warnings;
     let execute = |item: &Item, outputs: &[PathBuf]| execute(run_item, deny, item, outputs);
@@ -132,17 +126,12 @@ fn finish(ctx: &Context, records: &[Record], path: Option<&Path>) -> Result<()> 
         eprint!("{}", Summary::of(records));
         path.inspect(|p| eprintln!("report: {}", p.display()));
     }
-    let Some(verdict) = report::verdict(records) else {
-        return Ok(());
-    };
-    let output_failure = records
-        .iter()
-        .find(|r| (r.error.as_ref()).is_some_and(|e| e.kind == FailureKind::Output));
-    match output_failure {
-        Some(r) => Err(anyhow!(verdict).context(OutputError {
-            path: r.outputs.join(", "),
-        })),
-        None => Err(anyhow!(verdict)),
+    match report::verdict(records) {
+        None => Ok(()),
+        Some(v) => match v.failed_output {
+            Some(path) => Err(anyhow!(v.message).context(OutputError { path })),
+            None => Err(anyhow!(v.message)),
+        },
     }
 }
 
@@ -153,34 +142,10 @@ fn execute(
     item: &Item,
     outputs: &[PathBuf],
 ) -> Result<Vec<String>, ItemError> {
-    let input = |message: String| ItemError {
-        kind: FailureKind::Input,
-        message,
-    };
-    if !COMMANDS.contains(&item.command.as_str()) {
-        let expected = COMMANDS.join(", ");
-        let message = format!(
-            "command {:?} cannot run in a batch; expected one of {expected}",
-            item.command
-        );
-        return Err(input(message));
-    }
-    let [output] = outputs else {
-        return Err(input(format!("{} writes one output", item.command)));
-    };
-    let argv = item.command_line("rigport", output);
+    let argv = rigport_batch::command_line::argv("rigport", item, &COMMANDS, outputs)?;
     let captured = Arc::new(Mutex::new(Vec::new()));
-    let result = match run_item(argv, deny_warnings, Arc::clone(&captured)) {
-        ItemRun::Unparsed(text) => {
-            let first = text.lines().next().unwrap_or_default();
-            return Err(input(format!(
-                "{}: {}",
-                item.command,
-                first.trim_start_matches("error: ")
-            )));
-        }
-        ItemRun::Ran(result) => result,
-    };
+    let result = run_item(argv, deny_warnings, Arc::clone(&captured))
+        .map_err(|text| rigport_batch::command_line::unparsed(item, &text))?;
     let warnings = std::mem::take(&mut *captured.lock().unwrap_or_else(|e| e.into_inner()));
     result.map(|()| warnings).map_err(|e| ItemError {
         kind: match exit::code_for(&e) {
@@ -189,16 +154,4 @@ fn execute(
         },
         message: format!("{e:#}"),
     })
-}
-
-/// Items, rate, ETA and failures, on a terminal only.
-fn progress_bar(ctx: &Context, total: usize) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if ctx.quiet || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let template = "{wide_bar} {pos}/{len} items, {per_sec}, ETA {eta}, {msg}";
-    let style = indicatif::ProgressStyle::with_template(template)
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
-    indicatif::ProgressBar::new(total as u64).with_style(style)
 }

@@ -19,6 +19,9 @@ pub struct ConvertArgs {
     pub output: OutputArgs,
     #[command(flatten)]
     pub root_motion: RootMotionOptions,
+    /// Print what --reduce-tolerance did as JSON on standard output (keys, bytes, errors).
+    #[arg(long)]
+    pub json: bool,
     /// Deprecated: the frame rate of AMC motions, now `--amc-fps` (kept for one release).
     #[arg(long, value_name = "FPS", hide = true, value_parser = frame_rate)]
     pub fps: Option<f32>,
@@ -37,6 +40,7 @@ pub fn run(ctx: &Context, args: &ConvertArgs) -> Result<()> {
     let options = ConvertOptions {
         output: args.output.to_output(),
         root_motion: args.root_motion,
+        json: args.json,
     };
     ctx.run(|progress| rigport_pipeline::convert(&input, &options, progress))
 }

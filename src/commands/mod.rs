@@ -17,6 +17,8 @@ pub mod render;
 pub mod retarget;
 pub mod retime;
 pub mod sequence;
+pub mod skin;
+pub mod verify;
 
 use std::ffi::OsString;
 
@@ -38,13 +40,17 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 /// Parses and runs one `batch` item's command line (see [`batch::RunItem`]).
-fn run_item(argv: Vec<OsString>, deny_warnings: bool, captured: Captured) -> batch::ItemRun {
+fn run_item(
+    argv: Vec<OsString>,
+    deny_warnings: bool,
+    captured: Captured,
+) -> Result<Result<()>, String> {
     let cli = match Cli::try_parse_from(argv) {
         Ok(cli) => cli,
-        Err(e) => return batch::ItemRun::Unparsed(e.to_string()),
+        Err(e) => return Err(e.to_string()),
     };
     let ctx = Context::new(true, deny_warnings || cli.deny_warnings, Some(captured));
-    batch::ItemRun::Ran(run_command(ctx, cli.command))
+    Ok(run_command(ctx, cli.command))
 }
 
 /// Runs one command (also each item of `batch`, with a capturing context).
@@ -64,6 +70,8 @@ fn run_command(ctx: Context, command: Command) -> Result<()> {
         Command::Bake(args) => bake::run(&ctx, &args),
         Command::Cloth(args) => cloth::run(&ctx, &args),
         Command::Render(args) => render::run(&ctx, &args),
+        Command::Skin(args) => skin::run(&ctx, &args),
+        Command::Verify(args) => verify::run(&ctx, &args),
         Command::Batch(_) | Command::BatchReport(_) => {
             Err(UsageError("a batch item cannot be a batch".into()).into())
         }

@@ -8,7 +8,9 @@ use anyhow::Result;
 use rigport_model::SkinningMethod;
 use std::str::FromStr as _;
 
-use rigport_pipeline::render::{picture_size, skinning_methods, FrameRange, RenderRequest};
+use rigport_pipeline::render::{
+    picture_size, projection, skinning_methods, FrameRange, RenderRequest,
+};
 use rigport_render::{Projection, RenderOptions, View};
 
 use crate::args::{frame_rate, InputArgs};
@@ -42,9 +44,9 @@ pub struct RenderArgs {
     /// Where the camera looks from: front (+Z), side (+X), top (+Y) or three-quarter.
     #[arg(long, value_enum, default_value_t = View::Front)]
     pub view: View,
-    /// Orthographic (parallel) or perspective (35 deg field of view) projection.
-    #[arg(long, value_enum, default_value_t = CameraArg::Ortho)]
-    pub camera: CameraArg,
+    /// Projection: ortho (parallel) or perspective (35 deg vertical field of view).
+    #[arg(long, value_name = "ortho|perspective", default_value = "ortho", value_parser = projection)]
+    pub camera: Projection,
     /// Draw the targets of these IK handles (HANDLES.json, as `rigport ik` reads it) as
     /// markers, at each frame's time.
     #[arg(long, value_name = "HANDLES.json")]
@@ -62,15 +64,6 @@ pub struct RenderArgs {
     pub no_frame_counter: bool,
 }
 
-/// `--camera`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum CameraArg {
-    /// Orthographic: sizes do not change with depth.
-    Ortho,
-    /// Perspective, 35 deg vertical field of view.
-    Perspective,
-}
-
 /// Runs `render`.
 pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
     let request = RenderRequest {
@@ -78,10 +71,7 @@ pub fn run(ctx: &Context, args: &RenderArgs) -> Result<()> {
             width: args.size.0,
             height: args.size.1,
             view: args.view,
-            projection: match args.camera {
-                CameraArg::Ortho => Projection::Orthographic,
-                CameraArg::Perspective => Projection::PERSPECTIVE,
-            },
+            projection: args.camera,
             skinning: &[],
             skeleton: !args.no_skeleton,
             frame_counter: !args.no_frame_counter,

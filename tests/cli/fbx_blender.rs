@@ -26,17 +26,9 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// Python with `bpy` (Blender 4.5 as a module), or `None` (skip).
-pub fn blender_python() -> Option<PathBuf> {
-    let p = std::env::var_os("RIGPORT_BLENDER_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("tools/.venv-blender/bin/python"));
-    require(
-        "Blender's Python module bpy (tools/.venv-blender: bash tools/setup.sh --blender; \
-         or RIGPORT_BLENDER_PYTHON)",
-        p.exists().then_some(p),
-    )
-}
+/// Python with `bpy` (Blender 4.5 as a module), or `None` (skip); shared with the crates'
+/// tests.
+pub use rigport_testkit::blender_python;
 
 /// Runs a tools/blender script with `python`; panics with its stderr on failure.
 pub fn run_script(python: &Path, script: &str, args: &[&str]) -> String {

@@ -186,7 +186,7 @@ fn bad_numbers_are_refused_by_their_one_check() {
     for (args, message) in [
         (
             vec!["convert", bvh, "--reduce-tolerance=-1"],
-            "'--reduce-tolerance <D>': expected a distance >= 0",
+            "'--reduce-tolerance [<D>]': expected a distance >= 0",
         ),
         (
             vec!["retime", bvh, "--speed", "0"],

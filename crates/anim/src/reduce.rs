@@ -1,36 +1,52 @@
-//! Key reduction with a bound on world-space joint position error.
+//! Key reduction with a bound on model-space error: of joints, and of points fixed to them.
 //!
-//! [`reduce`] removes keys from LINEAR joint tracks while every joint's model-space
-//! position, at every original key time, stays within a tolerance of the unreduced clip's.
-//! It works in three steps:
+//! [`reduce_clip`] removes keys from LINEAR joint tracks while, at every original key time,
+//! the model-space position of every joint, and of *virtual points* fixed in each joint's
+//! frame (at a distance per joint: ACL's "shell distance", 3 cm or a skinned mesh's reach),
+//! stays within a tolerance of the unreduced clip's. [`reduce`] is the joints-only form.
+//! It works in three steps, as ozz-animation's optimizer does:
 //!
 //! 1. Each reducible track gets a *local* tolerance (metres of translation, radians of
-//!    rotation, scale units) derived from the world tolerance: a rotation error `θ` at a joint
-//!    moves a descendant at distance `r` by at most `2 r sin(θ/2) <= r θ`; a translation
-//!    error `δ` moves the joint and its subtree by at most `|parent scale| δ`; a scale error
-//!    `δ` moves a descendant by at most `r δ / |scale|`. The world budget is shared by the
-//!    `N` reducible tracks on the longest chain through the track: each gets `1/√N` of it,
-//!    not `1/N`, because the errors of different tracks rarely line up (verification
-//!    catches the frames where they do, and `1/N` kept about 1.6 times as many keys on
-//!    random 30-joint motion for the same tolerance).
-//! 2. Douglas–Peucker key removal per track against its local tolerance (first and last key
-//!    always kept), with the same interpolation a viewer uses (lerp, shortest-path slerp).
+//!    rotation, scale units) derived from the model-space tolerance and propagated down
+//!    the hierarchy, so a parent's error is paid for by its children: a rotation error `θ`
+//!    at a joint moves a descendant (or one of its own virtual points) at distance `r` by
+//!    at most `2 r sin(θ/2) <= r θ`; a translation error `δ` moves the joint and its
+//!    subtree by at most `|parent scale| δ`; a scale error `δ` moves a point by at most
+//!    `r δ / |scale|`. The budget is shared by the `N` reducible tracks on the longest
+//!    chain through the track: each gets `1/√N` of it, not `1/N`, because the errors of
+//!    different tracks rarely line up (verification catches the frames where they do, and
+//!    `1/N` kept about 1.6 times as many keys on random 30-joint motion for the same
+//!    tolerance).
+//! 2. Per track, the smaller of key removal and a lower uniform rate within its local
+//!    tolerance (`simplify`), with the same interpolation a viewer uses (lerp,
+//!    shortest-path slerp), on the values as written (16-bit rotations when asked).
 //! 3. Verification by forward kinematics at every original key time. Where a joint's error
 //!    exceeds the tolerance, the local tolerances of every reduced track above it shrink and
 //!    step 2 repeats; after a few rounds, tracks of chains that still fail are restored
 //!    whole. Restoring every track reproduces the clip exactly, so the loop always ends with
 //!    the bound met.
 
-use glam::{Mat4, Quat, Vec3, Vec4};
-use rigport_model::{Clip, Interpolation, JointIndex, Skeleton, Track, TrackTarget, Transform};
+use glam::{Mat4, Vec3};
+use rigport_model::{Clip, JointIndex, Skeleton, Track, Transform};
 
-use rigport_eval::{EvalError, LocalToModelJob};
+use rigport_eval::LocalToModelJob;
 
+mod channel;
+mod codec;
 mod curve;
+mod error;
+mod loosen;
+pub mod metric;
+mod simplify;
 
-use curve::{lerp3, quat_at, sample_quat, sample_vec3, Slerp};
+pub use codec::Codec;
+pub use error::{ReduceError, TrackProblem};
 
-/// What [`reduce`] did.
+use channel::{collect_channels, Channel, Kind};
+use curve::{sample_quat, sample_vec3};
+use simplify::simplify;
+
+/// What [`reduce`] and [`reduce_clip`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReduceStats {
     /// Keys over every track of the clip before reduction (all tracks, including those kept
@@ -38,77 +54,36 @@ pub struct ReduceStats {
     pub keys_before: usize,
     /// Keys over every track of the reduced clip.
     pub keys_after: usize,
-    /// The largest distance, in the skeleton's length unit, between a joint's model-space
-    /// position in the reduced and in the original clip, over every joint and every
-    /// original key time. At most the tolerance given to [`reduce`].
+    /// The largest distance, in the skeleton's length unit, between a joint's (or one of its
+    /// virtual points') model-space position in the reduced and in the original clip, over
+    /// every joint and every original key time. At most the tolerance.
     pub max_error: f32,
+    /// The mean over joints and original key times of that distance (the largest of a
+    /// joint's points at each time).
+    pub mean_error: f32,
+    /// Whether the error was measured on values as [`ReduceOptions::codec`] stores them:
+    /// `false` when asked but the codec alone would exceed the tolerance, so the values
+    /// must be written exactly (as floats).
+    pub coded: bool,
 }
 
-/// Why [`reduce`] could not run.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum ReduceError {
-    /// The tolerance is negative, NaN or infinite.
-    #[error("tolerance {tolerance} must be finite and non-negative")]
-    Tolerance {
-        /// The tolerance given.
-        tolerance: f32,
-    },
-    /// A track animates a joint the skeleton does not have.
-    #[error("clip {clip:?} track {track}: targets {joint}, but the skeleton has {joints} joints")]
-    UnknownJoint {
-        /// Clip name.
-        clip: String,
-        /// Track index in the clip.
-        track: usize,
-        /// The joint it names.
-        joint: JointIndex,
-        /// How many joints the skeleton has.
-        joints: usize,
-    },
-    /// A joint track's keys cannot be sampled.
-    #[error("clip {clip:?} track {track}: {problem}")]
-    BadTrack {
-        /// Clip name.
-        clip: String,
-        /// Track index in the clip.
-        track: usize,
-        /// What is wrong.
-        problem: TrackProblem,
-    },
-    /// Forward kinematics rejected its inputs (a skeleton not stored parents-first).
-    #[error(transparent)]
-    Eval(#[from] EvalError),
-}
-
-/// What is wrong with a track, as reported in [`ReduceError::BadTrack`].
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum TrackProblem {
-    /// The track has no key.
-    #[error("has no keys")]
-    NoKeys,
-    /// Key times are not finite or not strictly increasing.
-    #[error("key {key}: time is not finite or not after the previous key's")]
-    Times {
-        /// The first offending key.
-        key: usize,
-    },
-    /// The value count does not match the key count.
-    #[error("expected {expected} values for its keys, found {found}")]
-    ValueCount {
-        /// `keys * components` (three times that for cubic splines).
-        expected: usize,
-        /// The length of `values`.
-        found: usize,
-    },
-    /// A value is NaN or infinite.
-    #[error("has a non-finite value")]
-    NonFinite,
-    /// A rotation key is the zero quaternion, which is no rotation.
-    #[error("rotation key {key} has zero length")]
-    ZeroRotation {
-        /// The key.
-        key: usize,
-    },
+/// What [`reduce_clip`] holds to.
+#[derive(Clone, Debug, Default)]
+pub struct ReduceOptions {
+    /// The largest model-space distance allowed, in the skeleton's length unit.
+    pub tolerance: f32,
+    /// Per joint (by index), the distance of its virtual points from the joint, in the
+    /// skeleton's length unit: three points on the joint's local axes (in its model-space
+    /// frame, scale included), checked besides the joint itself. Empty or shorter than the
+    /// skeleton: no virtual points (0) for the joints left out, and a leaf's rotation held
+    /// at one parent-bone length instead, unverified ([`reduce`]).
+    pub point_distance: Vec<f32>,
+    /// How the writer stores LINEAR and STEP key values (`None`: exactly), so that the
+    /// error is measured on what a reader gets ([`Codec::I16`]: 16-bit rotations).
+    pub codec: Option<Codec>,
+    /// Also try a lower uniform rate per track (every k-th key), kept when it needs fewer
+    /// bytes than key removal (a key's value without a time of its own).
+    pub uniform_rate: bool,
 }
 
 /// Removes keys from LINEAR joint tracks so that, at every original key time, every
@@ -139,6 +114,45 @@ pub fn reduce(
     reduce_with(clip, skeleton, tolerance, Tuning::DEFAULT)
 }
 
+/// [`reduce`] with virtual points, 16-bit rotations and a uniform rate as `options` asks:
+/// every joint and every virtual point stays within `options.tolerance` of the unreduced
+/// clip at every original key time, as the values are written.
+///
+/// ```
+/// use rigport_anim::reduce::{reduce_clip, Codec, ReduceOptions};
+/// use rigport_model::glam::{Quat, Vec3};
+/// use rigport_model::{Clip, Interpolation, Joint, JointIndex, Skeleton, Track, TrackTarget, Transform};
+///
+/// let joint = |name: &str, parent: Option<u32>, y: f32| Joint {
+///     name: name.into(),
+///     parent: parent.map(JointIndex),
+///     rest_local: Transform { translation: Vec3::new(0.0, y, 0.0), ..Transform::IDENTITY },
+/// };
+/// let skeleton = Skeleton::new(vec![joint("hip", None, 0.0), joint("knee", Some(0), 0.5)]).expect("valid");
+/// // A slow swing of the hip at 120 keys per second.
+/// let times: Vec<f32> = (0..121).map(|k| k as f32 / 120.0).collect();
+/// let values = times.iter().flat_map(|t| Quat::from_rotation_z(0.5 * t).to_array()).collect();
+/// let track = Track { target: TrackTarget::Rotation(JointIndex(0)),
+///     interpolation: Interpolation::Linear, times, values };
+/// let clip = Clip { name: "swing".into(), tracks: vec![track] };
+/// let options = ReduceOptions { tolerance: 0.001, point_distance: vec![0.03; 2],
+///     codec: Some(Codec::I16), uniform_rate: true };
+/// let (reduced, stats) = reduce_clip(&clip, &skeleton, &options)?;
+/// assert!(stats.keys_after < 10 && stats.max_error <= 0.001 && stats.coded);
+/// assert_eq!(reduced.tracks[0].times.last(), Some(&1.0));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// As [`reduce`].
+pub fn reduce_clip(
+    clip: &Clip,
+    skeleton: &Skeleton,
+    options: &ReduceOptions,
+) -> Result<(Clip, ReduceStats), ReduceError> {
+    reduce_impl(clip, skeleton, options, Tuning::DEFAULT)
+}
+
 /// Knobs of the reduction loop; tests loosen them to drive the verification paths.
 #[derive(Clone, Copy, Debug)]
 struct Tuning {
@@ -162,17 +176,43 @@ fn reduce_with(
     tolerance: f32,
     tuning: Tuning,
 ) -> Result<(Clip, ReduceStats), ReduceError> {
+    let options = ReduceOptions {
+        tolerance,
+        ..ReduceOptions::default()
+    };
+    reduce_impl(clip, skeleton, &options, tuning)
+}
+
+/// [`reduce_clip`] with explicit [`Tuning`].
+fn reduce_impl(
+    clip: &Clip,
+    skeleton: &Skeleton,
+    options: &ReduceOptions,
+    tuning: Tuning,
+) -> Result<(Clip, ReduceStats), ReduceError> {
+    let tolerance = options.tolerance;
     if !tolerance.is_finite() || tolerance < 0.0 {
         return Err(ReduceError::Tolerance { tolerance });
     }
-    let channels = collect_channels(clip, skeleton)?;
     let keys_before: usize = clip.tracks.iter().map(|t| t.times.len()).sum();
-    let mut reducer = Reducer::new(skeleton, tolerance, tuning, channels)?;
-    let max_error = reducer.run()?;
+    let mut codec = options.codec;
+    let mut reducer = loop {
+        let channels = collect_channels(clip, skeleton, codec.as_ref(), options.uniform_rate)?;
+        let mut reducer = Reducer::new(skeleton, options, tuning, channels)?;
+        // The codec's rounding is the one error that restoring tracks cannot undo: measure
+        // it alone first, and write exact values when it does not fit.
+        if codec.is_some() && reducer.errors()?.0.iter().any(|&e| e > tolerance) {
+            codec = None;
+            continue;
+        }
+        reducer.set_local_tolerances();
+        break reducer;
+    };
+    let (max_error, mean_error) = reducer.run()?;
     let mut out = clip.clone();
     for chan in &reducer.channels {
-        if let (Some(reduced), Some(slot)) = (&chan.reduced, out.tracks.get_mut(chan.track)) {
-            *slot = reduced.clone();
+        if let (Some(kept), Some(slot)) = (&chan.kept, out.tracks.get_mut(chan.track)) {
+            *slot = pick_keys(chan.original, kept);
         }
     }
     let keys_after = out.tracks.iter().map(|t| t.times.len()).sum();
@@ -182,133 +222,31 @@ fn reduce_with(
             keys_before,
             keys_after,
             max_error,
+            mean_error,
+            coded: codec.is_some(),
         },
     ))
 }
 
-/// Which joint property a track animates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
-    Translation,
-    Rotation,
-    Scale,
-}
-
-impl Kind {
-    fn slot(self) -> usize {
-        match self {
-            Kind::Translation => 0,
-            Kind::Rotation => 1,
-            Kind::Scale => 2,
+/// The keys `kept` (increasing indices) of a LINEAR or STEP track.
+fn pick_keys(track: &Track, kept: &[usize]) -> Track {
+    let comps = track.values.len() / track.times.len().max(1);
+    let mut out = Track {
+        target: track.target,
+        interpolation: track.interpolation,
+        times: Vec::with_capacity(kept.len()),
+        values: Vec::with_capacity(kept.len() * comps),
+    };
+    for &k in kept {
+        if let (Some(&t), Some(v)) = (
+            track.times.get(k),
+            track.values.get(k * comps..(k + 1) * comps),
+        ) {
+            out.times.push(t);
+            out.values.extend_from_slice(v);
         }
     }
-}
-
-/// One sampled joint track (the first of the clip for its joint and property).
-struct Channel<'a> {
-    joint: usize,
-    kind: Kind,
-    /// Index in `clip.tracks`.
-    track: usize,
-    original: &'a Track,
-    /// LINEAR with more than two keys: keys can go.
-    reducible: bool,
-    /// Local tolerance: length unit (translation), radians (rotation), scale units (scale).
-    eps: f32,
-    /// The reduced track, `None` while the original is used.
-    reduced: Option<Track>,
-    /// Normalized rotation keys (rotation channels only), shared by the simplifier.
-    quats: Vec<Quat>,
-}
-
-impl Channel<'_> {
-    fn current(&self) -> &Track {
-        self.reduced.as_ref().unwrap_or(self.original)
-    }
-}
-
-/// Validates every joint track and keeps the first per joint and property.
-fn collect_channels<'a>(
-    clip: &'a Clip,
-    skeleton: &Skeleton,
-) -> Result<Vec<Channel<'a>>, ReduceError> {
-    let joints = skeleton.len();
-    let mut seen = vec![[false; 3]; joints];
-    let mut out = Vec::new();
-    for (ti, track) in clip.tracks.iter().enumerate() {
-        let (joint, kind) = match track.target {
-            TrackTarget::Translation(j) => (j, Kind::Translation),
-            TrackTarget::Rotation(j) => (j, Kind::Rotation),
-            TrackTarget::Scale(j) => (j, Kind::Scale),
-            TrackTarget::MorphWeights(_) => continue,
-        };
-        let bad = |problem| ReduceError::BadTrack {
-            clip: clip.name.clone(),
-            track: ti,
-            problem,
-        };
-        let Some(slot) = seen.get_mut(joint.get()) else {
-            return Err(ReduceError::UnknownJoint {
-                clip: clip.name.clone(),
-                track: ti,
-                joint,
-                joints,
-            });
-        };
-        if track.times.is_empty() {
-            return Err(bad(TrackProblem::NoKeys));
-        }
-        if let Some(key) = track.times.iter().enumerate().position(|(k, t)| {
-            !t.is_finite() || (k > 0 && track.times.get(k - 1).is_some_and(|p| t <= p))
-        }) {
-            return Err(bad(TrackProblem::Times { key }));
-        }
-        let comps = if kind == Kind::Rotation { 4 } else { 3 };
-        let per_key = if track.interpolation == Interpolation::CubicSpline {
-            3 * comps
-        } else {
-            comps
-        };
-        let expected = track.times.len() * per_key;
-        if track.values.len() != expected {
-            return Err(bad(TrackProblem::ValueCount {
-                expected,
-                found: track.values.len(),
-            }));
-        }
-        if track.values.iter().any(|v| !v.is_finite()) {
-            return Err(bad(TrackProblem::NonFinite));
-        }
-        let mut quats = Vec::new();
-        if kind == Kind::Rotation {
-            let offset = if track.interpolation == Interpolation::CubicSpline {
-                4
-            } else {
-                0
-            };
-            for (key, chunk) in track.values.chunks_exact(per_key).enumerate() {
-                let q = quat_at(chunk, offset);
-                if !q.is_finite() {
-                    return Err(bad(TrackProblem::ZeroRotation { key }));
-                }
-                quats.push(q);
-            }
-        }
-        if std::mem::replace(&mut slot[kind.slot()], true) {
-            continue;
-        }
-        out.push(Channel {
-            joint: joint.get(),
-            kind,
-            track: ti,
-            original: track,
-            reducible: track.interpolation == Interpolation::Linear && track.times.len() > 2,
-            eps: 0.0,
-            reduced: None,
-            quats,
-        });
-    }
-    Ok(out)
+    out
 }
 
 /// The state of one reduction.
@@ -320,20 +258,50 @@ struct Reducer<'a> {
     rest: Vec<Transform>,
     /// Per joint: channel index per [`Kind::slot`].
     chan_of: Vec<[Option<usize>; 3]>,
+    /// Per joint: the distance of its virtual points (0: none).
+    points: Vec<f32>,
+    /// Whether any joint has virtual points (a joint's own rotation then moves its points).
+    with_points: bool,
     /// Sorted union of every channel's key times.
     times: Vec<f32>,
-    /// Original model-space positions, `times.len() * joints`, time-major.
+    /// Original model-space points, `times.len() * joints * 4`, time-major: per joint the
+    /// joint, then its virtual points on x, y and z.
     original: Vec<Vec3>,
+    /// What the original motion says about each joint's reach, for step 1.
+    reach: Reach,
     /// Scratch for forward kinematics.
     local: Vec<Transform>,
     model: Vec<Mat4>,
     cursors: Vec<usize>,
 }
 
+/// Per joint, from the original motion: `lever` the farthest descendant (or virtual
+/// point), `bone` the longest distance to the parent, `parent_norm` the largest column
+/// length of the parent's model matrix (its scale), `min_scale` the smallest `|scale|`
+/// component.
+#[derive(Default)]
+struct Reach {
+    lever: Vec<f32>,
+    bone: Vec<f32>,
+    parent_norm: Vec<f32>,
+    min_scale: Vec<f32>,
+}
+
+/// The joint and its three virtual points at `r` on its local axes, in model space.
+fn points_of(m: &Mat4, r: f32) -> [Vec3; 4] {
+    let p = m.w_axis.truncate();
+    [
+        p,
+        p + m.x_axis.truncate() * r,
+        p + m.y_axis.truncate() * r,
+        p + m.z_axis.truncate() * r,
+    ]
+}
+
 impl<'a> Reducer<'a> {
     fn new(
         skeleton: &Skeleton,
-        tolerance: f32,
+        options: &ReduceOptions,
         tuning: Tuning,
         channels: Vec<Channel<'a>>,
     ) -> Result<Self, ReduceError> {
@@ -350,26 +318,41 @@ impl<'a> Reducer<'a> {
             .collect();
         times.sort_by(f32::total_cmp);
         times.dedup();
+        let points: Vec<f32> = (0..n)
+            .map(|j| {
+                options
+                    .point_distance
+                    .get(j)
+                    .copied()
+                    .unwrap_or(0.0)
+                    .max(0.0)
+            })
+            .collect();
         let mut r = Self {
-            tolerance,
+            tolerance: options.tolerance,
             tuning,
             cursors: vec![0; channels.len()],
             channels,
             parents: skeleton.parents().collect(),
             rest: skeleton.joints().iter().map(|j| j.rest_local).collect(),
             chan_of,
+            with_points: points.iter().any(|&d| d > 0.0),
+            points,
             times,
             original: Vec::new(),
+            reach: Reach::default(),
             local: vec![Transform::IDENTITY; n],
             model: vec![Mat4::IDENTITY; n],
         };
-        r.set_local_tolerances()?;
+        r.measure_original()?;
         Ok(r)
     }
 
-    /// Evaluates the current tracks at every union time; `f(time index, local, model)`.
+    /// Evaluates the tracks at every union time, the original ones (`original`) or as a
+    /// reader sees them now; `f(time index, local, model)`.
     fn for_each_frame(
         &mut self,
+        original: bool,
         mut f: impl FnMut(usize, &[Transform], &[Mat4]),
     ) -> Result<(), ReduceError> {
         self.cursors.fill(0);
@@ -379,7 +362,11 @@ impl<'a> Reducer<'a> {
                 let Some(local) = self.local.get_mut(chan.joint) else {
                     continue;
                 };
-                let track = chan.current();
+                let track = if original {
+                    chan.original
+                } else {
+                    chan.current()
+                };
                 match chan.kind {
                     Kind::Translation => local.translation = sample_vec3(track, t, cursor),
                     Kind::Scale => local.scale = sample_vec3(track, t, cursor),
@@ -398,29 +385,32 @@ impl<'a> Reducer<'a> {
         Ok(())
     }
 
-    /// Step 1: local tolerances from the original motion's lever arms and scales.
-    fn set_local_tolerances(&mut self) -> Result<(), ReduceError> {
+    /// The original motion's points and reach.
+    fn measure_original(&mut self) -> Result<(), ReduceError> {
         let n = self.parents.len();
         let parents = self.parents.clone();
-        // lever[j]: farthest descendant from j; parent_norm[j]: largest column length of the
-        // parent's model matrix (its scale); min_scale[j]: smallest |scale| component of j.
-        let mut lever = vec![0.0f32; n];
-        let mut bone = vec![0.0f32; n];
-        let mut parent_norm: Vec<f32> = parents
-            .iter()
-            .map(|p| if p.is_some() { 0.0 } else { 1.0 })
-            .collect();
-        let mut min_scale = vec![f32::INFINITY; n];
-        let mut original = Vec::with_capacity(self.times.len() * n);
-        self.for_each_frame(|_, local, model| {
+        let radius = self.points.clone();
+        let mut reach = Reach {
+            lever: vec![0.0f32; n],
+            bone: vec![0.0f32; n],
+            parent_norm: parents
+                .iter()
+                .map(|p| if p.is_some() { 0.0 } else { 1.0 })
+                .collect(),
+            min_scale: vec![f32::INFINITY; n],
+        };
+        let mut original = Vec::with_capacity(self.times.len() * n * 4);
+        self.for_each_frame(true, |_, local, model| {
             let base = original.len();
-            original.extend(model.iter().map(|m| m.w_axis.truncate()));
-            let pos = &original[base..];
+            for (m, &r) in model.iter().zip(&radius) {
+                original.extend(points_of(m, r));
+            }
+            let pos = |j: usize| original[base + 4 * j];
             for d in 0..n {
-                let p = pos[d];
+                let p = pos(d);
                 let mut cur = parents[d];
                 if let Some(pi) = cur {
-                    bone[d] = bone[d].max(p.distance(pos[pi.get()]));
+                    reach.bone[d] = reach.bone[d].max(p.distance(pos(pi.get())));
                     let m = model[pi.get()];
                     let norm = m
                         .x_axis
@@ -428,20 +418,37 @@ impl<'a> Reducer<'a> {
                         .length()
                         .max(m.y_axis.truncate().length())
                         .max(m.z_axis.truncate().length());
-                    parent_norm[d] = parent_norm[d].max(norm);
+                    reach.parent_norm[d] = reach.parent_norm[d].max(norm);
                 }
+                let own = (1..4).map(|k| original[base + 4 * d + k].distance(p));
+                reach.lever[d] = own.fold(reach.lever[d], f32::max);
                 while let Some(a) = cur {
                     let a = a.get();
-                    lever[a] = lever[a].max(p.distance(pos[a]));
+                    reach.lever[a] = reach.lever[a].max(p.distance(pos(a)));
                     cur = parents[a];
                 }
-                min_scale[d] = min_scale[d].min(local[d].scale.abs().min_element());
+                reach.min_scale[d] = reach.min_scale[d].min(local[d].scale.abs().min_element());
             }
         })?;
         self.original = original;
+        self.reach = reach;
+        Ok(())
+    }
+
+    /// Step 1: local tolerances from the original motion's lever arms and scales.
+    fn set_local_tolerances(&mut self) {
+        let n = self.parents.len();
+        let parents = &self.parents;
+        let Reach {
+            lever,
+            bone,
+            parent_norm,
+            min_scale,
+        } = &self.reach;
+        let mut lever = lever.clone();
         for j in 0..n {
             if lever[j] == 0.0 {
-                // A leaf: as if its bone went on (see `reduce`'s documentation).
+                // A leaf without virtual points: as if its bone went on (see `reduce`).
                 lever[j] = bone[j];
             }
         }
@@ -486,24 +493,39 @@ impl<'a> Reducer<'a> {
                 self.tuning.budget_scale * tol / (sensitivity * count)
             };
         }
-        Ok(())
     }
 
     /// Steps 2 and 3. Returns the measured maximum error.
-    fn run(&mut self) -> Result<f32, ReduceError> {
+    fn run(&mut self) -> Result<(f32, f32), ReduceError> {
+        let errors = self.tighten()?;
+        self.loosen(errors)
+    }
+
+    /// Re-simplifies the channels marked `dirty` (step 2).
+    fn simplify_dirty(&mut self, dirty: &mut [bool]) {
+        for (chan, dirty) in self.channels.iter_mut().zip(dirty.iter_mut()) {
+            if std::mem::take(dirty) && chan.reducible {
+                let kept = simplify(chan);
+                chan.reduced = Some(pick_keys(
+                    chan.as_written.as_ref().unwrap_or(chan.original),
+                    &kept,
+                ));
+                chan.kept = Some(kept);
+            }
+        }
+    }
+
+    /// Steps 2 and 3 until the bound holds. Returns the per-joint errors and their mean.
+    fn tighten(&mut self) -> Result<(Vec<f32>, f32), ReduceError> {
         let tol = self.tolerance;
         let mut dirty = vec![true; self.channels.len()];
         let mut round = 0;
         loop {
-            for (chan, dirty) in self.channels.iter_mut().zip(dirty.iter_mut()) {
-                if std::mem::take(dirty) && chan.reducible {
-                    chan.reduced = Some(simplify(chan));
-                }
-            }
-            let errors = self.joint_errors()?;
+            self.simplify_dirty(&mut dirty);
+            let (errors, mean) = self.errors()?;
             let max_error = errors.iter().copied().fold(0.0f32, f32::max);
             if max_error <= tol {
-                return Ok(max_error);
+                return Ok((errors, mean));
             }
             // Per channel, the strongest tightening any failing joint below it asks for.
             // A failing joint whose reduced channels are all at zero tolerance (or that
@@ -520,8 +542,8 @@ impl<'a> Reducer<'a> {
                 let mut cur = Some(d);
                 while let Some(a) = cur {
                     for kind in [Kind::Translation, Kind::Rotation, Kind::Scale] {
-                        // A joint's own rotation and scale do not move it.
-                        if kind != Kind::Translation && a == d {
+                        // A joint's own rotation and scale move its virtual points only.
+                        if kind != Kind::Translation && a == d && !self.with_points {
                             continue;
                         }
                         if let Some(c) = self.chan_of[a][kind.slot()] {
@@ -550,6 +572,7 @@ impl<'a> Reducer<'a> {
                 }
                 if restore[ci] {
                     chan.reduced = None;
+                    chan.kept = None;
                     chan.reducible = false;
                     changed = true;
                 } else if factor[ci] < 1.0 && chan.eps > 0.0 {
@@ -566,123 +589,48 @@ impl<'a> Reducer<'a> {
                 // channel above it); restoring everything reproduces the clip exactly.
                 for chan in &mut self.channels {
                     chan.reduced = None;
+                    chan.kept = None;
                     chan.reducible = false;
                 }
             }
         }
     }
 
-    /// Per joint: the largest model-space distance to the original over every union time.
-    fn joint_errors(&mut self) -> Result<Vec<f32>, ReduceError> {
+    /// Per joint: the largest model-space distance of the joint or one of its virtual
+    /// points to the original, over every union time; and the mean over joints and times of
+    /// the largest of a joint's points.
+    fn errors(&mut self) -> Result<(Vec<f32>, f32), ReduceError> {
         let n = self.parents.len();
         let mut errors = vec![0.0f32; n];
+        let mut sum = 0.0f64;
         let original = std::mem::take(&mut self.original);
-        let result = self.for_each_frame(|ti, _, model| {
-            let base = ti * n;
-            for (j, (m, e)) in model.iter().zip(errors.iter_mut()).enumerate() {
-                if let Some(o) = original.get(base + j) {
-                    *e = e.max(m.w_axis.truncate().distance(*o));
-                }
+        let radius = std::mem::take(&mut self.points);
+        let result = self.for_each_frame(false, |ti, _, model| {
+            let base = ti * n * 4;
+            for (j, ((m, e), &r)) in model.iter().zip(errors.iter_mut()).zip(&radius).enumerate() {
+                let at = base + 4 * j;
+                let Some(was) = original.get(at..at + 4) else {
+                    continue;
+                };
+                // Without virtual points the joint alone (its points coincide with it).
+                let worst = if r > 0.0 {
+                    let now = points_of(m, r);
+                    now.iter()
+                        .zip(was)
+                        .map(|(a, b)| a.distance(*b))
+                        .fold(0.0f32, f32::max)
+                } else {
+                    m.w_axis.truncate().distance(was[0])
+                };
+                sum += f64::from(worst);
+                *e = e.max(worst);
             }
         });
         self.original = original;
-        result.map(|()| errors)
+        self.points = radius;
+        let samples = (self.times.len() * n).max(1);
+        result.map(|()| (errors, (sum / samples as f64) as f32))
     }
-}
-
-/// Step 2: Douglas–Peucker on one LINEAR channel against `chan.eps`. Keeps the first and
-/// last keys; a key goes when the interpolation between the kept keys around it is within
-/// `eps` of its value (Euclidean distance; for rotations, the angle between them).
-fn simplify(chan: &Channel) -> Track {
-    let track = chan.original;
-    let times = &track.times;
-    let n = times.len();
-    let mut keep = vec![false; n];
-    if let (Some(first), Some(last)) = (keep.first_mut(), n.checked_sub(1)) {
-        *first = true;
-        keep[last] = true;
-    }
-    // Rotation: compare chords |q1 - q2| = 2 sin(θ/4) instead of angles (no asin per key).
-    let limit = match chan.kind {
-        Kind::Rotation => 2.0 * (chan.eps.min(std::f32::consts::TAU) / 4.0).sin(),
-        Kind::Translation | Kind::Scale => chan.eps,
-    };
-    let vectors: Vec<Vec3> = match chan.kind {
-        Kind::Rotation => Vec::new(),
-        Kind::Translation | Kind::Scale => {
-            track.values.chunks_exact(3).map(Vec3::from_slice).collect()
-        }
-    };
-    // The worst original key strictly between keys a and b when interpolating from a to b:
-    // (key, error), (a, 0) when there is none. Same arithmetic as the sampler.
-    let worst = |a: usize, b: usize| -> (usize, f32) {
-        let (ta, tb) = (times[a], times[b]);
-        let mut worst = (a, 0.0f32);
-        match chan.kind {
-            Kind::Rotation => {
-                let seg = Slerp::new(chan.quats[a], chan.quats[b]);
-                let inner = times[a + 1..b].iter().zip(&chan.quats[a + 1..b]);
-                for (k, (&t, &o)) in (a + 1..).zip(inner) {
-                    let q = Vec4::from(seg.at((t - ta) / (tb - ta)));
-                    let o = Vec4::from(o);
-                    let e = (q - o).length().min((q + o).length());
-                    if e > worst.1 {
-                        worst = (k, e);
-                    }
-                }
-            }
-            Kind::Translation | Kind::Scale => {
-                let (va, vb) = (vectors[a], vectors[b]);
-                let inner = times[a + 1..b].iter().zip(&vectors[a + 1..b]);
-                for (k, (&t, &v)) in (a + 1..).zip(inner) {
-                    let e = lerp3(va, vb, (t - ta) / (tb - ta)).distance(v);
-                    if e > worst.1 {
-                        worst = (k, e);
-                    }
-                }
-            }
-        }
-        worst
-    };
-    let mut stack = vec![(0usize, n.saturating_sub(1))];
-    while let Some((a, b)) = stack.pop() {
-        let (k, e) = worst(a, b);
-        if e > limit {
-            keep[k] = true;
-            stack.push((a, k));
-            stack.push((k, b));
-        }
-    }
-    // Douglas–Peucker splits at the worst key, which is not always a key the result needs
-    // (e.g. inside a run of equal values): one greedy pass drops every kept key whose two
-    // kept neighbours already reproduce all original keys between them.
-    let kept: Vec<usize> = (0..n).filter(|&k| keep[k]).collect();
-    let mut anchor = 0usize;
-    for w in kept.windows(2).skip(1) {
-        let (k, next) = (w[0], w[1]);
-        if worst(anchor, next).1 <= limit {
-            keep[k] = false;
-        } else {
-            anchor = k;
-        }
-    }
-    let comps = if chan.kind == Kind::Rotation { 4 } else { 3 };
-    let mut out = Track {
-        target: track.target,
-        interpolation: track.interpolation,
-        times: Vec::new(),
-        values: Vec::new(),
-    };
-    for ((&t, value), _) in times
-        .iter()
-        .zip(track.values.chunks_exact(comps))
-        .zip(&keep)
-        .filter(|(_, &k)| k)
-    {
-        out.times.push(t);
-        out.values.extend_from_slice(value);
-    }
-    out
 }
 
 #[cfg(test)]

@@ -46,6 +46,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod command_line;
 pub mod manifest;
 pub mod report;
 pub mod resume;

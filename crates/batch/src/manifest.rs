@@ -21,7 +21,7 @@ use std::path::{Component, Path, PathBuf};
 use serde::Deserialize;
 
 /// One unit of work.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Item {
     /// Position in the manifest (after folder expansion), from 0: the shard rule and the
     /// report order use it.

@@ -103,19 +103,33 @@ pub fn location_of(message: &str) -> Option<String> {
         .map(str::to_string)
 }
 
-/// The one-line verdict for failed records (`None` when none failed), for the exit code
+/// Why a run failed: [`verdict`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Verdict {
+    /// One line: how many items failed, and what to do.
+    pub message: String,
+    /// The outputs of the first item whose output could not be written, if any did
+    /// (comma-separated), for the exit code [`exit_code`] gives (3).
+    pub failed_output: Option<String>,
+}
+
+/// The verdict for failed records (`None` when none failed), for the exit code
 /// [`exit_code`] gives.
-pub fn verdict(records: &[Record]) -> Option<String> {
+pub fn verdict(records: &[Record]) -> Option<Verdict> {
     let failed = records.iter().filter(|r| r.error.is_some()).count();
     let why = match exit_code(records) {
         0 => return None,
         3 => "an output could not be written: retry",
         _ => "bad input; the other items finished",
     };
-    Some(format!(
-        "{failed} of {} items failed ({why})",
-        records.len()
-    ))
+    let failed_output = records
+        .iter()
+        .find(|r| (r.error.as_ref()).is_some_and(|e| e.kind == FailureKind::Output))
+        .map(|r| r.outputs.join(", "));
+    Some(Verdict {
+        message: format!("{failed} of {} items failed ({why})", records.len()),
+        failed_output,
+    })
 }
 
 /// A report line as JSON (no newline).

@@ -32,7 +32,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("bones_only", test_assets::bones_only(), 4),
     ];
     for (name, asset, max_influences) in cases {
-        let opts = GltfOptions { max_influences };
+        let opts = GltfOptions {
+            max_influences,
+            ..Default::default()
+        };
         for ext in ["glb", "gltf"] {
             let path = dir.join(format!("{name}.{ext}"));
             let warnings = write_gltf(&asset, &path, &opts)?;

@@ -46,6 +46,10 @@ mod usd;
 mod test_assets;
 
 pub use error::{ExportError, Problem};
+pub use gltf::meshopt::{
+    rotation_as_written as meshopt_rotation_as_written,
+    vector_as_written as meshopt_vector_as_written,
+};
 pub use gltf::weights::gltf_influences;
 pub use gltf::{
     prepare_gltf, to_glb, to_gltf, write_gltf, Exported, ExportedSplit, GltfOptions, ImageFile,

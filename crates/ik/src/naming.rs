@@ -346,6 +346,18 @@ fn bare(name: &str) -> &str {
     name.rsplit([':', '|']).next().unwrap_or(name)
 }
 
+/// Whether two joint names name the same joint under the conventions' rule: equal
+/// without case and after any namespace prefix (`mixamorig:LeftFoot` is `leftfoot`).
+///
+/// ```
+/// use rigport_ik::naming::same_joint_name;
+/// assert!(same_joint_name("mixamorig:LeftFoot", "leftfoot"));
+/// assert!(!same_joint_name("LeftFoot", "LeftToeBase"));
+/// ```
+pub fn same_joint_name(a: &str, b: &str) -> bool {
+    bare(a).eq_ignore_ascii_case(bare(b))
+}
+
 /// The joint whose bare name equals `wanted` (ignoring case); the first in skeleton order.
 pub(crate) fn find_bare(skeleton: &Skeleton, wanted: &str) -> Option<JointIndex> {
     skeleton

@@ -118,3 +118,33 @@ mod tests {
         assert!(OutputFormat::Gltf.is_gltf() && OutputFormat::Usdz.is_usd());
     }
 }
+
+/// How a glTF writer compresses binary data beyond core glTF.
+///
+/// ```
+/// use rigport_model::Compression;
+/// assert_eq!(Compression::default(), Compression::None);
+/// assert_eq!(Compression::Meshopt.extension(), Some("EXT_meshopt_compression"));
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum Compression {
+    /// Core glTF only: every viewer reads the file.
+    #[default]
+    None,
+    /// `EXT_meshopt_compression` (declared required): animation data and vertex attributes
+    /// through meshoptimizer's vertex codec, rotations with its quaternion filter and
+    /// translations and scales with its exponential filter; three.js, Babylon.js and
+    /// gltfpack decode it.
+    Meshopt,
+}
+
+impl Compression {
+    /// The glTF extension the compression needs, if any.
+    pub fn extension(self) -> Option<&'static str> {
+        match self {
+            Compression::None => None,
+            Compression::Meshopt => Some("EXT_meshopt_compression"),
+        }
+    }
+}

@@ -79,6 +79,37 @@ impl Influences {
         out
     }
 
+    /// Rescales every row to sum to 1, as glTF requires and as viewers and both writers take
+    /// weights, so that what rigport evaluates is what every file it writes holds. A row
+    /// summing to 0 (an unskinned vertex) stays as it is and is not counted. Returns how
+    /// many rows were off by more than `tolerance` and the largest `|sum - 1|`, for the
+    /// importer's warning.
+    ///
+    /// ```
+    /// use rigport_model::{Influence, Influences};
+    /// let half = |joint| Influence { joint, weight: 0.45 };
+    /// let mut rows = Influences::from_rows([vec![half(0), half(1)], vec![]]);
+    /// let (off, worst) = rows.normalize(1e-3);
+    /// assert_eq!((off, (worst * 100.0).round()), (1, 10.0));
+    /// assert_eq!(rows.vertex(0)[1].weight, 0.5);
+    /// ```
+    pub fn normalize(&mut self, tolerance: f32) -> (usize, f32) {
+        let (mut off, mut worst) = (0, 0.0_f32);
+        for v in 0..self.vertex_count() {
+            let row = &mut self.entries[self.offsets[v] as usize..self.offsets[v + 1] as usize];
+            let sum: f32 = row.iter().map(|i| i.weight).sum();
+            let dev = (sum - 1.0).abs();
+            if dev > tolerance && sum > 0.0 {
+                off += 1;
+                worst = worst.max(dev);
+            }
+            if dev > f32::EPSILON && sum > 0.0 {
+                row.iter_mut().for_each(|i| i.weight /= sum);
+            }
+        }
+        (off, worst)
+    }
+
     /// Number of vertices.
     pub fn vertex_count(&self) -> usize {
         self.offsets.len().saturating_sub(1)

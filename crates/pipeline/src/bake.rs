@@ -103,6 +103,7 @@ pub fn run(
             ..WriteOptions::default()
         },
         reduce_tolerance: None,
+        reduce: false,
     };
     let (plan, imported) = input.load_single(progress, "reading input")?;
     let (mut asset, mut warnings) = (imported.asset, imported.warnings);

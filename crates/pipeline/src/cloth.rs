@@ -38,33 +38,46 @@ use crate::{PipelineError, Report};
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ClothRequest {
-    /// The garment: the name of an unskinned mesh of the input, or an `.obj` file.
+    /// The garment: the name of an unskinned mesh of the input, or an .obj file.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "GARMENT"))]
     pub garment: String,
     /// The pinned vertices (none: the garment's own control points).
+    #[cfg_attr(feature = "clap", arg(skip))]
     pub pins: Vec<PinSelection>,
-    /// The clip (the first when `None`).
+    /// The clip to simulate (default: the first).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "NAME"))]
     pub clip: Option<String>,
-    /// Frames per second of the simulation's output.
+    /// Output frames per second (default: the clip's key rate when 24 or more, else 30).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "F", value_parser = crate::numbers::frame_rate))]
     pub fps: Option<f32>,
-    /// Seconds to simulate (looping the clip).
+    /// Simulate S seconds, looping the clip (default: the clip once).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "S"))]
     pub seconds: Option<f32>,
-    /// Solver substeps per frame.
+    /// Substeps per frame (default: 1200 per second).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N"))]
     pub substeps: Option<u32>,
-    /// Collision thickness.
+    /// Collision thickness in model units (default: 1% of the body's diagonal).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "D"))]
     pub thickness: Option<f32>,
-    /// Seconds of pre-roll (the library's default when `None`).
+    /// Seconds of pre-roll settling the garment into the first pose and each cut (default 2).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "S"))]
     pub preroll: Option<f32>,
-    /// Collide with the whole body, not only the parts near the garment at rest.
+    /// Collide with the whole body, not only the bones near the garment at rest (and up).
+    #[cfg_attr(feature = "clap", arg(long))]
     pub collide_all: bool,
-    /// Keep a simulation past its stability limits, with a warning, instead of failing.
+    /// Keep a simulation past the stability limits (warning W007) instead of failing.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub allow_unstable: bool,
-    /// The report as JSON (with every frame's measurements) as the product, instead of
-    /// the text summary.
+    /// Print the report as JSON on stdout, with every frame's measurements.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub json: bool,
-    /// Shared morph targets (PCA) instead of one per frame.
+    /// Compress the per-frame targets to K shared ones (PCA), as `bake --correctives`.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..)))]
     pub targets: Option<u32>,
-    /// The output file.
+    /// Output file: .glb, .gltf (+ .bin), .usda, .usdc or .usdz.
+    #[cfg_attr(feature = "clap", arg(long, short, value_name = "OUT"))]
     pub output: PathBuf,
 }
 
@@ -157,6 +170,7 @@ pub fn run(
             ..WriteOptions::default()
         },
         reduce_tolerance: None,
+        reduce: false,
     };
     let mut done = Report::logged(write_output(
         asset,

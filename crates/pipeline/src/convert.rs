@@ -4,10 +4,11 @@
 
 use rigport_anim::root_motion::RootMotionOptions;
 
+use crate::compact::CompactReport;
 use crate::load::{Input, single_plan};
 use crate::outputs::check_request;
 use crate::progress::{Progress, step};
-use crate::write::{Output, write_output};
+use crate::write::{Output, write_output_report};
 use crate::{PipelineError, Report};
 
 /// What `convert` writes.
@@ -39,6 +40,9 @@ pub struct ConvertOptions {
     /// The clips' root motion: kept (the default), removed, or extracted onto a root joint
     /// ([`crate::root_motion`]).
     pub root_motion: RootMotionOptions,
+    /// Put what reducing the clips did ([`crate::compact::CompactReport`]) in the report's
+    /// `output` as JSON (`null` when the clips are not reduced).
+    pub json: bool,
 }
 
 /// Reads `input`, changes its root motion if asked, and writes it to `options.output`.
@@ -55,14 +59,14 @@ pub struct ConvertOptions {
 /// assert!(std::fs::read_to_string(&out)?.starts_with("#usda 1.0"));
 /// // The travel moved onto a root joint above the hips, reported per clip.
 /// let root_motion = RootMotionOptions { mode: RootMotion::Extract, ..Default::default() };
-/// let options = convert::ConvertOptions { output: Output::new(&out), root_motion };
+/// let options = convert::ConvertOptions { output: Output::new(&out), root_motion, json: false };
 /// let report = convert(&input, &options, &Silent)?;
 /// assert!(report.log[1].starts_with("root motion extracted"), "{:?}", report.log);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 ///
 /// # Errors
-/// As the import and [`write_output`]; the output is checked before any work.
+/// As the import and [`write_output_report`]; the output is checked before any work.
 pub fn run(
     input: &Input,
     options: &ConvertOptions,
@@ -104,7 +108,7 @@ pub fn convert_imported(
 ) -> Result<Report, PipelineError> {
     check_request(input, &options.output.path, &[])?;
     let moved = crate::root_motion::apply(&mut imported.asset, &options.root_motion)?;
-    let line = write_output(
+    let (line, compacted) = write_output_report(
         imported.asset,
         imported.warnings,
         &options.output,
@@ -112,6 +116,15 @@ pub fn convert_imported(
         progress,
     )?;
     let mut report = Report::logged(line);
+    if options.json {
+        let json = serde_json::to_string_pretty(&compacted)
+            .map_err(|e| PipelineError::step("cannot write the report", e))?;
+        report.output = Some(json);
+    } else {
+        report
+            .log
+            .extend(compacted.iter().flat_map(CompactReport::lines));
+    }
     report.log.extend(moved.iter().flat_map(|m| m.lines()));
     Ok(report)
 }

@@ -94,6 +94,7 @@ pub(crate) fn prepare(
     )?;
     let options = GltfOptions {
         max_influences: limit,
+        ..GltfOptions::default()
     };
     let dqs = rigport_export::prepare_gltf(&twist, &out.join("twist_dqs.glb"), &options)?;
     warnings.extend(dqs.warnings().iter().cloned());

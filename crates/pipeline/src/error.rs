@@ -101,6 +101,24 @@ impl PipelineError {
         matches!(self, Self::Usage(_) | Self::Units(_))
     }
 
+    /// Whether a retarget failed on a partial joint map
+    /// (`rigport_ik::retarget::RetargetError::PartialMap`), which a caller may allow.
+    ///
+    /// ```
+    /// assert!(!rigport_pipeline::PipelineError::Invalid("no".into()).is_partial_map());
+    /// ```
+    pub fn is_partial_map(&self) -> bool {
+        use rigport_ik::retarget::RetargetError;
+        let mut cur: Option<&(dyn StdError + 'static)> = Some(self);
+        while let Some(e) = cur {
+            if let Some(RetargetError::PartialMap(_)) = e.downcast_ref::<RetargetError>() {
+                return true;
+            }
+            cur = e.source();
+        }
+        false
+    }
+
     /// A job's own error, shown as it is.
     pub(crate) fn failed(e: impl StdError + Send + Sync + 'static) -> Self {
         Self::Failed(Box::new(e))

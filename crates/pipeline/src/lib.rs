@@ -5,7 +5,8 @@
 //! Every command is `rigport_pipeline::COMMAND(input, options, &dyn Progress) ->
 //! Result<Report, PipelineError>`, one module each: [`convert()`], [`inspect()`],
 //! [`eval()`], [`animate()`], [`retime()`], [`sequence()`], [`ik()`], [`footlock()`],
-//! [`retarget()`], [`combine()`], [`bake()`], [`cloth()`], [`render()`], and [`demo()`] (no input).
+//! [`retarget()`], [`combine()`], [`bake()`], [`cloth()`], [`skin()`], [`render()`], [`verify()`], and [`demo()`]
+//! (no input).
 //! Each checks its output before any work, and gives [`progress::Progress::warnings`]
 //! everything lossy before writing, so a caller can refuse it ([`progress::Silent`] shows
 //! nothing and accepts all).
@@ -18,6 +19,8 @@
 //!   memory check, the influence fit (`truncate` or `refit`) and the writer chosen by the
 //!   output's extension;
 //! - [`memory`]: this process's memory budget;
+//! - [`numbers`]: the one check of each kind of number an option takes (frame rate,
+//!   distance, ...), the CLI's value parsers;
 //! - [`root_motion`]: the clips' travel kept, removed (in place) or moved onto a root
 //!   joint, for `convert`, `retarget` and `retime`;
 //! - [`units`]: the units of inputs that state none, and the warning for a skeleton too
@@ -47,6 +50,7 @@ mod asset_report;
 pub mod bake;
 pub mod cloth;
 pub mod combine;
+pub mod compact;
 pub mod convert;
 pub mod demo;
 mod dump;
@@ -58,6 +62,7 @@ pub mod inspect;
 mod keys;
 pub mod load;
 pub mod memory;
+pub mod numbers;
 mod outputs;
 pub mod progress;
 pub mod render;
@@ -66,7 +71,9 @@ pub mod retarget;
 pub mod retime;
 pub mod root_motion;
 pub mod sequence;
+pub mod skin;
 pub mod units;
+pub mod verify;
 mod weights;
 pub mod write;
 
@@ -85,6 +92,8 @@ pub use report::Report;
 pub use retarget::run as retarget;
 pub use retime::run as retime;
 pub use sequence::run as sequence;
+pub use skin::run as skin;
+pub use verify::run as verify;
 
 pub use error::{PipelineError, chain};
 pub use rigport_model::budget::{MemoryBudget, OverBudget};

@@ -51,13 +51,14 @@ impl Input {
     /// ```
     /// let input = rigport_pipeline::load::Input::new(vec!["walk.bvh".into()]);
     /// assert!(input.bone_mesh);
+    /// // The process's budget (`memory::install`), unlimited when none was installed.
     /// assert_eq!(input.budget, rigport_pipeline::MemoryBudget::UNLIMITED);
     /// ```
     pub fn new(paths: Vec<PathBuf>) -> Self {
         Self {
             files: Inputs::new(paths),
             bone_mesh: true,
-            budget: MemoryBudget::UNLIMITED,
+            budget: crate::memory::installed(),
             units: None,
             force_units: false,
         }
@@ -77,6 +78,12 @@ impl Input {
     /// As [`load`].
     pub(crate) fn load(&self, plan: &Source) -> Result<Imported, PipelineError> {
         let mut imported = load(plan, self.bone_mesh, &self.budget)?;
+        if self.files.auto_weights && matches!(plan, Source::Csci520(_)) {
+            // The weights are computed: their absence is no loss.
+            use rigport_import::csci520::NO_WEIGHTS;
+            (imported.warnings).retain(|w| !matches!(w, Warning::Incomplete { message, .. } if message.ends_with(NO_WEIGHTS)));
+            crate::weights::bind_unskinned(&mut imported, &plan.label())?;
+        }
         crate::units::apply(&mut imported, self.units, self.force_units, &plan.label())?;
         Ok(imported)
     }

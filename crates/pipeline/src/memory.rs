@@ -48,6 +48,33 @@ pub const DEFAULT: MemoryBudget = MemoryBudget {
     origin: "default",
 };
 
+static INSTALLED: std::sync::OnceLock<MemoryBudget> = std::sync::OnceLock::new();
+
+/// Sets this process's budget, once: a program's `main` calls it with the budget its
+/// flags give ([`process_budget`] or [`shared_budget`]); a second call keeps the first.
+/// [`crate::load::Input::new`] takes it.
+///
+/// ```
+/// use rigport_pipeline::memory::{install, installed, process_budget};
+/// install(process_budget(Some(1 << 30), "the limit given"));
+/// assert_eq!(installed().limit, 1 << 30);
+/// ```
+pub fn install(budget: MemoryBudget) {
+    let _ = INSTALLED.set(budget);
+}
+
+/// The budget [`install`]ed, or [`MemoryBudget::UNLIMITED`] when none was (a library
+/// caller that sets none).
+///
+/// ```
+/// // No program installed one in this doctest: unlimited.
+/// let budget = rigport_pipeline::memory::installed();
+/// assert_eq!(budget, rigport_pipeline::MemoryBudget::UNLIMITED);
+/// ```
+pub fn installed() -> MemoryBudget {
+    INSTALLED.get().copied().unwrap_or(MemoryBudget::UNLIMITED)
+}
+
 /// The machine's memory in bytes, as this process may use it.
 fn machine_memory() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;

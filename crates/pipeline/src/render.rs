@@ -113,6 +113,26 @@ pub fn picture_size(s: &str) -> Result<(u32, u32), String> {
     Ok((px(w)?, px(h)?))
 }
 
+/// A projection by name: `ortho` (parallel) or `perspective` (35 deg vertical field of
+/// view, [`rigport_render::Projection::PERSPECTIVE`]).
+///
+/// ```
+/// use rigport_render::Projection;
+///
+/// assert_eq!(rigport_pipeline::render::projection("ortho"), Ok(Projection::Orthographic));
+/// assert_eq!(rigport_pipeline::render::projection("perspective"), Ok(Projection::PERSPECTIVE));
+/// ```
+///
+/// # Errors
+/// Any other name.
+pub fn projection(s: &str) -> Result<rigport_render::Projection, String> {
+    match s {
+        "ortho" => Ok(rigport_render::Projection::Orthographic),
+        "perspective" => Ok(rigport_render::Projection::PERSPECTIVE),
+        _ => Err(format!("{s:?}: expected ortho or perspective")),
+    }
+}
+
 /// Skinning methods by name: `lbs`, `dqs`, or `both` ([`rigport_render::LBS_AND_DQS`]:
 /// LBS on the left, DQS on the right).
 ///

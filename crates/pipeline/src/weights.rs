@@ -1,14 +1,16 @@
-//! Automatic skin weights for a Pinocchio mesh and skeleton that come without an
-//! `attachment.out` (`--weights auto`): bone heat (`rigport_deform::weights`) on the mesh,
-//! one bone per Pinocchio joint after the root (from its parent's position to its own), the
-//! rig then built as the attachment would have built it.
+//! Automatic skin weights by bone heat (`rigport_deform::weights`):
+//! - a Pinocchio mesh and skeleton without an `attachment.out` ([`auto_rig`]): one bone
+//!   per Pinocchio joint after the root (from its parent's position to its own), the rig
+//!   then built as the attachment would have built it;
+//! - any other rig's meshes that have no skin ([`bind_unskinned`]: a CSCI 520 folder
+//!   without weights, a mesh bound to a BVH or ASF skeleton by `skin`).
 
 use std::path::Path;
 
-use rigport_deform::weights::{Bone, HeatOptions, Repairs, bone_heat};
+use rigport_deform::weights::{Bone, HeatOptions, Repairs, bind, bone_heat};
 use rigport_import::pinocchio::{PinocchioSkeleton, import_weighing};
 use rigport_import::{ImportError, Imported, Location, Problem};
-use rigport_model::{Mesh, Warning};
+use rigport_model::{Mesh, MeshIndex, Warning};
 
 use crate::PipelineError;
 
@@ -18,7 +20,77 @@ use crate::PipelineError;
 /// # Errors
 /// As the Pinocchio importer; a mesh without faces or a skeleton without bones.
 pub(crate) fn auto_rig(mesh: &Path, skeleton: &Path) -> Result<Imported, PipelineError> {
-    Ok(import_weighing(mesh, skeleton, |m, s| weigh(m, s, mesh))?)
+    Ok(auto_rig_rows(mesh, skeleton)?.0)
+}
+
+/// [`auto_rig`], and the weights as an `attachment.out` holds them: one row of bone
+/// weights per OBJ vertex.
+///
+/// # Errors
+/// As [`auto_rig`].
+pub(crate) fn auto_rig_rows(
+    mesh: &Path,
+    skeleton: &Path,
+) -> Result<(Imported, Vec<Vec<f32>>), PipelineError> {
+    let mut kept = Vec::new();
+    let imported = import_weighing(mesh, skeleton, |m, s| {
+        let (rows, warnings) = weigh(m, s, mesh)?;
+        kept.clone_from(&rows);
+        Ok((rows, warnings))
+    })?;
+    Ok((imported, kept))
+}
+
+/// Binds every mesh of `imported` that has no skin and follows no joint to its skeleton by
+/// bone heat ([`bind`]): a note per mesh with what was computed, and the repairs as W003.
+/// Returns how many meshes were bound.
+///
+/// # Errors
+/// A mesh without faces, a skeleton without bones (named with `source`).
+pub(crate) fn bind_unskinned(
+    imported: &mut Imported,
+    source: &str,
+) -> Result<usize, PipelineError> {
+    let Imported { asset, warnings } = imported;
+    let mut skins = Vec::new();
+    for (m, mesh) in asset.meshes.iter().enumerate() {
+        if mesh.attached_to.is_some() || asset.skins.iter().any(|s| s.mesh.get() == m) {
+            continue;
+        }
+        let bound = bind(
+            &asset.skeleton,
+            mesh,
+            MeshIndex(m as u32),
+            &HeatOptions::default(),
+        )
+        .map_err(|e| PipelineError::Invalid(format!("{source}: mesh {:?}: {e}", mesh.name)))?;
+        warnings.push(Warning::Note {
+            location: source.to_string(),
+            message: format!(
+                "mesh {:?}: skin weights computed by bone heat for {} vertices and {} bones \
+                 ({} vertices see no bone and take their neighbours' weights)",
+                mesh.name,
+                mesh.positions.len(),
+                bound.bones,
+                bound.repairs.unseen
+            ),
+        });
+        let repairs = Repairs {
+            unseen: 0,
+            ..bound.repairs
+        };
+        if repairs.any() {
+            warnings.push(Warning::Repaired {
+                location: format!("{source}: mesh {:?}", mesh.name),
+                message: repairs_text(&repairs),
+            });
+        }
+        skins.push(bound.binding);
+    }
+    let count = skins.len();
+    asset.skins.extend(skins);
+    asset.skins.sort_by_key(|s| s.mesh);
+    Ok(count)
 }
 
 /// One row of bone weights per OBJ vertex (column `k`: the bone ending at joint `k + 1`).

@@ -8,10 +8,12 @@ use std::path::{Path, PathBuf};
 use rigport_deform::refit::{self, asset::AssetRefit, asset::PoseSet};
 use rigport_export::{GltfOptions, PreparedGltf, PreparedUsd, UsdOptions};
 use rigport_model::{
-    Asset, InfluencesFit, MemoryBudget, OutputFormat, OverBudget, SkinningMethod, UpAxis, Warning,
+    Asset, Compression, InfluencesFit, MemoryBudget, OutputFormat, OverBudget, SkinningMethod,
+    UpAxis, Warning,
 };
 
 use crate::PipelineError;
+use crate::compact::{self, CompactReport};
 use crate::outputs::write_failure;
 use crate::progress::{Progress, step};
 
@@ -48,6 +50,9 @@ pub struct WriteOptions {
     /// A `.usda` writes unskinned morph-animated meshes as `points.timeSamples`
     /// ([`UsdOptions::morphs_as_points`]).
     pub morphs_as_points: bool,
+    /// glTF compression beyond the core ([`GltfOptions::compression`]); it reduces the
+    /// clips (as [`Output::reduce`]) so that the error is measured as stored. glTF only.
+    pub compression: Compression,
 }
 
 /// Where and how a command writes its asset.
@@ -70,8 +75,12 @@ pub struct Output {
     pub path: PathBuf,
     /// How the writer fits influences and labels the stage.
     pub options: WriteOptions,
-    /// Reduce every clip's keys within this world-space distance first.
+    /// Reduce every clip's keys within this model-space distance (rig units) first
+    /// ([`crate::compact`]); `Some` reduces even when `reduce` is `false`.
     pub reduce_tolerance: Option<f32>,
+    /// Reduce every clip's keys, within `reduce_tolerance` or by default 1 mm
+    /// ([`crate::compact::DEFAULT_TOLERANCE_M`]).
+    pub reduce: bool,
 }
 
 impl Output {
@@ -106,6 +115,20 @@ impl Output {
     pub fn format(&self) -> Result<OutputFormat, PipelineError> {
         crate::outputs::format_of(&self.path)
     }
+
+    /// Whether the clips are reduced before writing.
+    ///
+    /// ```
+    /// use rigport_pipeline::write::Output;
+    /// assert!(!Output::new("a.glb").reduces());
+    /// assert!(Output { reduce_tolerance: Some(0.01), ..Output::new("a.glb") }.reduces());
+    /// assert!(Output { reduce: true, ..Output::new("a.glb") }.reduces());
+    /// ```
+    pub fn reduces(&self) -> bool {
+        self.reduce
+            || self.reduce_tolerance.is_some()
+            || self.options.compression != Compression::None
+    }
 }
 
 /// Writes `asset` to `output` as the whole write step of a command: key reduction (when
@@ -132,17 +155,80 @@ impl Output {
 /// # Errors
 /// Over the budget; a refit or export that fails; refused warnings; an unwritable output.
 pub fn write_output(
+    asset: Asset,
+    warnings: Vec<Warning>,
+    output: &Output,
+    budget: &MemoryBudget,
+    progress: &dyn Progress,
+) -> Result<String, PipelineError> {
+    let (line, compacted) = write_output_report(asset, warnings, output, budget, progress)?;
+    for line in compacted.iter().flat_map(CompactReport::lines) {
+        progress.info(&line);
+    }
+    Ok(line)
+}
+
+/// [`write_output`], returning what compacting the clips did (when [`Output::reduces`])
+/// instead of giving its lines to `progress` (example: [`CompactReport`]).
+///
+/// ```
+/// use rigport_pipeline::write::{write_output_report, Output};
+/// use rigport_pipeline::{progress::Silent, MemoryBudget};
+///
+/// let dir = tempfile::tempdir()?;
+/// let imported = rigport_import::bvh::import("../../fixtures/bvh/end_sites.bvh".as_ref())?;
+/// let (line, report) = write_output_report(imported.asset, imported.warnings,
+///     &Output::new(dir.path().join("walk.usda")), &MemoryBudget::UNLIMITED, &Silent)?;
+/// assert!(line.starts_with("wrote ") && report.is_none());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// As [`write_output`].
+pub fn write_output_report(
     mut asset: Asset,
     mut warnings: Vec<Warning>,
     output: &Output,
     budget: &MemoryBudget,
     progress: &dyn Progress,
-) -> Result<String, PipelineError> {
-    if let Some(tolerance) = output.reduce_tolerance {
-        reduce_clips(&mut asset, tolerance, &mut warnings)?;
-    }
+) -> Result<(String, Option<CompactReport>), PipelineError> {
     let path = &output.path;
     let format = output.format()?;
+    let mut compacted = None;
+    if output.options.compression != Compression::None && !format.is_gltf() {
+        return Err(PipelineError::Invalid(format!(
+            "{}: compression is a glTF extension ({}); USD stores what the reduction keeps as time samples",
+            path.display(),
+            output.options.compression.extension().unwrap_or("none")
+        )));
+    }
+    if output.reduces() {
+        let tolerance = compact::tolerance_in_rig_units(&asset, output.reduce_tolerance);
+        // 16-bit rotations and meshopt filters are glTF encodings; USD writes floats.
+        let codec = format
+            .is_gltf()
+            .then(|| compact::codec(output.options.compression));
+        let (clips, reports, rotations_i16) = step(progress, "reducing keys", || {
+            compact::compact_clips(&asset, tolerance, codec)
+        })?;
+        let original = std::mem::replace(&mut asset.clips, clips);
+        // glTF drops a channel at its node's value; USD samples every joint anyway.
+        let skeleton = format
+            .is_gltf()
+            .then(|| compact::constants_into_rest(&mut asset))
+            .flatten();
+        compacted = Some((
+            (original, skeleton),
+            CompactReport {
+                tolerance,
+                meters_per_unit: asset.meters_per_unit.unwrap_or(1.0),
+                rotations_i16,
+                compression: format!("{:?}", output.options.compression).to_lowercase(),
+                clips: reports,
+                ..CompactReport::default()
+            },
+        ));
+    }
     let opts = &output.options;
     check_memory(&asset, path, format, budget)?;
     if format.is_gltf() && opts.max_influences.is_some_and(|k| k > 4) {
@@ -170,11 +256,46 @@ pub fn write_output(
     } else {
         "building USD"
     };
-    let prepared = step(progress, building, || prepare(asset, path, format, opts))?;
+    let i16 = compacted.as_ref().is_some_and(|(_, r)| r.rotations_i16);
+    let mut prepared = step(progress, building, || {
+        prepare(asset, path, format, opts, i16)
+    })?;
+    let mut report = None;
+    let mut unreduced_asset = None;
+    if let Some(((original, skeleton), mut compact_report)) = compacted {
+        // A reduced clip never makes the file bigger: build the plain one to compare.
+        let mut unreduced = asset.clone();
+        unreduced.clips = original;
+        if let Some(skeleton) = skeleton {
+            unreduced.skeleton = skeleton;
+        }
+        // The file the command writes without reduction or compression.
+        let plain_options = WriteOptions {
+            compression: Compression::None,
+            ..*opts
+        };
+        let plain = prepare(&unreduced, path, format, &plain_options, false)?;
+        compact_report.bytes_after = prepared.byte_len();
+        compact_report.bytes_before = plain.byte_len();
+        compact_report.reduced_written = compact_report.bytes_after <= compact_report.bytes_before;
+        if !compact_report.reduced_written {
+            warnings.push(Warning::Note {
+                location: path.display().to_string(),
+                message: format!(
+                    "key reduction would write {} bytes instead of {}; the unreduced clips are written",
+                    compact_report.bytes_after, compact_report.bytes_before
+                ),
+            });
+            prepared = plain;
+            unreduced_asset = Some(unreduced);
+        }
+        report = Some(compact_report);
+    }
+    let asset = unreduced_asset.as_ref().unwrap_or(asset);
     warnings.extend(prepared.warnings().iter().cloned());
     progress.warnings(&warnings)?;
     prepared.write()?;
-    Ok(written_line(path, asset))
+    Ok((written_line(path, asset), report))
 }
 
 /// "wrote PATH: J joints, M meshes (V vertices), S skins, C clips (each clip's name,
@@ -203,31 +324,6 @@ fn written_line(path: &Path, asset: &Asset) -> String {
             format!(" ({})", frames.join("; "))
         }
     )
-}
-
-/// Reduces the keys of every clip while every joint's world position stays within
-/// `tolerance` (`rigport_anim::reduce`), adding a note per clip.
-///
-/// # Errors
-/// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
-pub(crate) fn reduce_clips(
-    asset: &mut Asset,
-    tolerance: f32,
-    warnings: &mut Vec<Warning>,
-) -> Result<(), PipelineError> {
-    for clip in &mut asset.clips {
-        let (reduced, stats) = rigport_anim::reduce::reduce(clip, &asset.skeleton, tolerance)
-            .map_err(|e| PipelineError::step(format!("cannot reduce clip {:?}", clip.name), e))?;
-        warnings.push(Warning::Note {
-            location: format!("clip {:?}", clip.name),
-            message: format!(
-                "key reduction kept {} of {} keys (largest joint position error {:.3e}, tolerance {tolerance:.3e})",
-                stats.keys_after, stats.keys_before, stats.max_error
-            ),
-        });
-        *clip = reduced;
-    }
-    Ok(())
 }
 
 /// Checks that writing `asset` to `path` as `format` fits `budget`.
@@ -355,6 +451,14 @@ enum PreparedFile {
 }
 
 impl Prepared {
+    /// The bytes [`Prepared::write`] writes.
+    pub(crate) fn byte_len(&self) -> u64 {
+        match &self.file {
+            PreparedFile::Gltf(p) => p.byte_len(),
+            PreparedFile::Usd(p) => p.byte_len(),
+        }
+    }
+
     /// The writer's warnings (lossy or repairing steps), before anything is written.
     pub(crate) fn warnings(&self) -> &[Warning] {
         match &self.file {
@@ -386,6 +490,7 @@ pub(crate) fn prepare(
     path: &Path,
     format: OutputFormat,
     opts: &WriteOptions,
+    rotations_i16: bool,
 ) -> Result<Prepared, PipelineError> {
     // A long USD text is staged beside the output as it is built: failing to write it is
     // an output error, like a failing write.
@@ -397,6 +502,8 @@ pub(crate) fn prepare(
         OutputFormat::Glb | OutputFormat::Gltf => {
             let opts = GltfOptions {
                 max_influences: opts.max_influences.unwrap_or(4),
+                compact: rotations_i16,
+                compression: opts.compression,
             };
             PreparedFile::Gltf(rigport_export::prepare_gltf(asset, path, &opts).map_err(failed)?)
         }

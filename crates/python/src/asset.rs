@@ -255,11 +255,13 @@ impl Asset {
     }
 
     /// Writes the asset to `path` (.glb, .gltf, .usda, .usdc or .usdz, by extension) with
-    /// `rigport convert`'s options; the bytes are the CLI's. Returns the report.
+    /// `rigport convert`'s options; the bytes are the CLI's. `reduce` (or a
+    /// `reduce_tolerance`) reduces the clips' keys, `compress="meshopt"` compresses a glTF;
+    /// with `json`, `Report.output` is the reduction's report as JSON. Returns the report.
     #[pyo3(signature = (
         path, *, max_influences=None, influences_fit=None, reduce_tolerance=None,
-        skinning=None, up_axis=None, meters_per_unit=None, root_motion="keep",
-        root_yaw=false, root_window=None
+        reduce=false, compress=None, skinning=None, up_axis=None, meters_per_unit=None,
+        root_motion="keep", root_yaw=false, root_window=None, json=false
     ))]
     #[allow(clippy::too_many_arguments)] // one keyword argument per CLI option
     fn write(
@@ -269,12 +271,15 @@ impl Asset {
         max_influences: Option<u8>,
         influences_fit: Option<String>,
         reduce_tolerance: Option<f32>,
+        reduce: bool,
+        compress: Option<String>,
         skinning: Option<String>,
         up_axis: Option<String>,
         meters_per_unit: Option<f64>,
         root_motion: &str,
         root_yaw: bool,
         root_window: Option<f32>,
+        json: bool,
     ) -> PyResult<Report> {
         let output = options::output(
             path,
@@ -282,6 +287,8 @@ impl Asset {
                 max_influences,
                 influences_fit,
                 reduce_tolerance,
+                reduce,
+                compress,
                 skinning,
                 up_axis,
                 meters_per_unit,
@@ -290,6 +297,7 @@ impl Asset {
         let options = ConvertOptions {
             output,
             root_motion: options::root_motion(root_motion, root_yaw, root_window)?,
+            json,
         };
         let progress = PyProgress::after(&self.imported.warnings);
         let imported = self.imported.clone();

@@ -40,6 +40,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(footlock, m)?)?;
     m.add_function(wrap_pyfunction!(cloth, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(skin, m)?)?;
+    m.add_function(wrap_pyfunction!(verify, m)?)?;
     Ok(())
 }
 
@@ -63,7 +65,8 @@ fn input_of(input: &Bound<'_, PyAny>) -> PyResult<Input> {
 }
 
 /// The writing options and root motion among a command's `**options`: the keys of
-/// `Asset.write` (max_influences, influences_fit, reduce_tolerance, skinning, up_axis,
+/// `Asset.write` (max_influences, influences_fit, reduce_tolerance, reduce, compress,
+/// skinning, up_axis,
 /// meters_per_unit; root_motion, root_yaw, root_window with `root`).
 ///
 /// # Errors
@@ -81,6 +84,8 @@ fn write_options(
             "max_influences" => o.max_influences = value.extract()?,
             "influences_fit" => o.influences_fit = value.extract()?,
             "reduce_tolerance" => o.reduce_tolerance = value.extract()?,
+            "reduce" => o.reduce = value.extract()?,
+            "compress" => o.compress = value.extract()?,
             "skinning" => o.skinning = value.extract()?,
             "up_axis" => o.up_axis = value.extract()?,
             "meters_per_unit" => o.meters_per_unit = value.extract()?,
@@ -113,11 +118,12 @@ fn parsed<T>(name: &str, text: &str, result: Result<T, String>) -> PyResult<T> {
 /// `rigport convert`: reads `input` and writes it to `output` (by extension). Keyword
 /// options: those of `Asset.write`.
 #[pyfunction]
-#[pyo3(signature = (input, output, **options))]
+#[pyo3(signature = (input, output, *, json=false, **options))]
 fn convert(
     py: Python<'_>,
     input: &Bound<'_, PyAny>,
     output: PathBuf,
+    json: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Report> {
     let input = input_of(input)?;
@@ -125,6 +131,7 @@ fn convert(
     let options = rigport_pipeline::convert::ConvertOptions {
         output,
         root_motion,
+        json,
     };
     run(py, |p| rigport_pipeline::convert(&input, &options, p))
 }
@@ -602,4 +609,80 @@ fn render(
         output,
     };
     run(py, |p| rigport_pipeline::render(&input, &request, p))
+}
+
+/// `rigport skin`: a mesh and a skeleton (`input`) skinned with automatic weights (bone
+/// heat), written to `output` (`.out`: a Pinocchio `attachment.out`); the skeleton placed
+/// in the mesh's space by `skeleton_offset` (x, y, z) after `skeleton_scale`. Keyword
+/// options: those of `Asset.write` but root motion.
+#[pyfunction]
+#[pyo3(signature = (input, output, *, skeleton_offset=None, skeleton_scale=None, **options))]
+fn skin(
+    py: Python<'_>,
+    input: &Bound<'_, PyAny>,
+    output: PathBuf,
+    skeleton_offset: Option<[f32; 3]>,
+    skeleton_scale: Option<f32>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Report> {
+    let input = input_of(input)?;
+    let (output, _) = write_options(output, options, false)?;
+    let placement = rigport_pipeline::skin::Placement {
+        offset: skeleton_offset
+            .map(rigport_model::glam::Vec3::from)
+            .unwrap_or_default(),
+        scale: match skeleton_scale {
+            Some(s) => options::positive("skeleton_scale", s)?,
+            None => 1.0,
+        },
+    };
+    let options = rigport_pipeline::skin::SkinOptions { output, placement };
+    run(py, |p| rigport_pipeline::skin(&input, &options, p))
+}
+
+/// `rigport verify`: whether `candidate` moves as `reference` does (joints and skinned
+/// points over `clip`, or every clip with `all_clips`, sampled at `fps` or at the keys
+/// with `at_keys`), within `tol` of the reference's size. `Report.passed` says; a picture
+/// of the worst frame with `picture` (.png).
+#[pyfunction]
+#[pyo3(signature = (
+    reference, candidate, *, motion=Vec::new(), clip=None, all_clips=false, fps=None,
+    at_keys=false, tol=None, json=false, picture=None
+))]
+#[allow(clippy::too_many_arguments)] // one keyword argument per CLI option
+fn verify(
+    py: Python<'_>,
+    reference: PathBuf,
+    candidate: PathBuf,
+    motion: Vec<PathBuf>,
+    clip: Option<String>,
+    all_clips: bool,
+    fps: Option<f32>,
+    at_keys: bool,
+    tol: Option<f64>,
+    json: bool,
+    picture: Option<PathBuf>,
+) -> PyResult<Report> {
+    use rigport_pipeline::verify::{Clips, DEFAULT_TOLERANCE, Times, VerifyOptions};
+    if clip.is_some() && all_clips {
+        return Err(usage("give clip or all_clips, not both"));
+    }
+    if fps.is_some() && at_keys {
+        return Err(usage("give fps or at_keys, not both"));
+    }
+    let fps = fps.map(|f| options::positive("fps", f)).transpose()?;
+    let options = VerifyOptions {
+        clips: Clips::from_flags(clip.as_deref(), all_clips),
+        times: Times::from_flags(fps, at_keys),
+        tolerance: tol.unwrap_or(DEFAULT_TOLERANCE),
+        json,
+        picture,
+        ..VerifyOptions::new(Input::new(vec![candidate]))
+    };
+    let mut reference = Input::new(vec![reference]);
+    reference.files.motions = motion;
+    let progress = PyProgress::default();
+    let result = py.detach(|| rigport_pipeline::verify(&reference, &options, &progress));
+    let verdict = result.map_err(|e| progress.error(py, &e))?;
+    Ok(Report::new(verdict.report, &progress).with_verdict(verdict.passed))
 }

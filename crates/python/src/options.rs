@@ -8,7 +8,7 @@ use std::str::FromStr as _;
 
 use pyo3::prelude::*;
 use rigport_anim::root_motion::{RootMotion, RootMotionOptions};
-use rigport_model::{InfluencesFit, MemoryBudget, SkinningMethod, UpAxis};
+use rigport_model::{Compression, InfluencesFit, MemoryBudget, SkinningMethod, UpAxis};
 use rigport_pipeline::load::{Input, Inputs};
 use rigport_pipeline::units::InputUnits;
 use rigport_pipeline::write::{Output, WriteOptions};
@@ -107,6 +107,10 @@ pub struct OutputOptions {
     pub influences_fit: Option<String>,
     /// Remove keys within this distance.
     pub reduce_tolerance: Option<f32>,
+    /// Reduce keys (within `reduce_tolerance`, or the default 1 mm).
+    pub reduce: bool,
+    /// glTF compression: `"none"` or `"meshopt"`.
+    pub compress: Option<String>,
     /// The skinning method a USD declares.
     pub skinning: Option<String>,
     /// The up axis a USD declares.
@@ -150,8 +154,18 @@ pub fn output(path: PathBuf, options: &OutputOptions) -> PyResult<Output> {
             up_axis: up_axis(options.up_axis.as_deref())?,
             meters_per_unit: options.meters_per_unit,
             morphs_as_points: false,
+            compression: match options.compress.as_deref() {
+                None | Some("none") => Compression::None,
+                Some("meshopt") => Compression::Meshopt,
+                Some(other) => {
+                    return Err(usage(format!(
+                        "compress={other:?}: expected \"none\" or \"meshopt\""
+                    )));
+                }
+            },
         },
         reduce_tolerance: options.reduce_tolerance,
+        reduce: options.reduce || options.reduce_tolerance.is_some(),
     })
 }
 

@@ -26,6 +26,9 @@ pub struct Report {
     /// The notes (`note[N001]: ...`) met on the way.
     #[pyo3(get)]
     notes: Vec<String>,
+    /// `verify`'s verdict: whether the candidate matched; None for other commands.
+    #[pyo3(get)]
+    passed: Option<bool>,
 }
 
 impl Report {
@@ -38,6 +41,15 @@ impl Report {
             notices: report.notices,
             warnings: report.warnings.iter().map(|w| w.labelled()).collect(),
             notes: progress.notes.lock().map(|n| n.clone()).unwrap_or_default(),
+            passed: None,
+        }
+    }
+
+    /// This report with `verify`'s verdict.
+    pub fn with_verdict(self, passed: bool) -> Self {
+        Self {
+            passed: Some(passed),
+            ..self
         }
     }
 }

@@ -118,6 +118,10 @@ def test_evaluate_at_given_times(tmp_path):
         ("usd-usdz", lambda: [corpus(USD)], "arm.usdz", {}, []),
         ("bvh-in-place", lambda: [corpus(BVH)], "walk.gltf", {"root_motion": "in-place"},
          ["--root-motion", "in-place"]),
+        ("gltf-meshopt", lambda: [corpus(GLTF)], "man.glb", {"reduce": True, "compress": "meshopt"},
+         ["--reduce-tolerance", "--compress", "meshopt"]),
+        ("bvh-reduced", lambda: [corpus(BVH)], "walk.glb", {"reduce_tolerance": 0.05},
+         ["--reduce-tolerance", "0.05"]),
     ],
 )
 def test_write_equals_convert(tmp_path, cli, name, files, out, kwargs, flags):
@@ -293,3 +297,14 @@ def test_command_functions_write_the_cli_bytes(tmp_path, cli, command, source, k
     report = getattr(rigport, command)(asset, tmp_path / f"py-{out}", **kwargs)
     assert isinstance(report, rigport.Report)
     assert (tmp_path / f"py-{out}").read_bytes() == (tmp_path / f"cli-{out}").read_bytes()
+
+
+def test_verify_passes_on_a_written_copy(tmp_path):
+    gltf = corpus(GLTF)
+    copy = tmp_path / "copy.usda"
+    rigport.open(gltf).write(copy)
+    verdict = rigport.verify(gltf, copy, at_keys=True)
+    assert verdict.passed is True, verdict.summary
+    moved = tmp_path / "moved.glb"
+    rigport.retime(gltf, moved, speed=2.0)
+    assert rigport.verify(gltf, moved, at_keys=True).passed is False

@@ -17,6 +17,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod deviation;
 mod encode;
 pub mod raster;
 mod surface;

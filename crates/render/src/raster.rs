@@ -223,8 +223,8 @@ impl Framebuffer {
         self.text(&number.to_string(), x, y, scale, color);
     }
 
-    /// Writes `text` with the built-in 3x5 font (digits and the letters of `LBS`/`DQS`;
-    /// other characters leave a gap), each font pixel `scale` x `scale` screen pixels,
+    /// Writes `text` with the built-in 3x5 font (digits, the letters of `LBS`/`DQS`, and
+    /// `.`, `-`, `E`, `M` for a scale's numbers; other characters leave a gap), each font pixel `scale` x `scale` screen pixels,
     /// top-left corner at `(x, y)`, one font pixel between characters.
     pub fn text(&mut self, text: &str, x: i64, y: i64, scale: u32, color: Rgba) {
         let s = i64::from(scale.max(1));
@@ -257,6 +257,11 @@ fn glyph(ch: u8) -> Option<&'static [u8; 5]> {
         b'S' => Some(&[0b111, 0b100, 0b111, 0b001, 0b111]),
         b'D' => Some(&[0b110, 0b101, 0b101, 0b101, 0b110]),
         b'Q' => Some(&[0b010, 0b101, 0b101, 0b110, 0b011]),
+        // A colour scale's numbers: "1.5E-3", "MM".
+        b'.' => Some(&[0b000, 0b000, 0b000, 0b000, 0b010]),
+        b'-' => Some(&[0b000, 0b000, 0b111, 0b000, 0b000]),
+        b'E' => Some(&[0b111, 0b100, 0b110, 0b100, 0b111]),
+        b'M' => Some(&[0b101, 0b111, 0b111, 0b101, 0b101]),
         _ => None,
     }
 }

@@ -66,6 +66,23 @@ pub fn corpus(rel: &str) -> Option<PathBuf> {
     )
 }
 
+/// Python with Blender's `bpy` module (Blender 4.5): `RIGPORT_BLENDER_PYTHON`, else
+/// `tools/.venv-blender/bin/python` (`bash tools/setup.sh --blender`), or `None` (skip, see
+/// [`require`]) when absent.
+///
+/// # Panics
+/// It is absent and [`in_ci`].
+pub fn blender_python() -> Option<PathBuf> {
+    let p = std::env::var_os("RIGPORT_BLENDER_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo().join("tools/.venv-blender/bin/python"));
+    require(
+        "Blender's Python module bpy (tools/.venv-blender: bash tools/setup.sh --blender; \
+         or RIGPORT_BLENDER_PYTHON)",
+        p.exists().then_some(p),
+    )
+}
+
 /// The Pinocchio rigs of the corpus: (label, mesh, skeleton, attachment).
 pub const PINOCCHIO_RIGS: [(&str, &str, &str, &str); 4] = [
     (

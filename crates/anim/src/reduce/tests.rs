@@ -1,5 +1,6 @@
 use super::*;
-use rigport_model::{Joint, MeshIndex};
+use glam::{Mat4, Quat};
+use rigport_model::{Interpolation, Joint, MeshIndex, TrackTarget};
 
 /// xorshift64*: deterministic test data without a dependency.
 struct Rng(u64);
@@ -586,4 +587,153 @@ fn mocap_sized_clip_is_fast() {
     if !cfg!(debug_assertions) {
         assert!(elapsed.as_secs_f32() < 0.5, "{elapsed:?}");
     }
+}
+
+/// A root spinning three full turns about Y in 12° steps, then one step of 200° between two
+/// keys (which a viewer's shortest-path slerp plays as -160°), then still: the reduced clip
+/// (key removal, uniform rate, 16-bit rotations, virtual points) turns the same way at
+/// every time, between keys too, and by the same total angle (glTF-Transform #501: keys
+/// more than 180° apart collapse a spin or turn it backwards).
+#[test]
+fn spins_and_steps_over_180_degrees_keep_their_direction() {
+    let skeleton = Skeleton::new(vec![
+        Joint {
+            name: "root".into(),
+            parent: None,
+            rest_local: Transform::IDENTITY,
+        },
+        Joint {
+            name: "arm".into(),
+            parent: Some(JointIndex(0)),
+            rest_local: Transform {
+                translation: Vec3::new(0.5, 0.0, 0.0),
+                ..Transform::IDENTITY
+            },
+        },
+    ])
+    .expect("valid");
+    let step = 12f32.to_radians();
+    let mut angles: Vec<f32> = (0..=90).map(|k| k as f32 * step).collect(); // 3 turns
+    let spun = *angles.last().expect("keys");
+    angles.push(spun + 200f32.to_radians());
+    angles.extend([angles[91]; 10]);
+    let times: Vec<f32> = (0..angles.len()).map(|k| k as f32 / 30.0).collect();
+    let clip = Clip {
+        name: "spin".into(),
+        tracks: vec![Track {
+            target: TrackTarget::Rotation(JointIndex(0)),
+            interpolation: Interpolation::Linear,
+            times: times.clone(),
+            values: quats(angles.iter().map(|&a| Quat::from_rotation_y(a))),
+        }],
+    };
+    for options in [
+        ReduceOptions {
+            tolerance: 1e-3,
+            point_distance: vec![0.03; 2],
+            codec: Some(Codec::I16),
+            uniform_rate: true,
+        },
+        ReduceOptions {
+            tolerance: 0.05,
+            ..ReduceOptions::default()
+        },
+    ] {
+        let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+        assert!(stats.max_error <= options.tolerance, "{stats:?}");
+        assert!(stats.keys_after < stats.keys_before, "{stats:?}");
+        follows(&clip, &reduced, &skeleton, &times).expect("same direction");
+    }
+    // The check catches the failure: every 16th key (192° apart) turns backwards.
+    let every_16th: Vec<usize> = (0..times.len())
+        .step_by(16)
+        .chain([times.len() - 1])
+        .collect();
+    let mut backwards = clip.clone();
+    backwards.tracks[0] = pick_keys(&clip.tracks[0], &every_16th);
+    assert!(follows(&clip, &backwards, &skeleton, &times).is_err());
+}
+
+/// Whether `reduced` turns as `clip` does at ten samples per source interval: the arm stays
+/// where the source puts it, the heading turns by the same signed amount in every sub-step,
+/// and by the same total (three turns one way, then -160°).
+fn follows(clip: &Clip, reduced: &Clip, skeleton: &Skeleton, times: &[f32]) -> Result<(), String> {
+    let pi = std::f32::consts::PI;
+    let wrap = |d: f32| (d + pi).rem_euclid(2.0 * pi) - pi;
+    let (mut total_a, mut total_b) = (0.0f32, 0.0f32);
+    let (mut last_a, mut last_b) = (0.0f32, 0.0f32);
+    for k in 0..(times.len() - 1) * 10 + 1 {
+        let t = k as f32 / 300.0;
+        let a = naive_positions(clip, skeleton, t)[1];
+        let b = naive_positions(reduced, skeleton, t)[1];
+        if a.distance(b) >= 0.02 {
+            return Err(format!("t {t}: {a} vs {b}"));
+        }
+        let (ha, hb) = (a.z.atan2(a.x), b.z.atan2(b.x));
+        if k > 0 {
+            let (da, db) = (wrap(ha - last_a), wrap(hb - last_b));
+            if (da - db).abs() >= 0.05 {
+                return Err(format!("t {t}: turned {da} in the source, {db} reduced"));
+            }
+            total_a += da;
+            total_b += db;
+        }
+        (last_a, last_b) = (ha, hb);
+    }
+    let expected = -(6.0 * pi - 160f32.to_radians());
+    if (total_a - expected).abs() >= 1e-2 || (total_b - total_a).abs() >= 1e-2 {
+        return Err(format!(
+            "turned {total_b}, source {total_a}, expected {expected}"
+        ));
+    }
+    Ok(())
+}
+
+/// Virtual points, 16-bit rotations and the uniform rate on random motion: the bound holds
+/// as `point_error` measures it (the same numbers), kept keys are original keys, and at
+/// 3 cm points the reduction still removes keys.
+#[test]
+fn bound_holds_with_points_rotations_i16_and_uniform_rates() {
+    let mut rng = Rng(0x5eed_1234_abcd);
+    let skeleton = random_skeleton(&mut rng, 12);
+    let clip = random_clip(&mut rng, &skeleton, 240);
+    let points = vec![0.03; skeleton.len()];
+    for tolerance in [1e-3, 1e-2] {
+        let options = ReduceOptions {
+            tolerance,
+            point_distance: points.clone(),
+            codec: Some(Codec::I16),
+            uniform_rate: true,
+        };
+        let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+        assert!(stats.coded);
+        assert!(stats.max_error <= tolerance, "{stats:?}");
+        assert!(stats.keys_after < stats.keys_before, "{stats:?}");
+        assert_subset(&clip, &reduced);
+        let measured = metric::point_error(&clip, &reduced, &skeleton, &points, Some(&Codec::I16))
+            .expect("measures");
+        assert_eq!(measured.max, stats.max_error);
+        assert!(measured.mean <= measured.max);
+        // Joints alone, without rounding, by the naive reference: within the bound too
+        // (rounding moves a joint by well under the bound here).
+        assert!(measured_error(&clip, &reduced, &skeleton) <= tolerance * 1.05);
+    }
+}
+
+/// Rounding to 16 bits alone over the bound: rotations are measured (and must be written)
+/// as floats.
+#[test]
+fn rounding_that_exceeds_the_bound_falls_back_to_floats() {
+    let mut rng = Rng(0xfeed);
+    let skeleton = random_skeleton(&mut rng, 6);
+    let clip = random_clip(&mut rng, &skeleton, 60);
+    let options = ReduceOptions {
+        tolerance: 1e-7,
+        point_distance: vec![0.03; skeleton.len()],
+        codec: Some(Codec::I16),
+        uniform_rate: true,
+    };
+    let (_, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+    assert!(!stats.coded);
+    assert!(stats.max_error <= 1e-7, "{stats:?}");
 }

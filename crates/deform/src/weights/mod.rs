@@ -21,6 +21,7 @@
 //!   vertex in no face, is weighted by plain distance: its sources are the nearest bones
 //!   whether seen or not.
 
+mod bind;
 mod laplacian;
 #[cfg(test)]
 mod tests;
@@ -33,6 +34,8 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use visibility::Sight;
+
+pub use bind::{bind, Bound};
 
 /// A bone: the segment from its head (the joint it turns about) to its tail.
 #[derive(Clone, Copy, Debug, PartialEq)]

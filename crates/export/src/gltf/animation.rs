@@ -14,6 +14,7 @@ use json::accessor::Type;
 use json::animation::{Interpolation as GltfInterpolation, Property};
 use json::validation::Checked;
 use json::Index;
+use rigport_model::quantize::rotation_to_i16;
 use rigport_model::{Asset, Clip, Interpolation, Track, TrackTarget, Transform, Warning};
 
 use super::buffer::{Bounds, Builder};
@@ -29,6 +30,7 @@ pub(crate) fn write_animations(
     b: &mut Builder,
     asset: &Asset,
     mesh_nodes: &[usize],
+    rotations_i16: bool,
     warnings: &mut Vec<Warning>,
 ) {
     let mut inputs: BTreeMap<Vec<u32>, Index<json::Accessor>> = BTreeMap::new();
@@ -122,7 +124,7 @@ pub(crate) fn write_animations(
                 Some(&acc) => acc,
                 None => {
                     // Sampler inputs require min/max (ANIMATION_SAMPLER_INPUT_ACCESSOR_WITHOUT_BOUNDS).
-                    let acc = b.floats(&times, Type::Scalar, None, Bounds::MinMax);
+                    let acc = b.animation_floats(&times, Type::Scalar, Bounds::MinMax);
                     inputs.insert(key, acc);
                     acc
                 }
@@ -133,7 +135,18 @@ pub(crate) fn write_animations(
                 Property::MorphTargetWeights => Type::Scalar,
             };
             // Animation data views carry no target (they are not vertex or index data).
-            let output = b.floats(&values, type_, None, Bounds::None);
+            let output = if rotations_i16
+                && path == Property::Rotation
+                && interpolation != Interpolation::CubicSpline
+            {
+                let raw = match fate {
+                    Constancy::Constant => track.key_value(0).repeat(times.len()),
+                    _ => track.values.clone(),
+                };
+                b.animation_rotations(&raw, i16_rotations)
+            } else {
+                b.animation_floats(&values, type_, Bounds::None)
+            };
             let sampler = Index::push(
                 &mut samplers,
                 json::animation::Sampler {
@@ -352,6 +365,30 @@ fn dropped(location: &str, why: String) -> Warning {
         location: location.to_owned(),
         message: format!("track dropped: {why}"),
     }
+}
+
+/// LINEAR or STEP rotation keys (flat xyzw) as 16-bit normalized components: each key
+/// rounded from its own value ([`rotation_to_i16`], which the key reducer measures), then
+/// made sign-continuous as [`sampler_values`] does (rounding is odd, so flipping after it
+/// equals flipping before).
+fn i16_rotations(values: &[f32]) -> Vec<i16> {
+    let mut out = Vec::with_capacity(values.len());
+    let mut previous: Option<[i16; 4]> = None;
+    for key in values.chunks_exact(4) {
+        let mut q = rotation_to_i16([key[0], key[1], key[2], key[3]]);
+        let dot = |p: [i16; 4], q: [i16; 4]| -> i64 {
+            p.iter()
+                .zip(&q)
+                .map(|(&a, &b)| i64::from(a) * i64::from(b))
+                .sum()
+        };
+        if previous.is_some_and(|p| dot(p, q) < 0) {
+            q = q.map(|c| -c);
+        }
+        out.extend_from_slice(&q);
+        previous = Some(q);
+    }
+    out
 }
 
 /// The sampler output values of a track (flat, same layout as [`Track::values`]).

@@ -6,6 +6,8 @@ use json::buffer::Target;
 use json::validation::{Checked, USize64};
 use json::Index;
 
+use super::meshopt::{self, Compressed, Filter};
+
 /// Buffer views start on multiples of this (glTF 2.0 §3.6.2.4: an accessor's offset must be
 /// a multiple of its component size, at most 4; vertex attributes need 4-byte alignment).
 const VIEW_ALIGN: usize = 4;
@@ -16,6 +18,12 @@ pub(crate) struct Builder {
     pub root: json::Root,
     /// The buffer's bytes, little-endian.
     pub bin: Vec<u8>,
+    /// With `EXT_meshopt_compression`: the compressed views so far (animation data goes
+    /// through [`Builder::animation_floats`] and [`Builder::animation_rotations`]).
+    pub compressed: Option<Compressed>,
+    /// Compressed three-component animation outputs go through the `EXPONENTIAL` filter
+    /// (set when the key reducer measured it; else they are stored exactly).
+    pub filter_vectors: bool,
 }
 
 /// Per-component bounds of float data, for `accessor.min` / `accessor.max`.
@@ -35,6 +43,8 @@ impl Builder {
                 ..Default::default()
             },
             bin: Vec::new(),
+            compressed: None,
+            filter_vectors: false,
         }
     }
 
@@ -110,12 +120,8 @@ impl Builder {
             Bounds::None => None,
             Bounds::MinMax => Some(min_max(data, width)),
         };
-        let view = self.view(target, |bin| {
-            bin.reserve(data.len() * 4);
-            for v in data {
-                bin.extend_from_slice(&v.to_le_bytes());
-            }
-        });
+        let raw: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.vertex_view(target, &raw, 4 * width);
         self.accessor(view, data.len() / width, ComponentType::F32, type_, bounds)
     }
 
@@ -201,6 +207,183 @@ impl Builder {
         })
     }
 
+    /// A `SHORT` accessor with `normalized: true` (`data.len() / size` elements of `type_`),
+    /// read as `max(c / 32767, -1)` (glTF 2.0 §3.11): animation outputs, no bounds needed.
+    pub(crate) fn normalized_i16(&mut self, data: &[i16], type_: Type) -> Index<json::Accessor> {
+        let view = self.view(None, |bin| {
+            for v in data {
+                bin.extend_from_slice(&v.to_le_bytes());
+            }
+        });
+        let index = self.accessor(
+            view,
+            data.len() / type_.multiplicity(),
+            ComponentType::I16,
+            type_,
+            None,
+        );
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
+    }
+
+    /// A compressed view of `raw` (filtered bytes, elements of `stride` bytes) in the
+    /// fallback buffer (buffer 1), its encoded bytes appended to `bin`; `None` when the
+    /// export is not compressed.
+    fn compressed_view(
+        &mut self,
+        raw: &[u8],
+        stride: usize,
+        filter: Filter,
+        target: Option<Target>,
+    ) -> Option<Index<json::buffer::View>> {
+        let compressed = self.compressed.as_mut()?;
+        let index = self.root.buffer_views.len();
+        let (offset, len) = compressed.push(&mut self.bin, index, raw, stride, filter);
+        Some(self.root.push(json::buffer::View {
+            buffer: Index::new(1),
+            byte_length: USize64::from(len),
+            byte_offset: (offset > 0).then(|| USize64::from(offset)),
+            byte_stride: None,
+            name: None,
+            target: target.map(Checked::Valid),
+            extensions: None,
+            extras: None,
+        }))
+    }
+
+    /// A view of vertex data `raw` (elements of `stride` bytes): compressed (no filter,
+    /// exact) when the export is and `target` is `ARRAY_BUFFER` with a stride the writer
+    /// compresses ([`meshopt::STRIDES`]), else as it is.
+    fn vertex_view(
+        &mut self,
+        target: Option<Target>,
+        raw: &[u8],
+        stride: usize,
+    ) -> Index<json::buffer::View> {
+        if target == Some(Target::ArrayBuffer) && meshopt::STRIDES.contains(&stride) {
+            if let Some(view) = self.compressed_view(raw, stride, Filter::None, target) {
+                return view;
+            }
+        }
+        self.view(target, |bin| bin.extend_from_slice(raw))
+    }
+
+    /// An animation sampler's float accessor (key times, translations, scales, weights):
+    /// as [`Builder::floats`] (no target), or compressed when the export is; three-component
+    /// outputs then go through the `EXPONENTIAL` filter (what
+    /// [`super::meshopt::vector_as_written`] returns is what a reader gets), the rest as
+    /// they are.
+    pub(crate) fn animation_floats(
+        &mut self,
+        data: &[f32],
+        type_: Type,
+        bounds: Bounds,
+    ) -> Index<json::Accessor> {
+        let width = type_.multiplicity();
+        let (raw, filter) = if width == 3 && self.filter_vectors && matches!(bounds, Bounds::None) {
+            (meshopt::exponential(data), Filter::Exponential)
+        } else {
+            (meshopt::floats(data), Filter::None)
+        };
+        if self.compressed.is_none() {
+            return self.floats(data, type_, None, bounds);
+        }
+        let bounds = match bounds {
+            Bounds::None => None,
+            Bounds::MinMax => Some(min_max(data, width)),
+        };
+        self.grouped(&raw, 4 * width, filter, ComponentType::F32, type_, bounds)
+    }
+
+    /// An accessor over `raw` (filtered bytes, elements of `stride`) in the compressed
+    /// animation group of its stride and filter: one view per group, written by
+    /// [`Builder::finish_groups`] (fewer, larger views: less JSON, better compression).
+    fn grouped(
+        &mut self,
+        raw: &[u8],
+        stride: usize,
+        filter: Filter,
+        component: ComponentType,
+        type_: Type,
+        bounds: Option<(json::Value, json::Value)>,
+    ) -> Index<json::Accessor> {
+        // The view is set by `finish_groups`; 0 until then.
+        let index = self.accessor(Index::new(0), raw.len() / stride, component, type_, bounds);
+        if let Some(compressed) = self.compressed.as_mut() {
+            let offset = compressed.group(stride, filter, raw, index.value());
+            if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+                accessor.byte_offset = (offset > 0).then(|| USize64::from(offset));
+            }
+        }
+        index
+    }
+
+    /// Writes each compressed animation group as one view and points its accessors at it.
+    pub(crate) fn finish_groups(&mut self) {
+        let Some(groups) = self
+            .compressed
+            .as_mut()
+            .map(|c| std::mem::take(&mut c.groups))
+        else {
+            return;
+        };
+        for group in groups {
+            let Some(view) = self.compressed_view(&group.raw, group.stride, group.filter, None)
+            else {
+                continue;
+            };
+            for accessor in group.accessors {
+                if let Some(a) = self.root.accessors.get_mut(accessor) {
+                    a.buffer_view = Some(view);
+                }
+            }
+        }
+    }
+
+    /// Rotation outputs of LINEAR or STEP keys (flat xyzw, as in the track) as 16-bit
+    /// normalized components: compressed through the `QUATERNION` filter when the export
+    /// is, else each key rounded ([`rigport_model::quantize::rotation_to_i16`]) and signs
+    /// made continuous by `i16_keys`.
+    pub(crate) fn animation_rotations(
+        &mut self,
+        values: &[f32],
+        i16_keys: impl FnOnce(&[f32]) -> Vec<i16>,
+    ) -> Index<json::Accessor> {
+        if self.compressed.is_some() {
+            let raw = meshopt::quaternions(values);
+            let index = self.grouped(
+                &raw,
+                8,
+                Filter::Quaternion,
+                ComponentType::I16,
+                Type::Vec4,
+                None,
+            );
+            if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+                accessor.normalized = true;
+            }
+            return index;
+        }
+        self.normalized_i16(&i16_keys(values), Type::Vec4)
+    }
+
+    /// An `UNSIGNED_BYTE` accessor with `normalized: true` (read as `c / 255`), for vertex
+    /// weights.
+    pub(crate) fn normalized_u8(
+        &mut self,
+        data: &[u8],
+        type_: Type,
+        target: Option<Target>,
+    ) -> Index<json::Accessor> {
+        let index = self.ints(data, type_, target);
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
+    }
+
     /// An unsigned-integer accessor (`data.len() / size` elements of `type_`), of `T`'s
     /// component type (`u8`, `u16` or `u32`).
     pub(crate) fn ints<T: IntComponent>(
@@ -209,11 +392,12 @@ impl Builder {
         type_: Type,
         target: Option<Target>,
     ) -> Index<json::Accessor> {
-        let view = self.view(target, |bin| {
-            for v in data {
-                v.put_le(bin);
-            }
-        });
+        let mut raw = Vec::with_capacity(data.len() * 4);
+        for v in data {
+            v.put_le(&mut raw);
+        }
+        let stride = raw.len() / (data.len() / type_.multiplicity()).max(1);
+        let view = self.vertex_view(target, &raw, stride);
         self.accessor(
             view,
             data.len() / type_.multiplicity(),

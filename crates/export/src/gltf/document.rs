@@ -37,6 +37,9 @@ pub(crate) struct Built {
     pub bin: Vec<u8>,
     /// Lossy or repairing steps taken.
     pub warnings: Vec<Warning>,
+    /// With [`rigport_model::Compression::Meshopt`]: the compressed views, which the
+    /// caller declares ([`super::finish_json`]).
+    pub compressed: Option<super::meshopt::Compressed>,
 }
 
 /// Builds the glTF document for `asset`.
@@ -87,6 +90,10 @@ pub(crate) fn build(
         version: "2.0".into(),
         ..Default::default()
     });
+    if opts.compression == rigport_model::Compression::Meshopt {
+        b.compressed = Some(super::meshopt::Compressed::default());
+        b.filter_vectors = opts.compact;
+    }
     let skeleton = &asset.skeleton;
     let joint_count = skeleton.len();
 
@@ -180,7 +187,7 @@ pub(crate) fn build(
         write_skin(&mut b, asset, si, skin, skeleton_node, &mut warnings);
     }
 
-    animation::write_animations(&mut b, asset, &mesh_nodes, &mut warnings);
+    animation::write_animations(&mut b, asset, &mesh_nodes, opts.compact, &mut warnings);
 
     for (node, kids) in nodes.iter_mut().zip(children) {
         if !kids.is_empty() {
@@ -201,10 +208,12 @@ pub(crate) fn build(
 
     let pad = b.bin.len().wrapping_neg() % 4;
     b.bin.resize(b.bin.len() + pad, 0);
+    b.finish_groups();
     Ok(Built {
         root: b.root,
         bin: b.bin,
         warnings,
+        compressed: b.compressed,
     })
 }
 
@@ -378,7 +387,17 @@ fn write_mesh(
                 .iter()
                 .flat_map(|r| r.weights[slots.clone()].to_vec())
                 .collect();
-            let weights_acc = b.floats(&weights, Type::Vec4, array, Bounds::None);
+            // Normalized bytes when that is exact (glTF 2.0 §3.7.3.3 allows them for weights).
+            let exact_bytes = opts.compact
+                && weights
+                    .iter()
+                    .all(|&w| (w * 255.0).round() / 255.0 == w && (0.0..=1.0).contains(&w));
+            let weights_acc = if exact_bytes {
+                let bytes: Vec<u8> = weights.iter().map(|&w| (w * 255.0).round() as u8).collect();
+                b.normalized_u8(&bytes, Type::Vec4, array)
+            } else {
+                b.floats(&weights, Type::Vec4, array, Bounds::None)
+            };
             attributes.insert(Checked::Valid(Semantic::Joints(set as u32)), joints_acc);
             attributes.insert(Checked::Valid(Semantic::Weights(set as u32)), weights_acc);
         }

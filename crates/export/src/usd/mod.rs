@@ -277,7 +277,11 @@ enum Body {
     /// A `.usdc` or `.usdz` file's bytes.
     Encoded(Vec<u8>),
     /// USDA text already in a temporary file beside the target (a link's final target).
-    Staged { file: TempFile, target: PathBuf },
+    Staged {
+        file: TempFile,
+        target: PathBuf,
+        len: u64,
+    },
 }
 
 /// Builds the export of `asset` to `path`. The extension must be `.usda` or `.usd`
@@ -338,7 +342,7 @@ fn prepare_usd_spilling_at(
             let (images, warnings) = build_body(asset, options, &stem, &mut printer)?;
             let body = match printer.into_inner().finish().map_err(io_error)? {
                 Finished::Text(text) => Body::Text(text),
-                Finished::Staged { file, target } => Body::Staged { file, target },
+                Finished::Staged { file, target, len } => Body::Staged { file, target, len },
             };
             (body, images, warnings)
         }
@@ -368,6 +372,21 @@ fn prepare_usd_spilling_at(
 }
 
 impl PreparedUsd {
+    /// The bytes [`PreparedUsd::write`] writes, over every file (a long text staged beside
+    /// the output included).
+    pub fn byte_len(&self) -> u64 {
+        let body = match &self.body {
+            Body::Text(text) => text.len() as u64,
+            Body::Encoded(bytes) => bytes.len() as u64,
+            Body::Staged { len, .. } => *len,
+        };
+        body + self
+            .images
+            .iter()
+            .map(|i| i.bytes.len() as u64)
+            .sum::<u64>()
+    }
+
     /// Lossy or repairing steps taken, as [`ExportedUsd::warnings`].
     pub fn warnings(&self) -> &[Warning] {
         &self.warnings
@@ -407,7 +426,7 @@ impl PreparedUsd {
         match self.body {
             Body::Text(text) => crate::write_atomic(&self.path, text.as_bytes()).map_err(io_error),
             Body::Encoded(bytes) => crate::write_atomic(&self.path, &bytes).map_err(io_error),
-            Body::Staged { file, target } => file.persist(&target).map_err(io_error),
+            Body::Staged { file, target, .. } => file.persist(&target).map_err(io_error),
         }
     }
 }

@@ -46,6 +46,8 @@ pub(crate) enum Finished {
         file: TempFile,
         /// The output it replaces.
         target: PathBuf,
+        /// The text's length in bytes.
+        len: u64,
     },
 }
 
@@ -81,10 +83,12 @@ impl Usda {
             Some((file, mut writer)) => {
                 writer.write_all(self.out.as_bytes())?;
                 writer.flush()?;
+                let len = writer.get_ref().metadata()?.len();
                 drop(writer);
                 Ok(Finished::Staged {
                     file,
                     target: spill.target,
+                    len,
                 })
             }
         }

@@ -161,7 +161,18 @@ pub(super) fn run(
                             Problem::Invalid("a skin joint is not in the skeleton".into()),
                         )
                     })?;
-                let rows = Influences::from_rows(skin.weights.iter().map(|r| r.iter().copied()));
+                let mut rows =
+                    Influences::from_rows(skin.weights.iter().map(|r| r.iter().copied()));
+                // As every importer: rows rescaled to sum to 1, as viewers and the writers
+                // take them (rows left short by joint -1 are already reported above).
+                let (off, max_row_sum_error) = rows.normalize(1e-3);
+                if off > 0 && skin.on_bind_shape == 0 {
+                    warnings.push(Warning::WeightsRenormalized {
+                        source: doc.at(*instance).to_string(),
+                        rows: off,
+                        max_row_sum_error,
+                    });
+                }
                 asset.skins.push(SkinBinding {
                     mesh: index,
                     joints,

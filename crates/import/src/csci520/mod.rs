@@ -56,6 +56,11 @@ mod types;
 mod weights;
 
 pub use self::config::{parse_config, parse_joint_list, MAX_LIST_LEN};
+
+/// The end of the warning ([`Warning::Incomplete`]) for a rig whose weights file is not
+/// named or does not exist, so that a caller who computes the weights can drop it.
+pub const NO_WEIGHTS: &str =
+    "the rig has no skin weights; imported the skeleton and an unskinned mesh";
 pub use self::hierarchy::parse_hierarchy;
 pub use self::rest::{euler_rotation, local_rotation, parse_rest_transforms, rest_local_transform};
 pub use self::types::{ConfigEntry, Csci520Rig, RestTransforms, SkinConfig};
@@ -156,7 +161,7 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
         None => {
             warnings.push(Warning::Incomplete {
                 location: config.display().to_string(),
-                message: "no *jointWeightsFilename option: the rig has no skin weights; imported the skeleton and an unskinned mesh".into(),
+                message: format!("no *jointWeightsFilename option: {NO_WEIGHTS}"),
             });
             None
         }
@@ -167,7 +172,7 @@ pub fn import(config: &Path) -> Result<Csci520Rig, ImportError> {
                     warnings.push(Warning::Incomplete {
                         location: location(entry.line),
                         message: format!(
-                            "*jointWeightsFilename names {:?}, which does not exist: the rig has no skin weights; imported the skeleton and an unskinned mesh",
+                            "*jointWeightsFilename names {:?}, which does not exist: {NO_WEIGHTS}",
                             entry.value
                         ),
                     });

@@ -14,6 +14,7 @@ use std::path::Path;
 
 use rigport_model::{Clip, Interpolation, Track, TrackTarget};
 
+use super::blend::with_crossings;
 use super::mesh::Built;
 use super::skeleton::{quat, vec3, Skel};
 use crate::names::unique;
@@ -142,8 +143,9 @@ impl Timed for ufbx::BakedQuat {
     }
 }
 
-/// Morph weight tracks: per mesh, at the union of its animated channels' key times, each
-/// channel's `DeformPercent` / 100 (unanimated channels keep their static weight).
+/// Morph weight tracks: per mesh, at the union of its animated channels' key times (and
+/// where a channel's weight crosses a full weight, [`super::blend`]), each target's weight
+/// for its channel's `DeformPercent` / 100 (unanimated channels keep their static weight).
 fn morph_tracks(anim: &ufbx::BakedAnim, start: f64, built: &Built, tracks: &mut Vec<Track>) {
     let percent: HashMap<u32, &[ufbx::BakedVec3]> = anim
         .elements
@@ -153,18 +155,23 @@ fn morph_tracks(anim: &ufbx::BakedAnim, start: f64, built: &Built, tracks: &mut 
             Some((e.element_id, &*prop.keys))
         })
         .collect();
-    for (mesh, channels) in &built.channels {
-        let animated: Vec<&[ufbx::BakedVec3]> = channels
-            .iter()
-            .filter_map(|id| percent.get(id).copied())
-            .collect();
-        if animated.is_empty() {
+    for (mesh, segments) in &built.channels {
+        let mut times: Vec<f64> = Vec::new();
+        for (id, keys) in &percent {
+            let breaks: Vec<f64> = (segments.iter())
+                .filter(|s| s.channel == *id && !s.last)
+                .map(|s| s.to)
+                .collect();
+            if !segments.iter().any(|s| s.channel == *id) {
+                continue;
+            }
+            let weights: Vec<(f64, f64)> =
+                keys.iter().map(|k| (k.time, k.value.x / 100.0)).collect();
+            times.extend(with_crossings(&weights, &breaks));
+        }
+        if times.is_empty() {
             continue;
         }
-        let mut times: Vec<f64> = animated
-            .iter()
-            .flat_map(|k| k.iter().map(|k| k.time))
-            .collect();
         times.sort_by(f64::total_cmp);
         times.dedup();
         let statics = &built.meshes[mesh.0 as usize].morph_weights;
@@ -176,9 +183,9 @@ fn morph_tracks(anim: &ufbx::BakedAnim, start: f64, built: &Built, tracks: &mut 
                 continue;
             }
             out_times.push(t32);
-            for (k, id) in channels.iter().enumerate() {
-                let w = match percent.get(id) {
-                    Some(keys) => (ufbx::evaluate_baked_vec3(keys, t).x / 100.0) as f32,
+            for (k, segment) in segments.iter().enumerate() {
+                let w = match percent.get(&segment.channel) {
+                    Some(keys) => segment.weight(ufbx::evaluate_baked_vec3(keys, t).x / 100.0),
                     None => statics.get(k).copied().unwrap_or(0.0),
                 };
                 values.push(w);

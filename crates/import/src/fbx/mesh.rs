@@ -1,16 +1,13 @@
 //! Meshes: one model [`Mesh`] per material part of each mesh node, with its skin binding
 //! and blend shapes.
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use rigport_model::glam::{DMat4, Mat4, Vec2, Vec3};
 use rigport_model::{
-    Influence, Influences, MaterialIndex, Mesh, MeshIndex, MorphTarget, SkinBinding,
-    SkinningMethod, Warning,
+    Influence, Influences, MaterialIndex, Mesh, MeshIndex, SkinBinding, SkinningMethod, Warning,
 };
 
-use super::incomplete;
 use super::skeleton::{mat, Skel};
 use crate::names::unique;
 
@@ -18,8 +15,8 @@ use crate::names::unique;
 pub(super) struct Built {
     pub(super) meshes: Vec<rigport_model::Mesh>,
     pub(super) skins: Vec<SkinBinding>,
-    /// Per mesh with morph targets: the blend channels' element ids, one per target.
-    pub(super) channels: Vec<(MeshIndex, Vec<u32>)>,
+    /// Per mesh with morph targets: the blend channel span each target covers.
+    pub(super) channels: Vec<(MeshIndex, Vec<super::blend::Segment>)>,
 }
 
 /// Every mesh node's meshes (see the module table in `mod.rs`); the asset's checks run
@@ -91,9 +88,20 @@ pub(super) fn build(
             m.attached_to = attached_to;
             let index = MeshIndex(out.meshes.len() as u32);
             if let Some(skin) = skin {
-                out.skins.push(binding(skin, &m, index, skel));
+                let mut binding = binding(skin, &m, index, skel);
+                // As every importer: rows rescaled to sum to 1, as Blender deforms and as
+                // the writers store them (ufbx keeps the file's weights).
+                let (rows, max_row_sum_error) = binding.influences.normalize(1e-3);
+                if rows > 0 {
+                    warnings.push(Warning::WeightsRenormalized {
+                        source: format!("{}: {}", crate::Location::file(path), skin.element.name),
+                        rows,
+                        max_row_sum_error,
+                    });
+                }
+                out.skins.push(binding);
             }
-            let channels = blend_shapes(mesh, &mut m, &to_space_f, path, warnings);
+            let channels = super::blend::targets(mesh, &mut m, &to_space_f, path, warnings);
             if !channels.is_empty() {
                 out.channels.push((index, channels));
             }
@@ -135,7 +143,14 @@ fn geometry(mesh: &ufbx::Mesh, faces: &[u32], to_space: &Mat4, normal_m: &Mat4) 
     let mut out = Mesh::default();
     let mut uvs: Vec<Vec<Vec2>> = vec![Vec::new(); uv_sets.len()];
     let mut normal_values = Vec::new();
-    let mut seen: HashMap<Vec<u32>, u32> = HashMap::new();
+    // Corners made unique without hashing or allocating per corner (a Mixamo character
+    // has about 170k): per control point, the list of vertices made from it (`head`,
+    // `next`), each with its key (point, normal, UV indices) in `keys`, `stride` apiece.
+    let stride = 2 + uv_sets.len();
+    let mut head = vec![u32::MAX; mesh.vertex_position.values.len().max(1)];
+    let mut next: Vec<u32> = Vec::with_capacity(faces.len() * 3);
+    let mut keys: Vec<u32> = Vec::with_capacity(faces.len() * 3 * stride);
+    let mut key = vec![0u32; stride];
     let mut corner_vertex = |corner: usize, out: &mut Mesh, uvs: &mut Vec<Vec<Vec2>>| -> u32 {
         let point = mesh
             .vertex_position
@@ -143,17 +158,24 @@ fn geometry(mesh: &ufbx::Mesh, faces: &[u32], to_space: &Mat4, normal_m: &Mat4) 
             .get(corner)
             .copied()
             .unwrap_or(0);
-        let mut key = vec![point];
-        key.extend(normals.map(|n| n.indices.get(corner).copied().unwrap_or(0)));
-        key.extend(
-            uv_sets
-                .iter()
-                .map(|s| s.indices.get(corner).copied().unwrap_or(0)),
-        );
-        if let Some(&v) = seen.get(&key) {
-            return v;
+        key[0] = point;
+        key[1] = normals.map_or(0, |n| n.indices.get(corner).copied().unwrap_or(0));
+        for (slot, s) in key[2..].iter_mut().zip(&uv_sets) {
+            *slot = s.indices.get(corner).copied().unwrap_or(0);
+        }
+        let bucket = (point as usize).min(head.len() - 1);
+        let mut at = head[bucket];
+        while at != u32::MAX {
+            let k = at as usize * stride;
+            if keys[k..k + stride] == key[..] {
+                return at;
+            }
+            at = next[at as usize];
         }
         let v = out.positions.len() as u32;
+        next.push(head[bucket]);
+        head[bucket] = v;
+        keys.extend_from_slice(&key);
         let p = mesh.vertex_position.values.get(point as usize);
         out.positions.push(p.map_or(Vec3::ZERO, |p| {
             to_space.transform_point3(super::skeleton::vec3(p))
@@ -167,14 +189,13 @@ fn geometry(mesh: &ufbx::Mesh, faces: &[u32], to_space: &Mat4, normal_m: &Mat4) 
             normal_values.push(normal_m.transform_vector3(value).normalize_or(Vec3::Y));
         }
         for (set, (values, uv)) in uv_sets.iter().zip(uvs.iter_mut()).enumerate() {
-            let index = key[1 + usize::from(normals.is_some()) + set] as usize;
+            let index = key[2 + set] as usize;
             let t = values
                 .values
                 .get(index)
                 .map_or(Vec2::ZERO, |t| Vec2::new(t.x as f32, 1.0 - t.y as f32));
             uv.push(t);
         }
-        seen.insert(key, v);
         v
     };
     let mut tri = vec![0u32; mesh.max_face_triangles.max(1) * 3];
@@ -261,58 +282,4 @@ fn binding(skin: &ufbx::SkinDeformer, m: &Mesh, mesh: MeshIndex, skel: &Skel) ->
             _ => SkinningMethod::Lbs,
         },
     }
-}
-
-/// The blend channels of `mesh` as morph targets of `m` (the channel's full-weight shape,
-/// offsets through `to_space`'s linear part); returns the channels' element ids.
-fn blend_shapes(
-    mesh: &ufbx::Mesh,
-    m: &mut Mesh,
-    to_space: &Mat4,
-    path: &Path,
-    warnings: &mut Vec<Warning>,
-) -> Vec<u32> {
-    let mut ids = Vec::new();
-    for deformer in mesh.blend_deformers.iter() {
-        for channel in deformer.channels.iter() {
-            let Some(shape) = channel.target_shape.as_ref() else {
-                continue;
-            };
-            if channel.keyframes.len() > 1 {
-                warnings.push(incomplete(
-                    path,
-                    &channel.element.name,
-                    format!(
-                        "the blend shape channel has {} in-between shapes: only its full-weight \
-                         shape is imported",
-                        channel.keyframes.len() - 1
-                    ),
-                ));
-            }
-            let mut by_point: HashMap<u32, Vec3> = HashMap::new();
-            for (point, offset) in shape
-                .offset_vertices
-                .iter()
-                .zip(shape.position_offsets.iter())
-            {
-                by_point.insert(
-                    *point,
-                    to_space.transform_vector3(super::skeleton::vec3(offset)),
-                );
-            }
-            let position_deltas = m
-                .source_vertex
-                .iter()
-                .map(|p| by_point.get(p).copied().unwrap_or(Vec3::ZERO))
-                .collect();
-            m.morph_targets.push(MorphTarget {
-                name: channel.element.name.to_string(),
-                position_deltas,
-                normal_deltas: None,
-            });
-            m.morph_weights.push(channel.weight as f32);
-            ids.push(channel.element.element_id);
-        }
-    }
-    ids
 }

@@ -22,6 +22,7 @@
 //! [`SkinBinding`]: rigport_model::SkinBinding
 
 mod anim;
+mod blend;
 mod load;
 mod material;
 mod mesh;

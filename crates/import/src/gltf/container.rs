@@ -172,6 +172,19 @@ pub(super) fn json_pointer(gltf_path: &str) -> String {
     out
 }
 
+/// The document, when its only fault for `gltf-json` is a scene without `nodes`: glTF 2.0
+/// allows one (a scene's `nodes` is optional: an empty scene), the crate requires the field.
+fn with_scene_nodes(json: &[u8]) -> Option<::gltf::json::Root> {
+    let mut value: serde_json::Value = serde_json::from_slice(json).ok()?;
+    for scene in value.get_mut("scenes")?.as_array_mut()? {
+        let scene = scene.as_object_mut()?;
+        scene
+            .entry("nodes")
+            .or_insert_with(|| serde_json::json!([]));
+    }
+    serde_json::from_value(value).ok()
+}
+
 /// Parses and validates the glTF JSON (what `gltf::Gltf::from_slice` does, plus a check
 /// its validation needs first).
 pub(super) fn parse_document(
@@ -181,27 +194,30 @@ pub(super) fn parse_document(
     warnings: &mut Vec<Warning>,
 ) -> Result<::gltf::Document, ImportError> {
     use ::gltf::json::validation::{Checked, Error as SchemaError, Validate};
-    let root: ::gltf::json::Root = ::gltf::json::deserialize::from_slice(json).map_err(|e| {
-        let mut message = e.to_string();
-        let suffix = format!(" at line {} column {}", e.line(), e.column());
-        if let Some(stripped) = message.strip_suffix(&suffix) {
-            message = stripped.to_string();
-        }
-        if is_glb {
-            message = format!("in the GLB JSON chunk: {message}");
-        }
-        let location = if e.line() > 0 {
-            Location::line_column(path, e.line(), e.column())
-        } else {
-            Location::file(path)
-        };
-        let problem = if e.is_eof() {
-            Problem::Truncated(message)
-        } else {
-            Problem::Invalid(message)
-        };
-        ImportError::new(location, problem)
-    })?;
+    let parsed = ::gltf::json::deserialize::from_slice(json);
+    let root: ::gltf::json::Root = parsed
+        .or_else(|e| with_scene_nodes(json).ok_or(e))
+        .map_err(|e| {
+            let mut message = e.to_string();
+            let suffix = format!(" at line {} column {}", e.line(), e.column());
+            if let Some(stripped) = message.strip_suffix(&suffix) {
+                message = stripped.to_string();
+            }
+            if is_glb {
+                message = format!("in the GLB JSON chunk: {message}");
+            }
+            let location = if e.line() > 0 {
+                Location::line_column(path, e.line(), e.column())
+            } else {
+                Location::file(path)
+            };
+            let problem = if e.is_eof() {
+                Problem::Truncated(message)
+            } else {
+                Problem::Invalid(message)
+            };
+            ImportError::new(location, problem)
+        })?;
     // gltf-json 1.4's primitive validation indexes `accessors` with the POSITION index
     // before that index is checked: check it first.
     for (m, mesh) in root.meshes.iter().enumerate() {

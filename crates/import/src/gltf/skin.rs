@@ -175,21 +175,8 @@ impl<'a> Importer<'a> {
         // glTF 2.0 §3.7.3.3: weights must sum to 1. Rows that do not are rescaled, so what
         // rigport evaluates is what every file it writes holds (both exporters normalize);
         // rows visibly off are reported.
-        let mut off = 0usize;
-        let mut worst = 0.0f32;
-        for row in &mut rows {
-            let sum: f32 = row.iter().map(|i| i.weight).sum();
-            let dev = (sum - 1.0).abs();
-            if dev > WEIGHT_SUM_TOLERANCE {
-                off += 1;
-                worst = worst.max(dev);
-            }
-            if dev > f32::EPSILON && sum > 0.0 {
-                for i in row.iter_mut() {
-                    i.weight /= sum;
-                }
-            }
-        }
+        let mut influences = Influences::from_rows(rows);
+        let (off, worst) = influences.normalize(WEIGHT_SUM_TOLERANCE);
         if off > 0 {
             self.warnings.push(Warning::WeightsRenormalized {
                 source: Location::json(self.path, format!("{base}/attributes/WEIGHTS_0"))
@@ -198,6 +185,6 @@ impl<'a> Importer<'a> {
                 max_row_sum_error: worst,
             });
         }
-        Ok(Influences::from_rows(rows))
+        Ok(influences)
     }
 }

@@ -36,6 +36,8 @@ from ._rigport import (
     retarget,
     retime,
     sequence,
+    skin,
+    verify,
 )
 
 __all__ = [
@@ -62,4 +64,6 @@ __all__ = [
     "retarget",
     "retime",
     "sequence",
+    "skin",
+    "verify",
 ]

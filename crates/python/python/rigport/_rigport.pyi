@@ -119,6 +119,8 @@ class Report:
     notices: list[str]
     warnings: list[str]
     notes: list[str]
+    passed: Optional[bool]
+    """`verify`'s verdict; None for other commands."""
 
 class Asset:
     """A rig read as `rigport` reads it. Open one with `rigport.open`."""
@@ -173,15 +175,19 @@ class Asset:
         max_influences: Optional[int] = None,
         influences_fit: Optional[Literal["truncate", "refit"]] = None,
         reduce_tolerance: Optional[float] = None,
+        reduce: bool = False,
+        compress: Optional[Literal["none", "meshopt"]] = None,
         skinning: Optional[Skinning] = None,
         up_axis: Optional[Literal["Y", "Z", "y", "z"]] = None,
         meters_per_unit: Optional[float] = None,
         root_motion: RootMotion = "keep",
         root_yaw: bool = False,
         root_window: Optional[float] = None,
+        json: bool = False,
     ) -> Report:
         """Writes .glb, .gltf, .usda, .usdc or .usdz (by extension): `rigport convert`'s
-        bytes."""
+        bytes. `reduce` (or a `reduce_tolerance`) reduces the keys; `compress="meshopt"`
+        compresses a glTF; with `json`, `Report.output` is the reduction's JSON report."""
 
 def open(
     *paths: PathLike,
@@ -200,7 +206,7 @@ def open(
 
 # The commands: the CLI's options as keyword arguments. `**options` are `Asset.write`'s
 # (root motion where the command has it).
-def convert(input: Inputs, output: PathLike, **options: object) -> Report: ...
+def convert(input: Inputs, output: PathLike, *, json: bool = False, **options: object) -> Report: ...
 def inspect(input: Inputs, *, json: bool = False) -> Report: ...
 def animate(input: Inputs, keys: PathLike, output: PathLike, **options: object) -> Report: ...
 def sequence(
@@ -325,3 +331,28 @@ def render(
     skeleton: bool = True,
     frame_counter: bool = True,
 ) -> Report: ...
+def skin(
+    input: Inputs,
+    output: PathLike,
+    *,
+    skeleton_offset: Optional[tuple[float, float, float]] = None,
+    skeleton_scale: Optional[float] = None,
+    **options: object,
+) -> Report:
+    """Automatic weights (bone heat) for a mesh and a skeleton; `.out` writes a Pinocchio
+    `attachment.out`, anything else the rig as `convert` writes it."""
+
+def verify(
+    reference: PathLike,
+    candidate: PathLike,
+    *,
+    motion: Sequence[PathLike] = (),
+    clip: Optional[str] = None,
+    all_clips: bool = False,
+    fps: Optional[float] = None,
+    at_keys: bool = False,
+    tol: Optional[float] = None,
+    json: bool = False,
+    picture: Optional[PathLike] = None,
+) -> Report:
+    """Whether `candidate` moves as `reference` does, within `tol`: `Report.passed`."""

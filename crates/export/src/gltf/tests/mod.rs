@@ -19,6 +19,7 @@ use crate::test_assets;
 use crate::Problem;
 
 mod animation;
+mod compression;
 mod files;
 mod skin;
 
@@ -38,7 +39,14 @@ fn assert_close(a: &[f32], b: &[f32], what: &str) {
 }
 
 fn glb(asset: &Asset, max_influences: usize) -> Exported {
-    to_glb(asset, &GltfOptions { max_influences }).expect("export")
+    to_glb(
+        asset,
+        &GltfOptions {
+            max_influences,
+            ..Default::default()
+        },
+    )
+    .expect("export")
 }
 
 /// The JSON chunk of a GLB, parsed.
@@ -611,7 +619,14 @@ fn invalid_assets_and_options_are_rejected() {
     );
 
     for max_influences in [0, 9] {
-        let err = to_glb(&test_assets::rig(), &GltfOptions { max_influences }).unwrap_err();
+        let err = to_glb(
+            &test_assets::rig(),
+            &GltfOptions {
+                max_influences,
+                ..Default::default()
+            },
+        )
+        .unwrap_err();
         assert!(
             matches!(err, ExportError::MaxInfluences { max_influences: m } if m == max_influences)
         );

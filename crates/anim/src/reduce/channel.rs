@@ -1,0 +1,184 @@
+//! The joint tracks a reduction samples: validated, one per joint and property, with the
+//! values a reader sees.
+
+use glam::Quat;
+use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget};
+
+use super::codec::Codec;
+use super::curve::quat_at;
+use super::error::{ReduceError, TrackProblem};
+
+/// Which joint property a track animates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Kind {
+    Translation,
+    Rotation,
+    Scale,
+}
+
+impl Kind {
+    pub(super) fn slot(self) -> usize {
+        match self {
+            Kind::Translation => 0,
+            Kind::Rotation => 1,
+            Kind::Scale => 2,
+        }
+    }
+}
+
+/// One sampled joint track (the first of the clip for its joint and property).
+pub(super) struct Channel<'a> {
+    pub(super) joint: usize,
+    pub(super) kind: Kind,
+    /// Index in `clip.tracks`.
+    pub(super) track: usize,
+    pub(super) original: &'a Track,
+    /// The original as a reader sees it when that differs (16-bit rotations).
+    pub(super) as_written: Option<Track>,
+    /// LINEAR with more than two keys: keys can go.
+    pub(super) reducible: bool,
+    /// Try a lower uniform rate besides key removal (`simplify`).
+    pub(super) decimate: bool,
+    /// Bytes of one key's value as written (the simplifier's cost model).
+    pub(super) value_bytes: usize,
+    /// Local tolerance: length unit (translation), radians (rotation), scale units (scale).
+    pub(super) eps: f32,
+    /// The kept keys (indices into the original), `None` while every key is.
+    pub(super) kept: Option<Vec<usize>>,
+    /// The kept keys of `as_written` (or the original), the track sampled while reduced.
+    pub(super) reduced: Option<Track>,
+    /// Normalized rotation keys as written (rotation channels only), for the simplifier.
+    pub(super) quats: Vec<Quat>,
+}
+
+impl Channel<'_> {
+    /// The track as a reader sees it now.
+    pub(super) fn current(&self) -> &Track {
+        self.reduced
+            .as_ref()
+            .or(self.as_written.as_ref())
+            .unwrap_or(self.original)
+    }
+}
+
+/// Validates every joint track and keeps the first per joint and property.
+/// With a `codec`, LINEAR and STEP values are read as it stores them.
+pub(super) fn collect_channels<'a>(
+    clip: &'a Clip,
+    skeleton: &Skeleton,
+    codec: Option<&Codec>,
+    decimate: bool,
+) -> Result<Vec<Channel<'a>>, ReduceError> {
+    let joints = skeleton.len();
+    let mut seen = vec![[false; 3]; joints];
+    let mut out = Vec::new();
+    for (ti, track) in clip.tracks.iter().enumerate() {
+        let (joint, kind) = match track.target {
+            TrackTarget::Translation(j) => (j, Kind::Translation),
+            TrackTarget::Rotation(j) => (j, Kind::Rotation),
+            TrackTarget::Scale(j) => (j, Kind::Scale),
+            TrackTarget::MorphWeights(_) => continue,
+        };
+        let bad = |problem| ReduceError::BadTrack {
+            clip: clip.name.clone(),
+            track: ti,
+            problem,
+        };
+        let Some(slot) = seen.get_mut(joint.get()) else {
+            return Err(ReduceError::UnknownJoint {
+                clip: clip.name.clone(),
+                track: ti,
+                joint,
+                joints,
+            });
+        };
+        if track.times.is_empty() {
+            return Err(bad(TrackProblem::NoKeys));
+        }
+        if let Some(key) = track.times.iter().enumerate().position(|(k, t)| {
+            !t.is_finite() || (k > 0 && track.times.get(k - 1).is_some_and(|p| t <= p))
+        }) {
+            return Err(bad(TrackProblem::Times { key }));
+        }
+        let comps = if kind == Kind::Rotation { 4 } else { 3 };
+        let per_key = if track.interpolation == Interpolation::CubicSpline {
+            3 * comps
+        } else {
+            comps
+        };
+        let expected = track.times.len() * per_key;
+        if track.values.len() != expected {
+            return Err(bad(TrackProblem::ValueCount {
+                expected,
+                found: track.values.len(),
+            }));
+        }
+        if track.values.iter().any(|v| !v.is_finite()) {
+            return Err(bad(TrackProblem::NonFinite));
+        }
+        let mut quats = Vec::new();
+        if kind == Kind::Rotation {
+            let offset = if track.interpolation == Interpolation::CubicSpline {
+                4
+            } else {
+                0
+            };
+            for (key, chunk) in track.values.chunks_exact(per_key).enumerate() {
+                let q = quat_at(chunk, offset);
+                if !q.is_finite() {
+                    return Err(bad(TrackProblem::ZeroRotation { key }));
+                }
+                quats.push(q);
+            }
+        }
+        if std::mem::replace(&mut slot[kind.slot()], true) {
+            continue;
+        }
+        let cubic = track.interpolation == Interpolation::CubicSpline;
+        let as_written = codec
+            .filter(|_| !cubic)
+            .and_then(|codec| as_written(track, kind, codec));
+        if let Some(written) = as_written.as_ref().filter(|_| kind == Kind::Rotation) {
+            for (q, chunk) in quats.iter_mut().zip(written.values.chunks_exact(4)) {
+                *q = quat_at(chunk, 0);
+            }
+        }
+        let rounded = as_written.is_some() && kind == Kind::Rotation;
+        out.push(Channel {
+            joint: joint.get(),
+            kind,
+            track: ti,
+            original: track,
+            as_written,
+            reducible: track.interpolation == Interpolation::Linear && track.times.len() > 2,
+            decimate,
+            value_bytes: if rounded { 8 } else { 4 * comps },
+            eps: 0.0,
+            kept: None,
+            reduced: None,
+            quats,
+        });
+    }
+    Ok(out)
+}
+
+/// A LINEAR or STEP track's values as `codec` stores them (`None`: stored exactly).
+pub(super) fn as_written(track: &Track, kind: Kind, codec: &Codec) -> Option<Track> {
+    let mut written = track.clone();
+    match kind {
+        Kind::Rotation => {
+            for chunk in written.values.chunks_exact_mut(4) {
+                let q = (codec.rotation)([chunk[0], chunk[1], chunk[2], chunk[3]]);
+                chunk.copy_from_slice(&q);
+            }
+        }
+        Kind::Translation | Kind::Scale => {
+            let vector = codec.vector?;
+            for chunk in written.values.chunks_exact_mut(3) {
+                let v = vector([chunk[0], chunk[1], chunk[2]]);
+                chunk.copy_from_slice(&v);
+            }
+        }
+    }
+    Some(written)
+}

@@ -1,0 +1,245 @@
+//! `EXT_meshopt_compression` for animation data: what the filters keep of a value (for the
+//! key reducer to measure) and the compressed buffer views.
+//!
+//! The extension (Khronos `EXT_meshopt_compression`) stores a buffer view's bytes encoded by
+//! meshoptimizer's vertex codec (version 0, the one the extension defines) in buffer 0,
+//! while the view itself points into a *fallback* buffer that has no data; the extension is
+//! declared required, so readers without it refuse the file rather than read zeros.
+//! Rotations go through the `QUATERNION` filter (three components of K bits and the index of
+//! the fourth, decoded to 16-bit normalized components), translations and scales through
+//! the `EXPONENTIAL` filter (a K-bit mantissa and an 8-bit exponent per component); key
+//! times and vertex attributes are encoded without a filter, exactly.
+
+/// Bits per quaternion component (the filter allows 4 to 16): 16, the precision of plain
+/// 16-bit normalized rotations.
+pub(crate) const QUAT_BITS: i32 = 16;
+/// Mantissa bits of the exponential filter (1 to 24): 20, a relative error of 2^-20
+/// (a micrometre at a metre), far under the bounds reduction uses.
+pub(crate) const EXP_BITS: i32 = 20;
+/// The element sizes this writer compresses (the codec takes multiples of 4 up to 256).
+pub(crate) const STRIDES: [usize; 4] = [4, 8, 12, 16];
+/// The vertex codec version `EXT_meshopt_compression` defines.
+const CODEC_VERSION: i32 = 0;
+
+/// A rotation key (xyzw, any length) as a reader gets it back through the `QUATERNION`
+/// filter: 16-bit normalized components, as [`meshopt::decode_filter_quat`] writes them,
+/// read as `c / 32767` (the sign may differ from the input's: the same rotation).
+///
+/// ```
+/// let q = rigport_export::meshopt_rotation_as_written([0.0, 0.6, 0.0, 0.8]);
+/// // The same rotation, up to sign, within the 16-bit grid's steps.
+/// let near = |s: f32| q.iter().zip([0.0, 0.6, 0.0, 0.8]).all(|(a, b)| (a - s * b).abs() < 1e-4);
+/// assert!(near(1.0) || near(-1.0), "{q:?}");
+/// ```
+pub fn rotation_as_written(q: [f32; 4]) -> [f32; 4] {
+    let mut encoded = meshopt::encode_filter_quat(&[unit(q)], QUAT_BITS);
+    meshopt::decode_filter_quat(&mut encoded);
+    let [c] = encoded[..] else { return q };
+    rigport_model::quantize::rotation_from_i16(c)
+}
+
+/// A translation or scale key as a reader gets it back through the `EXPONENTIAL` filter.
+///
+/// ```
+/// let v = rigport_export::meshopt_vector_as_written([1.0, -0.25, 3.1]);
+/// assert_eq!(v[..2], [1.0, -0.25]);
+/// assert!((v[2] - 3.1).abs() < 3.1 / (1 << 19) as f32);
+/// ```
+pub fn vector_as_written(v: [f32; 3]) -> [f32; 3] {
+    let mut encoded = meshopt::encode_filter_exp(&[v], EXP_BITS, meshopt::EncodeExpMode::Separate);
+    meshopt::decode_filter_exp(&mut encoded);
+    let [c] = encoded[..] else { return v };
+    c.map(f32::from_bits)
+}
+
+/// `q / |q|` in `f64` (the identity for a zero quaternion, which validation rules out).
+fn unit(q: [f32; 4]) -> [f32; 4] {
+    let len = q.iter().map(|&c| f64::from(c).powi(2)).sum::<f64>().sqrt();
+    if len > 0.0 && len.is_finite() {
+        q.map(|c| (f64::from(c) / len) as f32)
+    } else {
+        [0.0, 0.0, 0.0, 1.0]
+    }
+}
+
+/// A view's filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Filter {
+    /// Bytes as they are (key times).
+    None,
+    /// `QUATERNION`: 16-bit normalized rotations, 8-byte stride.
+    Quaternion,
+    /// `EXPONENTIAL`: floats, 4 bytes per component.
+    Exponential,
+}
+
+impl Filter {
+    fn name(self) -> &'static str {
+        match self {
+            Filter::None => "NONE",
+            Filter::Quaternion => "QUATERNION",
+            Filter::Exponential => "EXPONENTIAL",
+        }
+    }
+}
+
+/// The encoded bytes of elements of `stride` bytes (4, 8, 12 or 16: [`STRIDES`]), `raw`
+/// being their filtered (pre-codec) bytes, little-endian. The codec reports no error but
+/// for sizes it computes itself; an empty result would only make the view unreadable, and
+/// the tests decode every view.
+fn encode(raw: &[u8], stride: usize) -> Vec<u8> {
+    // The codec wants elements of one size: feed it as [u8; stride] rows through u32
+    // words (every stride here is a multiple of 4).
+    let words: Vec<u32> = raw
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    let encoded = match stride {
+        4 => meshopt::encode_vertex_buffer_level(&words, 2, Some(CODEC_VERSION)),
+        8 => {
+            let rows: Vec<[u32; 2]> = words.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+            meshopt::encode_vertex_buffer_level(&rows, 2, Some(CODEC_VERSION))
+        }
+        12 => {
+            let rows: Vec<[u32; 3]> = words.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            meshopt::encode_vertex_buffer_level(&rows, 2, Some(CODEC_VERSION))
+        }
+        _ => {
+            debug_assert_eq!(stride, 16, "strides are STRIDES");
+            let rows: Vec<[u32; 4]> = words
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect();
+            meshopt::encode_vertex_buffer_level(&rows, 2, Some(CODEC_VERSION))
+        }
+    };
+    encoded.unwrap_or_default()
+}
+
+/// Filtered bytes of rotation keys (flat xyzw).
+pub(crate) fn quaternions(values: &[f32]) -> Vec<u8> {
+    let quats: Vec<[f32; 4]> = values
+        .chunks_exact(4)
+        .map(|c| unit([c[0], c[1], c[2], c[3]]))
+        .collect();
+    meshopt::encode_filter_quat(&quats, QUAT_BITS)
+        .iter()
+        .flatten()
+        .flat_map(|c| c.to_le_bytes())
+        .collect()
+}
+
+/// Filtered bytes of three-component float keys (flat).
+pub(crate) fn exponential(values: &[f32]) -> Vec<u8> {
+    let vectors: Vec<[f32; 3]> = values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    meshopt::encode_filter_exp(&vectors, EXP_BITS, meshopt::EncodeExpMode::Separate)
+        .iter()
+        .flatten()
+        .flat_map(|c| c.to_le_bytes())
+        .collect()
+}
+
+/// Raw bytes of floats.
+pub(crate) fn floats(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// One compressed view, for the JSON: the view's index and its extension object.
+#[derive(Clone, Debug)]
+pub(crate) struct CompressedView {
+    /// Index in `bufferViews`.
+    pub view: usize,
+    /// `EXT_meshopt_compression` of the view.
+    pub extension: serde_json::Value,
+}
+
+/// Animation data of one stride and filter, gathered into one view.
+#[derive(Clone, Debug)]
+pub(crate) struct Group {
+    pub stride: usize,
+    pub filter: Filter,
+    /// The filtered bytes, accessor after accessor.
+    pub raw: Vec<u8>,
+    /// The accessors that read it (indices in `accessors`).
+    pub accessors: Vec<usize>,
+}
+
+/// The state of a compressed export: views written so far and the fallback buffer's size.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Compressed {
+    pub views: Vec<CompressedView>,
+    /// Animation groups not yet written.
+    pub groups: Vec<Group>,
+    /// Bytes of the fallback buffer (buffer 1): the decoded views, 4-byte aligned.
+    pub fallback_len: usize,
+}
+
+impl Compressed {
+    /// Appends `raw` to the group of `stride` and `filter` for `accessor`; returns its byte
+    /// offset in the group.
+    pub(crate) fn group(
+        &mut self,
+        stride: usize,
+        filter: Filter,
+        raw: &[u8],
+        accessor: usize,
+    ) -> usize {
+        let at = match self
+            .groups
+            .iter()
+            .position(|g| g.stride == stride && g.filter == filter)
+        {
+            Some(at) => at,
+            None => {
+                self.groups.push(Group {
+                    stride,
+                    filter,
+                    raw: Vec::new(),
+                    accessors: Vec::new(),
+                });
+                self.groups.len() - 1
+            }
+        };
+        let group = &mut self.groups[at];
+        let offset = group.raw.len();
+        group.raw.extend_from_slice(raw);
+        group.accessors.push(accessor);
+        offset
+    }
+
+    /// Encodes `raw` (filtered bytes, `count` elements of `stride`) into `bin` (4-byte
+    /// aligned) and returns the fallback range `(byte_offset, byte_length)` of the view the
+    /// caller pushes as `view`.
+    pub(crate) fn push(
+        &mut self,
+        bin: &mut Vec<u8>,
+        view: usize,
+        raw: &[u8],
+        stride: usize,
+        filter: Filter,
+    ) -> (usize, usize) {
+        let count = raw.len() / stride.max(1);
+        let encoded = encode(raw, stride);
+        let pad = bin.len().wrapping_neg() % 4;
+        bin.resize(bin.len() + pad, 0);
+        let offset = bin.len();
+        bin.extend_from_slice(&encoded);
+        let mut extension = serde_json::json!({
+            "buffer": 0,
+            "byteLength": encoded.len(),
+            "byteStride": stride,
+            "count": count,
+            "mode": "ATTRIBUTES",
+        });
+        if offset > 0 {
+            extension["byteOffset"] = offset.into();
+        }
+        if filter != Filter::None {
+            extension["filter"] = filter.name().into();
+        }
+        self.views.push(CompressedView { view, extension });
+        let at = self.fallback_len;
+        self.fallback_len += raw.len().next_multiple_of(4);
+        (at, raw.len())
+    }
+}

@@ -1,0 +1,270 @@
+//! Compact outputs: 16-bit rotation outputs, and `EXT_meshopt_compression` views that
+//! decode (with meshoptimizer's own decoder and filters) to what the plain file holds.
+
+use rigport_model::quantize::{rotation_from_i16, rotation_to_i16};
+use rigport_model::{Compression, TrackTarget};
+
+use super::*;
+use crate::test_assets;
+
+fn export(compact: bool, compression: Compression) -> Vec<u8> {
+    let options = GltfOptions {
+        compact,
+        compression,
+        ..Default::default()
+    };
+    to_glb(&test_assets::rig(), &options).expect("export").glb
+}
+
+/// The BIN chunk of a GLB.
+fn bin(glb: &[u8]) -> &[u8] {
+    let len = u32::from_le_bytes(glb[12..16].try_into().expect("4 bytes")) as usize;
+    &glb[20 + len + 8..]
+}
+
+/// The bytes of view `v` of the plain file `json` / `bin`.
+fn view_bytes<'a>(json: &Value, bin: &'a [u8], v: usize) -> &'a [u8] {
+    let view = &json["bufferViews"][v];
+    let at = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    &bin[at..at + view["byteLength"].as_u64().expect("length") as usize]
+}
+
+#[test]
+fn rotation_outputs_are_normalized_shorts_rounded_as_the_reducer_measures() {
+    let plain = export(false, Compression::None);
+    let short = export(true, Compression::None);
+    assert!(short.len() < plain.len());
+    let asset = test_assets::rig();
+    let (doc, buffers) = import(&short);
+    for (animation, clip) in doc.animations().zip(&asset.clips) {
+        for channel in animation.channels() {
+            let node = channel.target().node().index();
+            let track = clip.tracks.iter().find(|t| {
+                t.target == TrackTarget::Rotation(rigport_model::JointIndex(node as u32))
+            });
+            let (Some(track), ReadOutputs::Rotations(rotations)) = (
+                track.filter(|t| t.interpolation != rigport_model::Interpolation::CubicSpline),
+                channel
+                    .reader(|b| Some(&buffers[b.index()]))
+                    .read_outputs()
+                    .expect("outputs"),
+            ) else {
+                continue;
+            };
+            let gltf::animation::util::Rotations::I16(keys) = rotations else {
+                panic!("rotation outputs are not SHORT normalized");
+            };
+            let keys: Vec<[i16; 4]> = keys.collect();
+            if keys.len() != track.times.len() {
+                continue; // a constant track written with two keys
+            }
+            for (k, key) in keys.iter().enumerate() {
+                let expected = rotation_to_i16(track.key_value(k).try_into().expect("xyzw"));
+                let flipped = expected.map(|c| -c);
+                assert!(
+                    *key == expected || *key == flipped,
+                    "key {k}: {key:?} vs {expected:?}"
+                );
+            }
+        }
+    }
+}
+
+/// Decodes `count` elements of `stride` bytes (a multiple of 4, at most 16).
+fn decode_bytes(encoded: &[u8], count: usize, stride: usize) -> Vec<u8> {
+    fn rows<T: Clone + Default + AsRef<[u32]>>(encoded: &[u8], count: usize) -> Vec<u8> {
+        let rows: Vec<T> = ::meshopt::decode_vertex_buffer(encoded, count).expect("decodes");
+        rows.iter()
+            .flat_map(|r| {
+                r.as_ref()
+                    .iter()
+                    .flat_map(|w| w.to_le_bytes())
+                    .collect::<Vec<u8>>()
+            })
+            .collect()
+    }
+    match stride {
+        4 => rows::<[u32; 1]>(encoded, count),
+        8 => rows::<[u32; 2]>(encoded, count),
+        12 => rows::<[u32; 3]>(encoded, count),
+        16 => rows::<[u32; 4]>(encoded, count),
+        _ => panic!("stride {stride}"),
+    }
+}
+
+/// The bytes accessor `a` reads from `json` / `bin` (plain views), `count * size`.
+fn accessor_bytes(json: &Value, bin: &[u8], a: usize, size: usize) -> Vec<u8> {
+    let accessor = &json["accessors"][a];
+    let view = accessor["bufferView"].as_u64().expect("view") as usize;
+    let at = accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let count = accessor["count"].as_u64().expect("count") as usize;
+    view_bytes(json, bin, view)[at..at + count * size].to_vec()
+}
+
+#[test]
+fn meshopt_views_decode_to_the_plain_files_data() {
+    let plain = export(true, Compression::None);
+    let packed = export(true, Compression::Meshopt);
+    let (pj, mj) = (glb_json(&plain), glb_json(&packed));
+    assert!(
+        packed.len() < plain.len(),
+        "{} vs {}",
+        packed.len(),
+        plain.len()
+    );
+    let name = "EXT_meshopt_compression";
+    assert_eq!(mj["extensionsRequired"], serde_json::json!([name]));
+    assert_eq!(mj["extensionsUsed"], serde_json::json!([name]));
+    assert_eq!(mj["buffers"][1]["extensions"][name]["fallback"], true);
+    assert!(mj["buffers"][1].get("uri").is_none());
+    let accessors = mj["accessors"].as_array().expect("accessors");
+    assert_eq!(
+        accessors.len(),
+        pj["accessors"].as_array().expect("accessors").len()
+    );
+    let (plain_bin, packed_bin) = (bin(&plain), bin(&packed));
+    let mut filters = std::collections::BTreeSet::new();
+    for (a, accessor) in accessors.iter().enumerate() {
+        let Some(v) = accessor["bufferView"].as_u64().map(|v| v as usize) else {
+            continue; // sparse without a base view
+        };
+        let view = &mj["bufferViews"][v];
+        let Some(ext) = view["extensions"].get(name) else {
+            let size = view_bytes(&mj, packed_bin, v).len();
+            let count = accessor["count"].as_u64().expect("count") as usize;
+            let element = size / count.max(1);
+            assert_eq!(
+                accessor_bytes(&mj, packed_bin, a, element),
+                accessor_bytes(&pj, plain_bin, a, element),
+                "accessor {a}"
+            );
+            continue;
+        };
+        assert_eq!(view["buffer"], 1);
+        let at = ext["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let encoded = &packed_bin[at..at + ext["byteLength"].as_u64().expect("len") as usize];
+        assert_eq!(encoded[0], 0xa0, "vertex codec version 0");
+        let count = ext["count"].as_u64().expect("count") as usize;
+        let stride = ext["byteStride"].as_u64().expect("stride") as usize;
+        assert_eq!(ext["mode"], "ATTRIBUTES");
+        let filter = ext["filter"].as_str().unwrap_or("NONE");
+        filters.insert(filter.to_owned());
+        let offset = accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let n = accessor["count"].as_u64().expect("count") as usize;
+        let expected = accessor_bytes(&pj, plain_bin, a, stride);
+        match (filter, stride) {
+            ("NONE", _) => {
+                let all = decode_bytes(encoded, count, stride);
+                assert_eq!(
+                    all[offset..offset + n * stride],
+                    expected[..],
+                    "accessor {a}"
+                );
+            }
+            ("QUATERNION", 8) => {
+                let mut rows: Vec<[i16; 4]> =
+                    ::meshopt::decode_vertex_buffer(encoded, count).expect("decodes");
+                ::meshopt::decode_filter_quat(&mut rows);
+                let rows = &rows[offset / 8..offset / 8 + n];
+                for (k, (row, plain)) in rows.iter().zip(expected.chunks_exact(8)).enumerate() {
+                    let plain: [i16; 4] = std::array::from_fn(|c| {
+                        i16::from_le_bytes([plain[2 * c], plain[2 * c + 1]])
+                    });
+                    let (x, y) = (rotation_from_i16(*row), rotation_from_i16(plain));
+                    // The same rotation (up to sign) within the 16-bit grid's steps.
+                    let near = |s: f32| {
+                        x.iter()
+                            .zip(&y)
+                            .all(|(p, q)| (p - s * q).abs() <= 2.0 / 32767.0)
+                    };
+                    assert!(
+                        near(1.0) || near(-1.0),
+                        "accessor {a} key {k}: {x:?} vs {y:?}"
+                    );
+                }
+            }
+            ("EXPONENTIAL", 12) => {
+                let mut rows: Vec<[u32; 3]> =
+                    ::meshopt::decode_vertex_buffer(encoded, count).expect("decodes");
+                ::meshopt::decode_filter_exp(&mut rows);
+                let rows = &rows[offset / 12..offset / 12 + n];
+                for (row, plain) in rows.iter().flatten().zip(expected.chunks_exact(4)) {
+                    let (x, y) = (
+                        f32::from_bits(*row),
+                        f32::from_le_bytes(plain.try_into().expect("4")),
+                    );
+                    assert!(
+                        (x - y).abs() <= y.abs() / (1 << 19) as f32,
+                        "accessor {a}: {x} vs {y}"
+                    );
+                }
+            }
+            other => panic!("accessor {a}: unexpected {other:?}"),
+        }
+    }
+    assert!(
+        filters.contains("QUATERNION") && filters.contains("EXPONENTIAL"),
+        "{filters:?}"
+    );
+}
+
+/// Weights that are exactly `k / 255` (here: every vertex on one joint, as a bone mesh) are
+/// normalized bytes in a compact export, read back as the same weights; other weights stay
+/// floats.
+#[test]
+fn exact_weights_are_normalized_bytes_in_compact_exports() {
+    let mut asset = test_assets::rig();
+    let weights_of = |glb: &[u8]| -> (u64, Vec<[f32; 4]>) {
+        let json = glb_json(glb);
+        let accessor = json["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"]
+            .as_u64()
+            .expect("WEIGHTS_0");
+        let (doc, buffers) = import(glb);
+        let primitive = doc
+            .meshes()
+            .next()
+            .expect("mesh")
+            .primitives()
+            .next()
+            .expect("primitive");
+        let reader = primitive.reader(|b| Some(&buffers[b.index()]));
+        let weights = reader
+            .read_weights(0)
+            .expect("weights")
+            .into_f32()
+            .collect();
+        (
+            json["accessors"][accessor as usize]["componentType"]
+                .as_u64()
+                .expect("type"),
+            weights,
+        )
+    };
+    let options = |compact| GltfOptions {
+        compact,
+        ..Default::default()
+    };
+    // The rig's blended weights are not all k/255: floats either way.
+    let blended = to_glb(&asset, &options(true)).expect("export").glb;
+    assert_eq!(weights_of(&blended).0, 5126);
+    // Every vertex on its nearest palette joint with weight 1.
+    let rows: Vec<Vec<rigport_model::Influence>> = asset.skins[0]
+        .influences
+        .rows()
+        .map(|row| {
+            let top = row.iter().max_by(|a, b| a.weight.total_cmp(&b.weight));
+            top.map(|t| {
+                vec![rigport_model::Influence {
+                    joint: t.joint,
+                    weight: 1.0,
+                }]
+            })
+            .unwrap_or_default()
+        })
+        .collect();
+    asset.skins[0].influences = rigport_model::Influences::from_rows(rows);
+    let plain = weights_of(&to_glb(&asset, &options(false)).expect("export").glb);
+    let compact = weights_of(&to_glb(&asset, &options(true)).expect("export").glb);
+    assert_eq!((plain.0, compact.0), (5126, 5121));
+    assert_eq!(plain.1, compact.1);
+}

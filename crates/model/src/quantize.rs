@@ -1,0 +1,49 @@
+//! Rotations as 16-bit normalized integers, as glTF stores animation outputs.
+//!
+//! glTF 2.0 §3.11 ("Animations", accessor types of `rotation` sampler outputs) allows
+//! `SHORT` normalized components for rotations in core glTF, no extension needed; a reader
+//! decodes a component `c` as `max(c / 32767, -1)` (§3.11, "Animation Samplers", and
+//! §3.6.2.4 on normalized integers). The encoder and the key reducer call the same
+//! functions, so the error a reducer measures is the error of the bytes written.
+
+/// The largest magnitude of a `SHORT` normalized component.
+const SHORT_MAX: f64 = 32767.0;
+
+/// `q` (xyzw, any non-zero length) normalized in `f64` and rounded to the nearest 16-bit
+/// normalized component. Odd: `rotation_to_i16(-q) == -rotation_to_i16(q)` component by
+/// component, so flipping a key's sign after encoding equals encoding the flipped key.
+///
+/// ```
+/// use rigport_model::quantize::{rotation_from_i16, rotation_to_i16};
+///
+/// let q = [0.0, 0.6, 0.0, 0.8];
+/// assert_eq!(rotation_to_i16(q), [0, 19660, 0, 26214]);
+/// assert_eq!(rotation_to_i16([-0.0, -0.6, -0.0, -0.8]), [0, -19660, 0, -26214]);
+/// let back = rotation_from_i16(rotation_to_i16(q));
+/// assert!((back[1] - 0.6).abs() < 1.0 / 32767.0);
+/// ```
+pub fn rotation_to_i16(q: [f32; 4]) -> [i16; 4] {
+    let len = q
+        .iter()
+        .map(|&c| f64::from(c) * f64::from(c))
+        .sum::<f64>()
+        .sqrt();
+    let len = if len > 0.0 && len.is_finite() {
+        len
+    } else {
+        1.0
+    };
+    // |c / len| <= 1, so the rounded value is within i16 (the cast saturates anyway).
+    q.map(|c| (f64::from(c) / len * SHORT_MAX).round() as i16)
+}
+
+/// The rotation a reader decodes from 16-bit normalized components: `max(c / 32767, -1)`
+/// each (not renormalized; a slerp renormalizes or not, as the reader does).
+pub fn rotation_from_i16(c: [i16; 4]) -> [f32; 4] {
+    c.map(|c| (f64::from(c) / SHORT_MAX).max(-1.0) as f32)
+}
+
+/// [`rotation_from_i16`] of [`rotation_to_i16`]: the rotation a reader sees for `q`.
+pub fn rotation_as_i16(q: [f32; 4]) -> [f32; 4] {
+    rotation_from_i16(rotation_to_i16(q))
+}

@@ -1,0 +1,366 @@
+//! Compact clips: every clip's keys reduced within a model-space bound on joints and on
+//! virtual points fixed to them (`rigport_anim::reduce`), with rotations as 16-bit
+//! normalized integers in glTF, and the report of what it saved ([`CompactReport`]).
+//!
+//! The bound is a distance in the rig's length unit; by default 1 mm
+//! ([`DEFAULT_TOLERANCE_M`]) converted with the asset's metres per unit (a rig that states
+//! no unit is taken to be in metres, as glTF export takes it). Virtual points sit at 3 cm
+//! ([`POINT_DISTANCE_M`], ACL's default shell distance) from every joint, farther for a
+//! joint that skins vertices farther than that (the farthest such vertex, in the joint's
+//! bind frame), so the bound covers the skinned mesh as ACL's metric does.
+
+use rigport_anim::reduce::metric::point_error;
+use rigport_anim::reduce::{Codec, ReduceOptions, reduce_clip};
+use rigport_model::{Asset, Clip, Compression, Interpolation, JointIndex, Skeleton, TrackTarget};
+use serde::Serialize;
+
+use crate::PipelineError;
+
+/// The default bound: 1 mm.
+///
+/// ```
+/// use rigport_pipeline::compact::{DEFAULT_TOLERANCE_M, POINT_DISTANCE_M};
+/// // ACL's threshold (0.01 cm) is a tenth of the default bound; its points sit 30 times farther.
+/// assert_eq!(DEFAULT_TOLERANCE_M, 0.001);
+/// assert!((POINT_DISTANCE_M / DEFAULT_TOLERANCE_M - 30.0).abs() < 1e-9);
+/// ```
+pub const DEFAULT_TOLERANCE_M: f64 = 0.001;
+/// The distance of the virtual points from each joint: 3 cm, ACL's default.
+///
+/// ```
+/// assert_eq!(rigport_pipeline::compact::POINT_DISTANCE_M, 0.03);
+/// ```
+pub const POINT_DISTANCE_M: f64 = 0.03;
+
+/// What compacting one clip did. Errors are in the rig's length unit unless named `_cm`.
+///
+/// ```
+/// let clip = rigport_pipeline::compact::ClipReport { keys_before: 10, keys_after: 4, ..Default::default() };
+/// assert_eq!(serde_json::to_value(&clip)?["keys_after"], 4);
+/// # Ok::<(), serde_json::Error>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ClipReport {
+    /// The clip's name.
+    pub clip: String,
+    /// Keys over every track, before and after.
+    pub keys_before: usize,
+    /// See `keys_before`.
+    pub keys_after: usize,
+    /// The largest and mean model-space error of joints and their virtual points (at 3 cm,
+    /// or a skinned mesh's reach), over every original key time.
+    pub max_error: f32,
+    /// See `max_error`.
+    pub mean_error: f32,
+    /// ACL's metric: the largest and mean error of virtual points at 3 cm from every joint,
+    /// in centimetres (ACL's threshold is 0.01 cm).
+    pub acl_max_error_cm: f64,
+    /// See `acl_max_error_cm`.
+    pub acl_mean_error_cm: f64,
+}
+
+/// What compacting an asset's clips did ([`crate::write::write_output_report`]).
+///
+/// ```
+/// use rigport_pipeline::write::{write_output_report, Output};
+/// use rigport_pipeline::{progress::Silent, MemoryBudget};
+///
+/// let dir = tempfile::tempdir()?;
+/// let imported = rigport_import::bvh::import("../../fixtures/bvh/end_sites.bvh".as_ref())?;
+/// let output = Output { reduce: true, ..Output::new(dir.path().join("walk.glb")) };
+/// let (_, report) = write_output_report(imported.asset, imported.warnings, &output,
+///     &MemoryBudget::UNLIMITED, &Silent)?;
+/// let report = report.expect("reduced");
+/// // The default bound: 1 mm in a rig that states no unit (metres).
+/// assert_eq!(report.tolerance, 0.001);
+/// // The reduced clips are written only when they make the file no bigger.
+/// assert_eq!(report.reduced_written, report.bytes_after <= report.bytes_before);
+/// assert!(report.clips.iter().all(|c| c.max_error <= 0.001 && c.keys_after <= c.keys_before));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct CompactReport {
+    /// The bound, in the rig's length unit.
+    pub tolerance: f32,
+    /// Metres per rig unit (1 when the rig states none).
+    pub meters_per_unit: f64,
+    /// Whether key values are written as the compression stores them (16-bit rotations; with
+    /// meshopt, its filters), as the error was measured; `false`: exact floats.
+    pub rotations_i16: bool,
+    /// The compression the file is written with.
+    pub compression: String,
+    /// The output's size without and with the reduction, in bytes.
+    pub bytes_before: u64,
+    /// See `bytes_before`.
+    pub bytes_after: u64,
+    /// Whether the reduced clips were written (`false`: they made the file no smaller, and
+    /// the unreduced clips were written instead).
+    pub reduced_written: bool,
+    /// Per clip, in the asset's order.
+    pub clips: Vec<ClipReport>,
+}
+
+impl CompactReport {
+    /// One line per clip, then the sizes.
+    ///
+    /// ```
+    /// let report = rigport_pipeline::compact::CompactReport { bytes_before: 9, bytes_after: 4,
+    ///     reduced_written: true, ..Default::default() };
+    /// assert_eq!(report.lines(), ["compact: 9 -> 4 bytes (reduced clips written)"]);
+    /// ```
+    pub fn lines(&self) -> Vec<String> {
+        let mut lines: Vec<String> = self
+            .clips
+            .iter()
+            .map(|c| {
+                format!(
+                    "compact: clip {:?}: {} -> {} keys; error max {:.3e} mean {:.3e} (bound {:.3e}, rig units); ACL metric (3 cm points) max {:.4} mean {:.4} cm",
+                    c.clip, c.keys_before, c.keys_after, c.max_error, c.mean_error,
+                    self.tolerance, c.acl_max_error_cm, c.acl_mean_error_cm
+                )
+            })
+            .collect();
+        lines.push(format!(
+            "compact: {} -> {} bytes ({}{})",
+            self.bytes_before,
+            self.bytes_after,
+            if self.reduced_written {
+                "reduced clips written"
+            } else {
+                "unreduced clips written: the reduction made the file no smaller"
+            },
+            if self.rotations_i16 {
+                ", rotations as 16-bit integers"
+            } else {
+                ""
+            }
+        ));
+        lines
+    }
+}
+
+/// The bound in rig units: `tolerance` when given, else 1 mm in the asset's unit.
+pub(crate) fn tolerance_in_rig_units(asset: &Asset, tolerance: Option<f32>) -> f32 {
+    tolerance.unwrap_or_else(|| (DEFAULT_TOLERANCE_M / meters_per_unit(asset)) as f32)
+}
+
+/// Metres per rig unit, 1 when the asset states none (or a value that is not positive).
+fn meters_per_unit(asset: &Asset) -> f64 {
+    asset
+        .meters_per_unit
+        .filter(|m| m.is_finite() && *m > 0.0)
+        .unwrap_or(1.0)
+}
+
+/// Per joint: 3 cm in rig units, or the farthest vertex the joint skins (weight above
+/// zero), measured in its bind frame, when that is farther.
+fn point_distances(asset: &Asset) -> Vec<f32> {
+    let base = (POINT_DISTANCE_M / meters_per_unit(asset)) as f32;
+    let mut out = vec![base; asset.skeleton.len()];
+    for skin in &asset.skins {
+        let Some(mesh) = asset.meshes.get(skin.mesh.get()) else {
+            continue;
+        };
+        for (row, &p) in skin.influences.rows().zip(&mesh.positions) {
+            for influence in row.iter().filter(|i| i.weight > 0.0) {
+                let palette = influence.joint as usize;
+                let (Some(joint), Some(inv_bind)) =
+                    (skin.joints.get(palette), skin.inv_bind.get(palette))
+                else {
+                    continue;
+                };
+                let reach = inv_bind.transform_point3(p).length();
+                if let Some(d) = out.get_mut(joint.get()) {
+                    if reach.is_finite() {
+                        *d = d.max(reach);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// How a glTF writer with `compression` stores key values: 16-bit rotations, or
+/// meshoptimizer's quaternion and exponential filters.
+pub(crate) fn codec(compression: Compression) -> Codec {
+    match compression {
+        Compression::None => Codec::I16,
+        Compression::Meshopt => Codec {
+            rotation: rigport_export::meshopt_rotation_as_written,
+            vector: Some(rigport_export::meshopt_vector_as_written),
+        },
+    }
+}
+
+/// The asset's clips reduced within `tolerance` (rig units), with their reports and
+/// whether key values are measured (and so must be written) through `codec`: kept only
+/// when every clip's rounding fits the bound.
+///
+/// # Errors
+/// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
+pub(crate) fn compact_clips(
+    asset: &Asset,
+    tolerance: f32,
+    codec: Option<Codec>,
+) -> Result<(Vec<Clip>, Vec<ClipReport>, bool), PipelineError> {
+    let points = point_distances(asset);
+    let acl_points = vec![(POINT_DISTANCE_M / meters_per_unit(asset)) as f32; points.len()];
+    let cm_per_unit = meters_per_unit(asset) * 100.0;
+    let mut codec = codec;
+    'again: loop {
+        let options = ReduceOptions {
+            tolerance,
+            point_distance: points.clone(),
+            codec,
+            uniform_rate: true,
+        };
+        let mut clips = Vec::with_capacity(asset.clips.len());
+        let mut reports = Vec::with_capacity(asset.clips.len());
+        for clip in &asset.clips {
+            let failed = |e| PipelineError::step(format!("cannot reduce clip {:?}", clip.name), e);
+            let (reduced, stats) = reduce_clip(clip, &asset.skeleton, &options).map_err(failed)?;
+            if codec.is_some() && !stats.coded {
+                // One writer setting for the file: exact values for every clip.
+                codec = None;
+                continue 'again;
+            }
+            let acl = point_error(clip, &reduced, &asset.skeleton, &acl_points, codec.as_ref())
+                .map_err(failed)?;
+            reports.push(ClipReport {
+                clip: clip.name.clone(),
+                keys_before: stats.keys_before,
+                keys_after: stats.keys_after,
+                max_error: stats.max_error,
+                mean_error: stats.mean_error,
+                acl_max_error_cm: f64::from(acl.max) * cm_per_unit,
+                acl_mean_error_cm: f64::from(acl.mean) * cm_per_unit,
+            });
+            clips.push(reduced);
+        }
+        return Ok((clips, reports, codec.is_some()));
+    }
+}
+
+/// Moves every joint property that every clip holds at one value (LINEAR or STEP keys all
+/// bit for bit equal, in every clip) into the rest pose, so that the glTF writer drops its
+/// tracks (a property without a channel keeps its node's value, glTF 2.0 §3.11). Returns
+/// the skeleton as it was when something moved, `None` when nothing did. A rest rotation is
+/// the clips' value normalized.
+pub(crate) fn constants_into_rest(asset: &mut Asset) -> Option<Skeleton> {
+    if asset.clips.is_empty() {
+        return None;
+    }
+    let mut joints = asset.skeleton.joints().to_vec();
+    let mut moved = false;
+    for (j, joint) in joints.iter_mut().enumerate() {
+        let at = JointIndex(j as u32);
+        for target in [
+            TrackTarget::Translation(at),
+            TrackTarget::Rotation(at),
+            TrackTarget::Scale(at),
+        ] {
+            let Some(value) = held_value(&asset.clips, target) else {
+                continue;
+            };
+            let rest = &mut joint.rest_local;
+            match (target, value.as_slice()) {
+                (TrackTarget::Translation(_), &[x, y, z]) => {
+                    rest.translation = rigport_model::glam::Vec3::new(x, y, z);
+                }
+                (TrackTarget::Scale(_), &[x, y, z]) => {
+                    rest.scale = rigport_model::glam::Vec3::new(x, y, z);
+                }
+                (TrackTarget::Rotation(_), &[x, y, z, w]) => {
+                    let q = rigport_model::glam::Quat::from_xyzw(x, y, z, w);
+                    if q.length() == 0.0 || !q.is_finite() {
+                        continue;
+                    }
+                    rest.rotation = q.normalize();
+                }
+                _ => continue,
+            }
+            moved = true;
+        }
+    }
+    if !moved {
+        return None;
+    }
+    let mut skeleton = Skeleton::new(joints).ok()?;
+    skeleton.set_limits(asset.skeleton.limits().iter().cloned());
+    Some(std::mem::replace(&mut asset.skeleton, skeleton))
+}
+
+/// The one value every clip's (first) track for `target` holds at every key, if any.
+fn held_value(clips: &[Clip], target: TrackTarget) -> Option<Vec<f32>> {
+    let mut value: Option<&[f32]> = None;
+    for clip in clips {
+        let track = clip.tracks.iter().find(|t| t.target == target)?;
+        let c = track.components();
+        if track.interpolation == Interpolation::CubicSpline || c == 0 {
+            return None;
+        }
+        let first = track.values.get(..c)?;
+        if !track.values.chunks_exact(c).all(|k| k == first) || value.is_some_and(|v| v != first) {
+            return None;
+        }
+        value = Some(first);
+    }
+    value.map(<[f32]>::to_vec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn walk() -> Asset {
+        let path = std::path::Path::new("../../fixtures/bvh/end_sites.bvh");
+        match rigport_import::bvh::import(path) {
+            Ok(imported) => imported.asset,
+            Err(e) => panic!("fixture: {e}"),
+        }
+    }
+
+    /// A rotation every clip holds at one value goes into the rest pose; one that a clip
+    /// changes, or that one clip does not animate, stays.
+    #[test]
+    fn properties_every_clip_holds_move_into_the_rest_pose() {
+        let mut asset = walk();
+        let (ti, joint) = asset.clips[0]
+            .tracks
+            .iter()
+            .enumerate()
+            .find_map(|(ti, t)| match t.target {
+                TrackTarget::Rotation(j) => Some((ti, j)),
+                _ => None,
+            })
+            .expect("a rotation track");
+        let held = [0.0f32, 0.6, 0.0, 0.8];
+        let keys = asset.clips[0].tracks[ti].times.len();
+        asset.clips[0].tracks[ti].values = held.repeat(keys);
+        asset.clips.push(asset.clips[0].clone());
+        let before = asset.skeleton.clone();
+        let mut moved = asset.clone();
+        assert_eq!(constants_into_rest(&mut moved), Some(before.clone()));
+        let rest = moved.skeleton.joint(joint).rest_local.rotation;
+        assert!(
+            rest.abs_diff_eq(rigport_model::glam::Quat::from_array(held), 1e-7),
+            "{rest}"
+        );
+        // Everything else is as it was.
+        for (a, b) in moved.skeleton.joints().iter().zip(before.joints()) {
+            if a.name != before.joint(joint).name {
+                assert_eq!(a, b);
+            }
+        }
+        // One clip holds another value at one key: nothing moves.
+        let mut changed = asset.clone();
+        changed.clips[1].tracks[ti].values[0] = 0.1;
+        assert_eq!(constants_into_rest(&mut changed), None);
+        assert_eq!(changed.skeleton, before);
+        // One clip does not animate it: nothing moves.
+        let mut missing = asset.clone();
+        missing.clips[1].tracks.remove(ti);
+        assert_eq!(constants_into_rest(&mut missing), None);
+    }
+}
