@@ -3,7 +3,7 @@
 //! the parent, which names the joint whose own rotation differs), where each largest one
 //! is, and each reference vertex's largest deviation over the frames.
 
-use glam::DQuat;
+use glam::{DQuat, DVec3};
 
 use crate::side::Posed;
 use crate::vertex_map::VertexMap;
@@ -29,6 +29,17 @@ pub struct MeshPair {
     pub candidate: usize,
     /// For each reference vertex, its candidate vertices.
     pub map: VertexMap,
+}
+
+impl MeshPair {
+    /// How far reference vertex `v`, at `p`, is from the nearest of its candidate
+    /// vertices among `candidate` positions (infinite when it has none).
+    pub fn distance(&self, v: usize, p: DVec3, candidate: &[DVec3]) -> f64 {
+        (self.map.of(v).iter())
+            .filter_map(|&c| candidate.get(c as usize))
+            .map(|c| c.distance(p))
+            .fold(f64::INFINITY, f64::min)
+    }
 }
 
 /// Where a largest deviation is: a frame (index into the times compared, and its time
@@ -163,13 +174,7 @@ impl ClipDeviation {
             };
             let per_vertex = &mut self.per_vertex[k];
             for (v, p) in rv.iter().enumerate() {
-                let d = pair
-                    .map
-                    .of(v)
-                    .iter()
-                    .filter_map(|&c| cv.get(c as usize))
-                    .map(|c| c.distance(*p))
-                    .fold(f64::INFINITY, f64::min);
+                let d = pair.distance(v, *p, cv);
                 if !d.is_finite() {
                     continue;
                 }

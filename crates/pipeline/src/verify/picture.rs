@@ -82,13 +82,7 @@ pub(crate) fn write(f: &Findings<'_>, path: &Path) -> Result<Vec<Mark>, Pipeline
             .iter()
             .enumerate()
             .map(|(v, p)| {
-                let d = pair
-                    .map
-                    .of(v)
-                    .iter()
-                    .filter_map(|&c| cv.get(c as usize))
-                    .map(|c| c.distance(*p))
-                    .fold(f64::INFINITY, f64::min);
+                let d = pair.distance(v, *p, cv);
                 if d.is_finite() {
                     if d > f.within() {
                         ranked.push((d, pair.reference, v));
