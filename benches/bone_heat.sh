@@ -6,7 +6,9 @@
 #   alone, taken in turn, A B A B ..., so the shared machine's drift hits both;
 # - the same mesh with every triangle cut into 9 (120,008 vertices, made by the example's
 #   `--split 3` and written to a temp OBJ, not committed): wall time and peak memory of the
-#   whole process (GNU time -v) for both.
+#   whole process (GNU time -v) for both;
+# - rigport alone on the mesh split 1, 2, 3, 4 and 6 times (13k to 480k vertices): peak
+#   memory per vertex, to show it grows linearly.
 #
 #   bash benches/bone_heat.sh [ROUNDS]
 #
@@ -55,3 +57,11 @@ grep -E '^run' "$work/out.txt"
 timed "Blender (bpy start-up, OBJ read, armature, weights, write)" \
   "$bpy" tools/blender/auto_weights.py "$work/split3.obj" "$skeleton" "$work/blender.txt"
 head -3 "$work/blender.txt" | grep '^#'
+
+echo "== rigport's peak memory by size (split N: every triangle cut into N*N)"
+for n in 1 2 3 4 6; do
+  timed "split $n" "$example" "$mesh" "$skeleton" --split "$n"
+  vertices=$(sed -n 's/^run 0: \([0-9]*\) vertices.*: \([0-9.]*\) s .*/\1 \2/p' "$work/out.txt")
+  awk -v v="$vertices" -F': ' '/Maximum resident set size/ {split(v, a, " ");
+    printf "  %s vertices, weights %s s, %.2f KiB per vertex\n", a[1], a[2], $2 / a[1]}' "$work/time.txt"
+done

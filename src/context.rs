@@ -138,6 +138,10 @@ impl Progress for Context {
             return;
         }
         let mut slot = self.bar.lock().unwrap_or_else(|e| e.into_inner());
+        // A step's spinner (no length) gives way to the bar.
+        if let Some(spinner) = slot.take_if(|b| b.length().is_none()) {
+            spinner.finish_and_clear();
+        }
         let template = format!("{what} {{bar:30}} {{pos}}/{{len}}, ETA {{eta}}");
         let bar = slot.get_or_insert_with(|| self.bar(total, &template));
         bar.set_length(total as u64);

@@ -220,3 +220,67 @@ fn a_csci520_folder_without_weights_gets_them_with_the_flag() {
     let npz = dir.path().join("chain.npz");
     rigport_ok(&["eval", s(&cfg), "--weights", "auto", "-o", s(&npz), "-q"]);
 }
+
+/// A capped-open tube along +Y from 0 to 3 of `rings` rings of `around` vertices, as OBJ
+/// text, and a Pinocchio skeleton.out of three joints up its axis (two bones).
+fn long_tube(rings: usize, around: usize) -> (String, &'static str) {
+    let mut obj = String::new();
+    for r in 0..rings {
+        let y = 3.0 * r as f32 / (rings - 1) as f32;
+        for k in 0..around {
+            let t = k as f32 * std::f32::consts::TAU / around as f32;
+            writeln!(obj, "v {} {y} {}", 0.2 * t.cos(), 0.2 * t.sin()).unwrap();
+        }
+    }
+    for r in 0..rings - 1 {
+        for k in 0..around {
+            let v = |r: usize, k: usize| 1 + r * around + k % around;
+            let (a0, a1, b0, b1) = (v(r, k), v(r, k + 1), v(r + 1, k), v(r + 1, k + 1));
+            writeln!(obj, "f {a0} {b1} {a1}\nf {a0} {b0} {b1}").unwrap();
+        }
+    }
+    (obj, "0 0 0.1 0 -1\n1 0 1.5 0 0\n2 0 2.9 0 1\n")
+}
+
+/// Runs `rigport args` under a pseudo-terminal (`script`, util-linux), where progress is
+/// drawn: everything the terminal received.
+fn on_a_terminal(args: &[&str]) -> String {
+    let line = std::iter::once(env!("CARGO_BIN_EXE_rigport"))
+        .chain(args.iter().copied())
+        .map(|a| format!("'{a}'"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let out = std::process::Command::new("script")
+        .args(["-qefc", &line, "/dev/null"])
+        .output()
+        .expect("script (util-linux) runs");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "{line}:\n{text}");
+    text
+}
+
+#[test]
+fn meshes_over_50k_vertices_show_a_progress_bar_while_weighted() {
+    let dir = scratch();
+    let skeleton = dir.path().join("skeleton.out");
+    for (name, rings, bar) in [("big", 1601, true), ("small", 101, false)] {
+        // 32 around: 51,232 vertices for the big tube, 3,232 for the small one.
+        let (obj, bones) = long_tube(rings, 32);
+        std::fs::write(&skeleton, bones).unwrap();
+        let mesh = dir.path().join(format!("{name}.obj"));
+        std::fs::write(&mesh, obj).unwrap();
+        let out = dir.path().join(format!("{name}.out"));
+        let shown = on_a_terminal(&["skin", s(&mesh), s(&skeleton), "-o", s(&out)]);
+        // The bar counts three units per vertex (sight, factorization, solves); a smaller
+        // mesh has the step's spinner only.
+        let counted = shown.contains(&format!("/{}, ETA", 3 * rings * 32));
+        assert_eq!(counted, bar, "{name}:\n{shown}");
+        assert!(
+            shown.contains("computing weights by bone heat"),
+            "{name}:\n{shown}"
+        );
+        assert!(shown.contains("wrote "), "{name}:\n{shown}");
+        let rows = std::fs::read_to_string(&out).unwrap();
+        assert_eq!(rows.lines().count(), rings * 32);
+    }
+}

@@ -210,6 +210,7 @@ impl Reference {
             &mesh.triangles,
             &self.bones,
             &HeatOptions::default(),
+            &|_, _| {},
         )
         .expect("weights");
         let seconds = start.elapsed().as_secs_f64();
@@ -343,8 +344,14 @@ fn bone_heat_weights_a_tiny_mesh_as_its_full_size() {
             tail: b.tail * scale,
         })
         .collect();
-    let heat =
-        bone_heat(&positions, &mesh.triangles, &bones, &HeatOptions::default()).expect("weights");
+    let heat = bone_heat(
+        &positions,
+        &mesh.triangles,
+        &bones,
+        &HeatOptions::default(),
+        &|_, _| {},
+    )
+    .expect("weights");
     let joints = bones.len();
     let dense = |row: &[(u32, f32)]| {
         let mut d = vec![0.0f32; joints];

@@ -256,7 +256,7 @@ fn gather(
     request: &CombineRequest,
 ) -> Result<Gathered, PipelineError> {
     let label = motion.source.label();
-    let imported = input.load(&motion.source)?;
+    let imported = input.load(&motion.source, &crate::progress::Silent)?;
     let (source, mut warnings) = (imported.asset, imported.warnings);
     if source.clips.is_empty() {
         if motion.from_folder {

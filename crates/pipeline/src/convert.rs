@@ -75,7 +75,7 @@ pub fn run(
     check_request(input, &options.output.path, &[])?;
     let plan = single_plan(&input.files)?;
     let imported = step(progress, &format!("reading {}", plan.label()), || {
-        input.load(&plan)
+        input.load(&plan, progress)
     })?;
     convert_imported(input, imported, options, progress)
 }

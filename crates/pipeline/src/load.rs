@@ -72,17 +72,22 @@ impl Input {
         plan(&self.files)
     }
 
-    /// Imports `plan` (see [`load`]).
+    /// Imports `plan` (see [`load`]); weights computed on the way (`auto_weights`) tell
+    /// `progress` how far they are.
     ///
     /// # Errors
     /// As [`load`].
-    pub(crate) fn load(&self, plan: &Source) -> Result<Imported, PipelineError> {
-        let mut imported = load(plan, self.bone_mesh, &self.budget)?;
+    pub(crate) fn load(
+        &self,
+        plan: &Source,
+        progress: &dyn Progress,
+    ) -> Result<Imported, PipelineError> {
+        let mut imported = load(plan, self.bone_mesh, &self.budget, progress)?;
         if self.files.auto_weights && matches!(plan, Source::Csci520(_)) {
             // The weights are computed: their absence is no loss.
             use rigport_import::csci520::NO_WEIGHTS;
             (imported.warnings).retain(|w| !matches!(w, Warning::Incomplete { message, .. } if message.ends_with(NO_WEIGHTS)));
-            crate::weights::bind_unskinned(&mut imported, &plan.label())?;
+            crate::weights::bind_unskinned(&mut imported, &plan.label(), progress)?;
         }
         crate::units::apply(&mut imported, self.units, self.force_units, &plan.label())?;
         Ok(imported)
@@ -110,7 +115,7 @@ impl Input {
     ) -> Result<(Source, Imported), PipelineError> {
         crate::progress::step(progress, step, || {
             let plan = single_plan(&self.files)?;
-            let imported = self.load(&plan)?;
+            let imported = self.load(&plan, progress)?;
             Ok((plan, imported))
         })
     }
@@ -145,7 +150,8 @@ pub(crate) fn single_plan(inputs: &Inputs) -> Result<Source, PipelineError> {
 }
 
 /// Imports a plan within `budget`; with `bone_mesh`, a skeleton-only asset gets a
-/// generated bone mesh (noted in the warnings).
+/// generated bone mesh (noted in the warnings). Weights computed for a Pinocchio mesh
+/// without its attachment tell `progress` how far they are.
 ///
 /// # Errors
 /// Over the memory budget; as the importer.
@@ -153,10 +159,13 @@ pub(crate) fn load(
     plan: &Source,
     bone_mesh: bool,
     budget: &MemoryBudget,
+    progress: &dyn Progress,
 ) -> Result<Imported, PipelineError> {
     crate::memory::check_import(plan, budget)?;
     let mut imported = match plan {
-        Source::PinocchioUnweighted { mesh, skeleton } => crate::weights::auto_rig(mesh, skeleton)?,
+        Source::PinocchioUnweighted { mesh, skeleton } => {
+            crate::weights::auto_rig(mesh, skeleton, progress)?
+        }
         _ => plan.import()?,
     };
     if bone_mesh && rigport_import::bone_mesh::add_bone_mesh(&mut imported.asset) {

@@ -106,7 +106,7 @@ pub fn run(
     let mut loaded = Vec::with_capacity(plans.len());
     for plan in &plans {
         let imported = step(progress, &format!("reading {}", plan.label()), || {
-            input.load(plan)
+            input.load(plan, progress)
         })?;
         loaded.push((plan, imported));
     }

@@ -110,7 +110,7 @@ pub fn run(
                 ));
             }
             let (imported, rows) = step(progress, "computing weights by bone heat", || {
-                crate::weights::auto_rig_rows(mesh, skeleton)
+                crate::weights::auto_rig_rows(mesh, skeleton, progress)
             })?;
             if attachment {
                 progress.warnings(&imported.warnings)?;
@@ -152,12 +152,13 @@ pub fn run(
                 ..input.clone()
             };
             let mut rig = step(progress, &format!("reading {}", skeleton.label()), || {
-                rig_input.load(skeleton)
+                rig_input.load(skeleton, progress)
             })?;
-            let body = crate::load::load(&Source::Obj(mesh.clone()), false, &input.budget)?;
+            let body =
+                crate::load::load(&Source::Obj(mesh.clone()), false, &input.budget, progress)?;
             place(&mut rig, body, options.placement);
             step(progress, "computing weights by bone heat", || {
-                crate::weights::bind_unskinned(&mut rig, &mesh.display().to_string())
+                crate::weights::bind_unskinned(&mut rig, &mesh.display().to_string(), progress)
             })?;
             let line = write_output(
                 rig.asset,

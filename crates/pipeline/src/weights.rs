@@ -13,14 +13,33 @@ use rigport_import::{ImportError, Imported, Location, Problem};
 use rigport_model::{Mesh, MeshIndex, Warning};
 
 use crate::PipelineError;
+use crate::progress::Progress;
+
+/// Meshes with more vertices than this show counted progress while they are weighted
+/// (smaller ones take under a second).
+const COUNTED: usize = 50_000;
+
+/// Bone heat's progress for a mesh of `vertices`, as counted work of `progress` when the
+/// mesh is large.
+fn counter(progress: &dyn Progress, vertices: usize) -> impl Fn(usize, usize) + Sync + '_ {
+    move |done, total| {
+        if vertices > COUNTED {
+            progress.count("computing weights by bone heat", done, total);
+        }
+    }
+}
 
 /// The rig of `mesh` and `skeleton` with weights by bone heat; the repairs, if any, as a
 /// W003 warning, and a note saying the weights were computed.
 ///
 /// # Errors
 /// As the Pinocchio importer; a mesh without faces or a skeleton without bones.
-pub(crate) fn auto_rig(mesh: &Path, skeleton: &Path) -> Result<Imported, PipelineError> {
-    Ok(auto_rig_rows(mesh, skeleton)?.0)
+pub(crate) fn auto_rig(
+    mesh: &Path,
+    skeleton: &Path,
+    progress: &dyn Progress,
+) -> Result<Imported, PipelineError> {
+    Ok(auto_rig_rows(mesh, skeleton, progress)?.0)
 }
 
 /// [`auto_rig`], and the weights as an `attachment.out` holds them: one row of bone
@@ -31,10 +50,11 @@ pub(crate) fn auto_rig(mesh: &Path, skeleton: &Path) -> Result<Imported, Pipelin
 pub(crate) fn auto_rig_rows(
     mesh: &Path,
     skeleton: &Path,
+    progress: &dyn Progress,
 ) -> Result<(Imported, Vec<Vec<f32>>), PipelineError> {
     let mut kept = Vec::new();
     let imported = import_weighing(mesh, skeleton, |m, s| {
-        let (rows, warnings) = weigh(m, s, mesh)?;
+        let (rows, warnings) = weigh(m, s, mesh, progress)?;
         kept.clone_from(&rows);
         Ok((rows, warnings))
     })?;
@@ -50,6 +70,7 @@ pub(crate) fn auto_rig_rows(
 pub(crate) fn bind_unskinned(
     imported: &mut Imported,
     source: &str,
+    progress: &dyn Progress,
 ) -> Result<usize, PipelineError> {
     let Imported { asset, warnings } = imported;
     let mut skins = Vec::new();
@@ -62,6 +83,7 @@ pub(crate) fn bind_unskinned(
             mesh,
             MeshIndex(m as u32),
             &HeatOptions::default(),
+            &counter(progress, mesh.positions.len()),
         )
         .map_err(|e| PipelineError::Invalid(format!("{source}: mesh {:?}: {e}", mesh.name)))?;
         warnings.push(Warning::Note {
@@ -98,6 +120,7 @@ fn weigh(
     mesh: &Mesh,
     skeleton: &PinocchioSkeleton,
     path: &Path,
+    progress: &dyn Progress,
 ) -> Result<(Vec<Vec<f32>>, Vec<Warning>), ImportError> {
     let bones: Vec<Bone> = (1..skeleton.positions.len())
         .map(|k| Bone {
@@ -110,6 +133,7 @@ fn weigh(
         &mesh.triangles,
         &bones,
         &HeatOptions::default(),
+        &counter(progress, mesh.positions.len()),
     )
     .map_err(|e| ImportError::new(Location::file(path), Problem::Invalid(e.to_string())))?;
     let mut rows = vec![vec![0.0f32; bones.len()]; mesh.source_vertex_count()];

@@ -24,7 +24,7 @@ pub struct Bound {
 }
 
 /// The skin binding of `mesh` (index `index` in its asset, positions in `skeleton`'s model
-/// space) to `skeleton` by bone heat, LBS.
+/// space) to `skeleton` by bone heat, LBS; `progress` as [`bone_heat`]'s.
 ///
 /// ```
 /// use rigport_deform::weights::{bind, HeatOptions};
@@ -51,7 +51,7 @@ pub struct Bound {
 ///     let (a, b) = (2 * k, 2 * k + 2);
 ///     mesh.triangles.extend([[a, a + 1, b], [b, a + 1, b + 1]]);
 /// }
-/// let bound = bind(&skeleton, &mesh, MeshIndex(0), &HeatOptions::default()).unwrap();
+/// let bound = bind(&skeleton, &mesh, MeshIndex(0), &HeatOptions::default(), &|_, _| {}).unwrap();
 /// assert_eq!(bound.bones, 2);
 /// // The hip and the knee head a bone; the foot none.
 /// assert_eq!(bound.binding.joints, [JointIndex(0), JointIndex(1)]);
@@ -67,6 +67,7 @@ pub fn bind(
     mesh: &Mesh,
     index: MeshIndex,
     options: &HeatOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Bound, WeightsError> {
     let rest = skeleton.model_rest_matrices();
     let at = |j: usize| rest[j].w_axis.truncate();
@@ -88,7 +89,7 @@ pub fn bind(
     if bones.is_empty() {
         return Err(WeightsError::NoBones);
     }
-    let heat = bone_heat(&mesh.positions, &mesh.triangles, &bones, options)?;
+    let heat = bone_heat(&mesh.positions, &mesh.triangles, &bones, options, progress)?;
     // The palette: the joints that head a bone, in joint order.
     let mut palette_of = vec![None; skeleton.len()];
     let mut joints = Vec::new();

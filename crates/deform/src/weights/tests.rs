@@ -47,7 +47,7 @@ fn weight_of(row: &[(u32, f32)], bone: u32) -> f32 {
 #[test]
 fn each_end_follows_its_bone_and_the_joint_blends() {
     let (p, t) = bar(2.0, 21, Vec3::ZERO);
-    let w = bone_heat(&p, &t, &two_bones(), &HeatOptions::default()).expect("weights");
+    let w = bone_heat(&p, &t, &two_bones(), &HeatOptions::default(), &|_, _| {}).expect("weights");
     assert_eq!(w.rows.len(), p.len());
     for (v, row) in w.rows.iter().enumerate() {
         let sum: f32 = row.iter().map(|e| e.1).sum();
@@ -79,7 +79,7 @@ fn it_never_fails_and_counts_what_it_repaired() {
     p.push(p[5]);
     t.push([p.len() as u32 - 1, 6, 7]);
     p.push(Vec3::new(5.0, 5.0, 5.0));
-    let w = bone_heat(&p, &t, &two_bones(), &HeatOptions::default()).expect("weights");
+    let w = bone_heat(&p, &t, &two_bones(), &HeatOptions::default(), &|_, _| {}).expect("weights");
     assert_eq!(w.rows.len(), p.len());
     assert!(w.rows.iter().all(|r| {
         let s: f32 = r.iter().map(|e| e.1).sum();
@@ -99,7 +99,14 @@ fn it_never_fails_and_counts_what_it_repaired() {
         Vec3::new(1.0, 0.0, 0.8),
     ];
     let fan_t = vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]];
-    let w = bone_heat(&fan_p, &fan_t, &two_bones(), &HeatOptions::default()).expect("fan");
+    let w = bone_heat(
+        &fan_p,
+        &fan_t,
+        &two_bones(),
+        &HeatOptions::default(),
+        &|_, _| {},
+    )
+    .expect("fan");
     assert_eq!(w.repairs.non_manifold_edges, 1);
     assert_eq!(w.rows.len(), 5);
 }
@@ -118,7 +125,7 @@ fn a_vertex_that_sees_no_bone_takes_its_neighbours_weights() {
         head: Vec3::ZERO,
         tail: Vec3::X * 2.0,
     }];
-    let w = bone_heat(&p, &t, &one, &HeatOptions::default()).expect("weights");
+    let w = bone_heat(&p, &t, &one, &HeatOptions::default(), &|_, _| {}).expect("weights");
     assert!(w.repairs.unseen > 0, "{:?}", w.repairs);
     assert_eq!(w.repairs.by_distance, 0, "{:?}", w.repairs);
     assert!(w.rows.iter().all(|r| r == &vec![(0, 1.0)]));
@@ -128,15 +135,52 @@ fn a_vertex_that_sees_no_bone_takes_its_neighbours_weights() {
 fn bad_input_is_refused() {
     let (p, t) = bar(2.0, 3, Vec3::ZERO);
     assert_eq!(
-        bone_heat(&p, &[], &two_bones(), &HeatOptions::default()),
+        bone_heat(&p, &[], &two_bones(), &HeatOptions::default(), &|_, _| {}),
         Err(WeightsError::NoFaces)
     );
     assert_eq!(
-        bone_heat(&p, &t, &[], &HeatOptions::default()),
+        bone_heat(&p, &t, &[], &HeatOptions::default(), &|_, _| {}),
         Err(WeightsError::NoBones)
     );
     assert!(matches!(
-        bone_heat(&p, &[[0, 1, 99]], &two_bones(), &HeatOptions::default()),
+        bone_heat(
+            &p,
+            &[[0, 1, 99]],
+            &two_bones(),
+            &HeatOptions::default(),
+            &|_, _| {}
+        ),
         Err(WeightsError::BadIndex { vertex: 99, .. })
     ));
+}
+
+#[test]
+fn progress_reaches_its_total_in_at_most_about_a_hundred_calls() {
+    // 2,000 vertices, 3 bones: sight, factorization and solves count 2,000 units each.
+    let (p, t) = bar(3.0, 500, Vec3::ZERO);
+    let bones = vec![
+        two_bones()[0],
+        two_bones()[1],
+        Bone {
+            head: Vec3::X * 2.0,
+            tail: Vec3::X * 3.0,
+        },
+    ];
+    let calls = std::sync::Mutex::new(Vec::new());
+    let heat = bone_heat(&p, &t, &bones, &HeatOptions::default(), &|done, total| {
+        calls.lock().unwrap().push((done, total));
+    })
+    .expect("weights");
+    assert_eq!(heat.rows.len(), 2000);
+    let calls = calls.into_inner().unwrap();
+    assert!(calls.iter().all(|&(_, total)| total == 6000), "{calls:?}");
+    assert_eq!(calls.first(), Some(&(0, 6000)));
+    assert_eq!(calls.iter().map(|c| c.0).max(), Some(6000), "{calls:?}");
+    assert_eq!(calls.iter().filter(|c| c.0 == 6000).count(), 1, "{calls:?}");
+    // At most one call per 1% (threads may cross a step together), the factorization and
+    // the solves a third each, told when done.
+    assert!((30..=110).contains(&calls.len()), "{} calls", calls.len());
+    let sight = calls.iter().filter(|c| c.0 > 0 && c.0 <= 2000).count();
+    assert!(sight >= 30, "{sight} calls while checking sight: {calls:?}");
+    assert_eq!(calls.iter().filter(|c| c.0 == 4000).count(), 1, "{calls:?}");
 }
