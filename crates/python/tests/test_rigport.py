@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import rigport
-from conftest import corpus
+from conftest import REPO, corpus
 
 PINOCCHIO = "1_pinocchio/berkeley_cs184__severus-snape_mobius-ants/human_model1/"
 BVH = "4_bvh/cmu_cgspeed__nobuyuki83_delfem2/walk.bvh"
@@ -308,3 +308,38 @@ def test_verify_passes_on_a_written_copy(tmp_path):
     moved = tmp_path / "moved.glb"
     rigport.retime(gltf, moved, speed=2.0)
     assert rigport.verify(gltf, moved, at_keys=True).passed is False
+
+
+ARM_WITH_CLOTH = "6_usd/ustc_cg_24_hw10__USTC-CG/arm_with_cloth.usda"
+AMC_SKELETON = "3_acclaim_asf_amc/usc_csci520_mocapPlayer__shreyabhaumik/07-walk.asf"
+AMC_MOTION = "3_acclaim_asf_amc/usc_csci520_mocapPlayer__shreyabhaumik/07_05-walk.amc"
+BRANCH = REPO / "fixtures" / "pinocchio"
+
+
+def test_rig_commands_write_the_cli_bytes(tmp_path, cli):
+    """retarget, combine, ik, cloth and skin: the function with keyword options writes the
+    bytes the CLI writes with the same flags."""
+    rig = pinocchio()
+    bvh = corpus(BVH)
+    asf, amc = corpus(AMC_SKELETON), corpus(AMC_MOTION)
+    handles = REPO / "fixtures" / "ik" / "pinocchio_one_hand_reach.json"
+    runs = [
+        ("retarget.glb", ["retarget", bvh, "--onto", *rig, "--plant-feet"],
+         lambda out: rigport.retarget(bvh, rig, out, plant_feet=True)),
+        # combine's rig is its first input: the rig's folder.
+        ("combine.glb", ["combine", rig[0].parent, asf, amc, "--fps", "30"],
+         lambda out: rigport.combine([rig[0].parent, asf, amc], out, fps=30.0)),
+        ("ik.usda", ["ik", *rig, "--handles", handles, "--solver", "fabrik"],
+         lambda out: rigport.ik(rig, handles, out, solver="fabrik")),
+        ("cloth.glb", ["cloth", corpus(ARM_WITH_CLOTH), "--garment", "Grid", "--seconds", "0.5"],
+         lambda out: rigport.cloth(corpus(ARM_WITH_CLOTH), "Grid", out, seconds=0.5)),
+        ("attachment.out", ["skin", BRANCH / "branch.obj", BRANCH / "branch_skeleton.out"],
+         lambda out: rigport.skin([BRANCH / "branch.obj", BRANCH / "branch_skeleton.out"], out)),
+    ]
+    for out, flags, call in runs:
+        theirs, ours = tmp_path / f"cli-{out}", tmp_path / f"py-{out}"
+        cli(*flags, "-o", theirs)
+        report = call(ours)
+        assert isinstance(report, rigport.Report), out
+        assert any(line.startswith("wrote ") for line in report.log), (out, report.log)
+        assert ours.read_bytes() == theirs.read_bytes(), out
