@@ -39,18 +39,73 @@ pub fn is_fbx(head: &[u8]) -> bool {
 /// # Errors
 /// What ufbx reports, located as [`error`] says.
 pub(super) fn load(bytes: &[u8], path: &Path) -> Result<ufbx::SceneRoot, ImportError> {
-    let opts = ufbx::LoadOpts {
+    ufbx::load_memory(bytes, options(ufbx::InheritModeHandling::Compensate))
+        .map_err(|e| error(&e, bytes, path))
+}
+
+/// [`load`]'s options, with `inherit` for the inherit types.
+fn options(inherit: ufbx::InheritModeHandling) -> ufbx::LoadOpts<'static> {
+    ufbx::LoadOpts {
         target_axes: ufbx::CoordinateAxes::right_handed_y_up(),
         space_conversion: ufbx::SpaceConversion::ModifyGeometry,
         geometry_transform_handling: ufbx::GeometryTransformHandling::ModifyGeometry,
-        inherit_mode_handling: ufbx::InheritModeHandling::Compensate,
+        inherit_mode_handling: inherit,
         generate_missing_normals: true,
         load_external_files: false,
         ignore_missing_external_files: true,
         file_format: ufbx::FileFormat::Fbx,
         ..Default::default()
+    }
+}
+
+/// Where ufbx's scale helpers put nodes away from the file's definition: the node that
+/// moved most, how far, and the size of the scene's nodes (the diagonal of their origins'
+/// box), in the file's units; `None` when `scene` has no scale helper.
+///
+/// ufbx compensates inherit types exactly for uniform scale only; for a non-uniform
+/// parent scale it adds a scale helper node, which drops the child's scaling pivot and
+/// rotation offset. The file is read again with the inherit types preserved, where ufbx
+/// evaluates each node's world transform as the file defines it, and the nodes' origins
+/// are compared by name (names used once in both readings).
+pub(super) fn scale_helper_drift(bytes: &[u8], scene: &ufbx::Scene) -> Option<(String, f64, f64)> {
+    use std::collections::HashMap;
+    if !scene.nodes.iter().any(|n| n.is_scale_helper) {
+        return None;
+    }
+    let exact = ufbx::load_memory(bytes, options(ufbx::InheritModeHandling::Preserve)).ok()?;
+    let origins = |scene: &ufbx::Scene| {
+        let mut by_name: HashMap<String, Option<rigport_model::glam::DVec3>> = HashMap::new();
+        for n in scene.nodes.iter() {
+            if n.is_root || n.is_scale_helper || n.is_geometry_transform_helper {
+                continue;
+            }
+            let at = super::skeleton::mat(&n.node_to_world).w_axis.truncate();
+            by_name
+                .entry(n.element.name.to_string())
+                .and_modify(|seen| *seen = None)
+                .or_insert(Some(at));
+        }
+        by_name
     };
-    ufbx::load_memory(bytes, opts).map_err(|e| error(&e, bytes, path))
+    let (ours, theirs) = (origins(scene), origins(&exact));
+    let (mut lo, mut hi) = (
+        rigport_model::glam::DVec3::MAX,
+        rigport_model::glam::DVec3::MIN,
+    );
+    let mut worst = (String::new(), 0.0);
+    let mut names: Vec<&String> = theirs.keys().collect();
+    names.sort();
+    for name in names {
+        let Some(at) = &theirs[name] else { continue };
+        (lo, hi) = (lo.min(*at), hi.max(*at));
+        if let Some(Some(ours)) = ours.get(name) {
+            let d = ours.distance(*at);
+            if d > worst.1 * (1.0 + 1e-9) {
+                worst = (name.clone(), d);
+            }
+        }
+    }
+    Some((worst.0, worst.1, (hi - lo).length().max(f64::MIN_POSITIVE)))
 }
 
 /// A ufbx error as an [`ImportError`], located where the file shows the problem.

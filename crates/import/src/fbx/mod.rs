@@ -63,6 +63,22 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
     let mut warnings = Vec::new();
     let baked = anim::bake(&scene, path)?;
     let skel = skeleton::build(&scene, &anim::animated_nodes(&baked), path)?;
+    if let Some((node, drift, size)) = load::scale_helper_drift(bytes, &scene) {
+        if drift > 1e-4 * size {
+            warnings.push(incomplete(
+                path,
+                &node,
+                format!(
+                    "placed {drift:.3e} units ({:.2}% of the skeleton's size) from where the \
+                     file puts it: a non-uniform scale above a node that inherits it its own \
+                     way (InheritType 0, RrSs, or 2, Rrs: segment scale compensate) and has a \
+                     scaling pivot or rotation offset has no exact joint transform (ufbx's \
+                     scale helper drops the offset)",
+                    100.0 * drift / size
+                ),
+            ));
+        }
+    }
     let mats = material::build(&scene, path, &mut warnings);
     let built = mesh::build(&scene, &skel, path, &mut warnings);
     let clips = anim::clips(&baked, &skel, &built);

@@ -393,11 +393,11 @@ fn in_between_shapes_blend_as_ufbx_evaluates_them() {
 /// the child's `InheritType` (`INHERIT`: 0 RrSs, 1 RSrs, 2 Rrs, Maya's segment scale
 /// compensate: the child ignores its parent's scale).
 ///
-/// Not covered, because it fails: a *non-uniform* parent scale with a scaling pivot or a
-/// child's rotation offset. ufbx then adds a scale helper node (its inherit-mode
+/// Not exact, and warned about instead: a *non-uniform* parent scale with a scaling pivot
+/// or a child's rotation offset. ufbx then adds a scale helper node (its inherit-mode
 /// compensation is exact for uniform scale only), and the helper drops those offsets: the
 /// child lands up to 0.15 units (5% of the bone) from where ufbx's own evaluation without
-/// compensation puts it.
+/// compensation puts it (`a_non_uniform_scale_over_segment_scale_compensate_is_warned`).
 const PIVOTS: &str = "; FBX 7.4.0 project file
 FBXHeaderExtension:  {
 \tFBXHeaderVersion: 1003
@@ -485,4 +485,36 @@ fn pivots_pre_post_rotation_and_segment_scale_compensate_place_joints_as_ufbx_do
         }
         assert_eq!(checked, 3);
     }
+}
+
+#[test]
+fn a_non_uniform_scale_over_segment_scale_compensate_is_warned() {
+    let drift_warnings = |inherit: &str, scale: &str| {
+        let text = PIVOTS
+            .replace("INHERIT", inherit)
+            .replace("\"A\",2,2,2", &format!("\"A\",{scale}"));
+        let imported = import_slice(text.as_bytes(), Path::new("x.fbx")).expect("imports");
+        (imported.warnings.iter())
+            .filter(|w| w.to_string().contains("has no exact joint transform"))
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+    };
+    // RrSs (0) and Rrs (2, segment scale compensate) under a parent scaled 2, 1, 1: the
+    // helper drops mid's rotation offset (0.1 units, 2.5% of the skeleton).
+    for inherit in ["0", "2"] {
+        let warned = drift_warnings(inherit, "2,1,1");
+        assert_eq!(warned.len(), 1, "InheritType {inherit}: {warned:?}");
+        assert!(
+            warned[0].contains("x.fbx: mid: placed 1.000e-1 units (2.52%"),
+            "{}",
+            warned[0]
+        );
+        // Uniform scale is compensated exactly: no warning.
+        assert!(
+            drift_warnings(inherit, "2,2,2").is_empty(),
+            "InheritType {inherit}"
+        );
+    }
+    // The standard inherit type (RSrs) needs no helper.
+    assert!(drift_warnings("1", "2,1,1").is_empty());
 }
