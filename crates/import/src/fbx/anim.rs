@@ -53,6 +53,22 @@ pub(super) fn bake(scene: &ufbx::Scene, path: &Path) -> Result<Vec<Baked>, Impor
         .collect()
 }
 
+/// The nodes (ufbx typed ids) any stack's layers have a curve on: those [`bake`] bakes,
+/// unless inherit types make it bake their children and scale helpers too.
+pub(super) fn curve_nodes(scene: &ufbx::Scene) -> HashSet<u32> {
+    let mut nodes = HashSet::new();
+    for stack in scene.anim_stacks.iter() {
+        for layer in stack.anim.layers.iter() {
+            for prop in layer.anim_props.iter() {
+                if prop.element.type_ == ufbx::ElementType::Node {
+                    nodes.insert(prop.element.typed_id);
+                }
+            }
+        }
+    }
+    nodes
+}
+
 /// The nodes (ufbx typed ids) any stack animates: they become joints.
 pub(super) fn animated_nodes(baked: &[Baked]) -> HashSet<u32> {
     baked

@@ -60,21 +60,23 @@ fn options(inherit: ufbx::InheritModeHandling) -> ufbx::LoadOpts<'static> {
 
 /// Where ufbx's scale helpers put nodes away from the file's definition: the node that
 /// moved most, how far, and the size of the scene's nodes (the diagonal of their origins'
-/// box), in the file's units; `None` when `scene` has no scale helper.
+/// box at rest), in the file's units; `None` when `scene` has no scale helper.
 ///
-/// ufbx compensates inherit types exactly for uniform scale only; for a non-uniform
-/// parent scale it adds a scale helper node, which drops the child's scaling pivot and
-/// rotation offset. The file is read again with the inherit types preserved, where ufbx
-/// evaluates each node's world transform as the file defines it, and the nodes' origins
-/// are compared by name (names used once in both readings).
+/// ufbx compensates inherit types exactly for uniform scale only; for a non-uniform or
+/// animated parent scale it adds a scale helper node, which drops the child's scaling
+/// pivot and rotation offset. The file is read again with the inherit types preserved,
+/// where ufbx evaluates each node's world transform as the file defines it, and the nodes'
+/// origins are compared by name (names used once in both readings): at rest, and at the
+/// start, middle and end of each animation stack.
 pub(super) fn scale_helper_drift(bytes: &[u8], scene: &ufbx::Scene) -> Option<(String, f64, f64)> {
+    use rigport_model::glam::DVec3;
     use std::collections::HashMap;
     if !scene.nodes.iter().any(|n| n.is_scale_helper) {
         return None;
     }
     let exact = ufbx::load_memory(bytes, options(ufbx::InheritModeHandling::Preserve)).ok()?;
     let origins = |scene: &ufbx::Scene| {
-        let mut by_name: HashMap<String, Option<rigport_model::glam::DVec3>> = HashMap::new();
+        let mut by_name: HashMap<String, Option<DVec3>> = HashMap::new();
         for n in scene.nodes.iter() {
             if n.is_root || n.is_scale_helper || n.is_geometry_transform_helper {
                 continue;
@@ -87,24 +89,38 @@ pub(super) fn scale_helper_drift(bytes: &[u8], scene: &ufbx::Scene) -> Option<(S
         }
         by_name
     };
-    let (ours, theirs) = (origins(scene), origins(&exact));
-    let (mut lo, mut hi) = (
-        rigport_model::glam::DVec3::MAX,
-        rigport_model::glam::DVec3::MIN,
-    );
     let mut worst = (String::new(), 0.0);
-    let mut names: Vec<&String> = theirs.keys().collect();
-    names.sort();
-    for name in names {
-        let Some(at) = &theirs[name] else { continue };
-        (lo, hi) = (lo.min(*at), hi.max(*at));
-        if let Some(Some(ours)) = ours.get(name) {
-            let d = ours.distance(*at);
-            if d > worst.1 * (1.0 + 1e-9) {
-                worst = (name.clone(), d);
+    let mut compare = |ours: &ufbx::Scene, theirs: &ufbx::Scene| {
+        let (ours, theirs) = (origins(ours), origins(theirs));
+        let mut names: Vec<&String> = theirs.keys().collect();
+        names.sort();
+        for name in names {
+            if let (Some(at), Some(Some(ours))) = (&theirs[name], ours.get(name)) {
+                let d = ours.distance(*at);
+                if d > worst.1 * (1.0 + 1e-9) {
+                    worst = (name.clone(), d);
+                }
             }
         }
+    };
+    compare(scene, &exact);
+    for (stack, exact_stack) in scene.anim_stacks.iter().zip(exact.anim_stacks.iter()) {
+        let (begin, end) = (stack.time_begin, stack.time_end);
+        for t in [begin, 0.5 * (begin + end), end] {
+            let opts = || ufbx::EvaluateOpts::default();
+            let (Ok(ours), Ok(theirs)) = (
+                ufbx::evaluate_scene(scene, &stack.anim, t, opts()),
+                ufbx::evaluate_scene(&exact, &exact_stack.anim, t, opts()),
+            ) else {
+                continue;
+            };
+            compare(&ours, &theirs);
+        }
     }
+    let rest = origins(&exact);
+    let (lo, hi) = (rest.values().flatten()).fold((DVec3::MAX, DVec3::MIN), |(lo, hi), p| {
+        (lo.min(*p), hi.max(*p))
+    });
     Some((worst.0, worst.1, (hi - lo).length().max(f64::MIN_POSITIVE)))
 }
 

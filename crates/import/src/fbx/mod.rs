@@ -30,6 +30,7 @@ mod skeleton;
 #[cfg(test)]
 mod tests;
 
+use std::collections::HashSet;
 use std::path::Path;
 
 use rigport_model::{Asset, SceneFrame, Warning};
@@ -60,27 +61,24 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
         return Err(ImportError::new(Location::file(path), Problem::Empty));
     }
     let scene = load::load(bytes, path)?;
-    let mut warnings = Vec::new();
-    let baked = anim::bake(&scene, path)?;
-    let skel = skeleton::build(&scene, &anim::animated_nodes(&baked), path)?;
-    if let Some((node, drift, size)) = load::scale_helper_drift(bytes, &scene) {
-        if drift > 1e-4 * size {
-            warnings.push(incomplete(
-                path,
-                &node,
-                format!(
-                    "placed {drift:.3e} units ({:.2}% of the skeleton's size) from where the \
-                     file puts it: a non-uniform scale above a node that inherits it its own \
-                     way (InheritType 0, RrSs, or 2, Rrs: segment scale compensate) and has a \
-                     scaling pivot or rotation offset has no exact joint transform (ufbx's \
-                     scale helper drops the offset)",
-                    100.0 * drift / size
-                ),
-            ));
-        }
-    }
-    let mats = material::build(&scene, path, &mut warnings);
-    let built = mesh::build(&scene, &skel, path, &mut warnings);
+    // The stacks bake on a second thread while the skeleton, materials and meshes are
+    // built from the nodes the stacks' curves name, which are the nodes ufbx bakes unless
+    // inherit types make it bake more (then they are built again with those).
+    let guess = anim::curve_nodes(&scene);
+    let (baked, built) = std::thread::scope(|s| {
+        let baking = (!scene.anim_stacks.is_empty()).then(|| s.spawn(|| anim::bake(&scene, path)));
+        let built = structure(&scene, bytes, &guess, path);
+        let baked = baking.map_or(Ok(Vec::new()), |b| {
+            b.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
+        });
+        (baked, built)
+    });
+    let baked = baked?;
+    let animated = anim::animated_nodes(&baked);
+    let (skel, mats, built, warnings) = match built {
+        Ok(built) if animated == guess => built,
+        _ => structure(&scene, bytes, &animated, path)?,
+    };
     let clips = anim::clips(&baked, &skel, &built);
     let unit = scene.settings.unit_meters;
     let name = path
@@ -101,6 +99,48 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
     };
     check_asset(&asset, || Location::file(path))?;
     Ok(Imported { asset, warnings })
+}
+
+/// The skeleton (with `animated` nodes among its joints), materials and meshes of `scene`,
+/// and the warnings found building them.
+///
+/// # Errors
+/// As `skeleton::build`.
+fn structure(
+    scene: &ufbx::Scene,
+    bytes: &[u8],
+    animated: &HashSet<u32>,
+    path: &Path,
+) -> Result<
+    (
+        skeleton::Skel,
+        material::Materials,
+        mesh::Built,
+        Vec<Warning>,
+    ),
+    ImportError,
+> {
+    let mut warnings = Vec::new();
+    let skel = skeleton::build(scene, animated, path)?;
+    if let Some((node, drift, size)) = load::scale_helper_drift(bytes, scene) {
+        if drift > 1e-4 * size {
+            warnings.push(incomplete(
+                path,
+                &node,
+                format!(
+                    "placed {drift:.3e} units ({:.2}% of the skeleton's size) from where the \
+                     file puts it: a non-uniform scale above a node that inherits it its own \
+                     way (InheritType 0, RrSs, or 2, Rrs: segment scale compensate) and has a \
+                     scaling pivot or rotation offset has no exact joint transform (ufbx's \
+                     scale helper drops the offset)",
+                    100.0 * drift / size
+                ),
+            ));
+        }
+    }
+    let mats = material::build(scene, path, &mut warnings);
+    let built = mesh::build(scene, &skel, path, &mut warnings);
+    Ok((skel, mats, built, warnings))
 }
 
 /// A warning at the file, about one named FBX element.

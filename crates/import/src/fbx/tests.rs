@@ -518,3 +518,169 @@ fn a_non_uniform_scale_over_segment_scale_compensate_is_warned() {
     // The standard inherit type (RSrs) needs no helper.
     assert!(drift_warnings("1", "2,1,1").is_empty());
 }
+
+/// [`PIVOTS`] with Rrs (segment scale compensate) on `mid` and one stack that scales the
+/// root's X from 2 to 3 over a second: the only curve is on the root, yet ufbx bakes `mid`
+/// too (its inherit type makes its own transform follow the parent's scale). Without the
+/// scaling pivot and rotation offset, which ufbx's scale helper cannot carry under a
+/// non-uniform scale (see [`PIVOTS`]).
+fn animated_pivots() -> String {
+    let anim = "\tAnimationStack: 900, \"AnimStack::grow\", \"\" {
+\t}
+\tAnimationLayer: 901, \"AnimLayer::BaseLayer\", \"\" {
+\t}
+\tAnimationCurveNode: 902, \"AnimCurveNode::S\", \"\" {
+\t\tProperties70:  {
+\t\t\tP: \"d|X\", \"Number\", \"\", \"A\",2
+\t\t\tP: \"d|Y\", \"Number\", \"\", \"A\",2
+\t\t\tP: \"d|Z\", \"Number\", \"\", \"A\",2
+\t\t}
+\t}
+\tAnimationCurve: 903, \"AnimCurve::\", \"\" {
+\t\tDefault: 2
+\t\tKeyVer: 4009
+\t\tKeyTime: *2 {
+\t\t\ta: 0,46186158000
+\t\t}
+\t\tKeyValueFloat: *2 {
+\t\t\ta: 2,3
+\t\t}
+\t\tKeyAttrFlags: *1 {
+\t\t\ta: 4
+\t\t}
+\t\tKeyAttrDataFloat: *4 {
+\t\t\ta: 0,0,0,0
+\t\t}
+\t\tKeyAttrRefCount: *1 {
+\t\t\ta: 2
+\t\t}
+\t}
+}
+Connections:  {
+\tC: \"OO\",901,900
+\tC: \"OO\",902,901
+\tC: \"OP\",902,30, \"Lcl Scaling\"
+\tC: \"OP\",903,902, \"d|X\"
+";
+    PIVOTS
+        .replace("INHERIT", "2")
+        .replace(
+            "\t\t\tP: \"ScalingPivot\", \"Vector3D\", \"Vector\", \"\",0,0.25,0\n",
+            "",
+        )
+        .replace(
+            "\t\t\tP: \"RotationOffset\", \"Vector3D\", \"Vector\", \"\",0.1,0,0\n",
+            "",
+        )
+        .replace("}\nConnections:  {\n", anim)
+}
+
+#[test]
+fn nodes_baked_for_their_inherit_type_alone_become_animated_joints() {
+    let text = animated_pivots();
+    let scene = super::load::load(text.as_bytes(), Path::new("x.fbx")).unwrap();
+    let baked = super::anim::bake(&scene, Path::new("x.fbx")).unwrap();
+    let (guess, real) = (
+        super::anim::curve_nodes(&scene),
+        super::anim::animated_nodes(&baked),
+    );
+    // The case the importer builds twice: the curves name fewer nodes than ufbx bakes.
+    assert!(
+        guess.len() < real.len() && guess.is_subset(&real),
+        "{guess:?} {real:?}"
+    );
+    let imported = import_slice(text.as_bytes(), Path::new("x.fbx")).expect("imports");
+    let asset = &imported.asset;
+    let clip = &asset.clips[0];
+    assert_eq!(clip.name, "grow");
+    let mid = asset.skeleton.find("mid").expect("mid is a joint");
+    use rigport_model::TrackTarget::{Rotation, Scale, Translation};
+    let joint_of = |target: rigport_model::TrackTarget| match target {
+        Translation(j) | Rotation(j) | Scale(j) => Some(j),
+        _ => None,
+    };
+    assert!(
+        clip.tracks.iter().any(|t| joint_of(t.target) == Some(mid)),
+        "mid has tracks of its own: {:?}",
+        clip.tracks.iter().map(|t| t.target).collect::<Vec<_>>()
+    );
+    // Every joint where ufbx's own evaluation of the stack puts it, mid-way.
+    let t = 0.5;
+    let skeleton = &asset.skeleton;
+    let mut world: Vec<rigport_model::glam::Mat4> = Vec::new();
+    for (j, joint) in skeleton.joints().iter().enumerate() {
+        let mut local = joint.rest_local;
+        for track in
+            (clip.tracks.iter()).filter(|tr| joint_of(tr.target).map(|x| x.get()) == Some(j))
+        {
+            let keys = rigport_model::interp::Keys::of(track);
+            let mut v = [0.0f32; 3];
+            match track.target {
+                Translation(_) => {
+                    keys.sample(t, &mut v);
+                    local.translation = v.into();
+                }
+                Scale(_) => {
+                    keys.sample(t, &mut v);
+                    local.scale = v.into();
+                }
+                Rotation(_) => {
+                    local.rotation = rigport_model::glam::Quat::from_array(keys.sample_rotation(t));
+                }
+                _ => {}
+            }
+        }
+        let m = local.to_mat4();
+        world.push(match joint.parent {
+            Some(p) => world[p.get()] * m,
+            None => m,
+        });
+    }
+    let anim = &scene.anim_stacks[0].anim;
+    let at = ufbx::evaluate_scene(&scene, anim, f64::from(t), ufbx::EvaluateOpts::default())
+        .expect("ufbx evaluates the stack");
+    let mut checked = 0;
+    for node in at
+        .nodes
+        .iter()
+        .filter(|n| !n.is_root && !n.element.name.is_empty())
+    {
+        let j = skeleton.find(&node.element.name).unwrap();
+        let theirs = super::skeleton::mat(&node.node_to_world).as_mat4();
+        for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z] {
+            let (a, b) = (
+                world[j.get()].transform_point3(p),
+                theirs.transform_point3(p),
+            );
+            assert!(
+                a.distance(b) < 1e-4,
+                "{}: {p} -> {a} vs ufbx {b}",
+                node.element.name
+            );
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 3);
+}
+
+#[test]
+fn an_animated_non_uniform_scale_over_an_offset_is_warned() {
+    // animated_pivots() with mid's rotation offset kept: at rest the scale is uniform
+    // (2, 2, 2), but the stack makes it (3, 2, 2), and the helper drops the offset.
+    let text = animated_pivots().replace(
+        "\t\t\tP: \"InheritType\", \"enum\", \"\", \"\",2\n",
+        "\t\t\tP: \"InheritType\", \"enum\", \"\", \"\",2\n\t\t\tP: \"RotationOffset\", \"Vector3D\", \"Vector\", \"\",0.1,0,0\n",
+    );
+    let imported = import_slice(text.as_bytes(), Path::new("x.fbx")).expect("imports");
+    let warned: Vec<String> = (imported.warnings.iter())
+        .map(ToString::to_string)
+        .filter(|w| w.contains("has no exact joint transform"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", imported.warnings);
+    // Without the offset the helper is exact: no warning.
+    let exact = import_slice(animated_pivots().as_bytes(), Path::new("x.fbx")).unwrap();
+    assert!(exact
+        .warnings
+        .iter()
+        .all(|w| !w.to_string().contains("no exact joint")));
+}
