@@ -594,11 +594,6 @@ fn nodes_baked_for_their_inherit_type_alone_become_animated_joints() {
     let clip = &asset.clips[0];
     assert_eq!(clip.name, "grow");
     let mid = asset.skeleton.find("mid").expect("mid is a joint");
-    use rigport_model::TrackTarget::{Rotation, Scale, Translation};
-    let joint_of = |target: rigport_model::TrackTarget| match target {
-        Translation(j) | Rotation(j) | Scale(j) => Some(j),
-        _ => None,
-    };
     assert!(
         clip.tracks.iter().any(|t| joint_of(t.target) == Some(mid)),
         "mid has tracks of its own: {:?}",
@@ -607,35 +602,7 @@ fn nodes_baked_for_their_inherit_type_alone_become_animated_joints() {
     // Every joint where ufbx's own evaluation of the stack puts it, mid-way.
     let t = 0.5;
     let skeleton = &asset.skeleton;
-    let mut world: Vec<rigport_model::glam::Mat4> = Vec::new();
-    for (j, joint) in skeleton.joints().iter().enumerate() {
-        let mut local = joint.rest_local;
-        for track in
-            (clip.tracks.iter()).filter(|tr| joint_of(tr.target).map(|x| x.get()) == Some(j))
-        {
-            let keys = rigport_model::interp::Keys::of(track);
-            let mut v = [0.0f32; 3];
-            match track.target {
-                Translation(_) => {
-                    keys.sample(t, &mut v);
-                    local.translation = v.into();
-                }
-                Scale(_) => {
-                    keys.sample(t, &mut v);
-                    local.scale = v.into();
-                }
-                Rotation(_) => {
-                    local.rotation = rigport_model::glam::Quat::from_array(keys.sample_rotation(t));
-                }
-                _ => {}
-            }
-        }
-        let m = local.to_mat4();
-        world.push(match joint.parent {
-            Some(p) => world[p.get()] * m,
-            None => m,
-        });
-    }
+    let world = joint_world_at(asset, clip, t);
     let anim = &scene.anim_stacks[0].anim;
     let at = ufbx::evaluate_scene(&scene, anim, f64::from(t), ufbx::EvaluateOpts::default())
         .expect("ufbx evaluates the stack");
@@ -683,4 +650,168 @@ fn an_animated_non_uniform_scale_over_an_offset_is_warned() {
         .warnings
         .iter()
         .all(|w| !w.to_string().contains("no exact joint")));
+}
+
+/// The joint a track animates, if any.
+fn joint_of(target: rigport_model::TrackTarget) -> Option<rigport_model::JointIndex> {
+    use rigport_model::TrackTarget::{Rotation, Scale, Translation};
+    match target {
+        Translation(j) | Rotation(j) | Scale(j) => Some(j),
+        _ => None,
+    }
+}
+
+/// Every joint's model-space matrix at clip time `t` (forward kinematics written here, on
+/// the tracks as the model defines them: lerp, shortest-path slerp).
+fn joint_world_at(
+    asset: &rigport_model::Asset,
+    clip: &rigport_model::Clip,
+    t: f32,
+) -> Vec<rigport_model::glam::Mat4> {
+    use rigport_model::TrackTarget::{Rotation, Scale, Translation};
+    let mut world: Vec<rigport_model::glam::Mat4> = Vec::new();
+    for (j, joint) in asset.skeleton.joints().iter().enumerate() {
+        let mut local = joint.rest_local;
+        for track in
+            (clip.tracks.iter()).filter(|tr| joint_of(tr.target).map(|x| x.get()) == Some(j))
+        {
+            let keys = rigport_model::interp::Keys::of(track);
+            let mut v = [0.0f32; 3];
+            match track.target {
+                Translation(_) => {
+                    keys.sample(t, &mut v);
+                    local.translation = v.into();
+                }
+                Scale(_) => {
+                    keys.sample(t, &mut v);
+                    local.scale = v.into();
+                }
+                Rotation(_) => {
+                    local.rotation = rigport_model::glam::Quat::from_array(keys.sample_rotation(t));
+                }
+                _ => {}
+            }
+        }
+        let m = local.to_mat4();
+        world.push(match joint.parent {
+            Some(p) => world[p.get()] * m,
+            None => m,
+        });
+    }
+    world
+}
+
+/// Every corpus FBX clip's key values are what ufbx's own evaluation of the stack gives
+/// at that key time: each joint's local translation (within 1e-5 of the skeleton's size),
+/// rotation (1e-5 rad) and scale (1e-5). The keys are ufbx's bake samples: the source's
+/// keys, and 30 a second where ufbx resamples a curve; a curve keyed at 19.5 or more keys
+/// a second is not resampled (`BakeOpts::minimum_sample_rate`), and the clip is linear
+/// between its keys, as Blender and three.js read such curves too.
+#[test]
+fn corpus_clip_keys_are_ufbx_evaluation_of_the_stacks() {
+    use rigport_model::TrackTarget::{Rotation, Scale, Translation};
+    let Some(dir) = corpus(FBX) else {
+        return;
+    };
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("fbx")))
+        .collect();
+    files.sort();
+    let mut clips = 0;
+    for path in &files {
+        let bytes = std::fs::read(path).unwrap();
+        let asset = import_slice(&bytes, path).unwrap().asset;
+        let scene = super::load::load(&bytes, path).unwrap();
+        let (lo, hi) = (asset.skeleton.model_rest_matrices().iter())
+            .map(|m| m.w_axis.truncate())
+            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        // One unit for a skeleton of one joint.
+        let size = match (hi - lo).length() {
+            0.0 => 1.0,
+            d => d,
+        };
+        for (clip, stack) in asset.clips.iter().zip(scene.anim_stacks.iter()) {
+            let first_key = (stack.anim.layers.iter())
+                .flat_map(|l| l.anim_values.iter())
+                .flat_map(|v| v.curves.iter().flatten())
+                .filter_map(|c| c.keyframes.first().map(|k| k.time))
+                .fold(f64::MAX, f64::min);
+            let offset = stack.time_begin.min(first_key);
+            let mut times: Vec<f32> = clip
+                .tracks
+                .iter()
+                .flat_map(|t| t.times.iter().copied())
+                .collect();
+            times.sort_by(f32::total_cmp);
+            times.dedup();
+            // (translation / size, rotation radians, scale) worst, with where.
+            let mut worst = [
+                (0.0f32, String::new()),
+                (0.0, String::new()),
+                (0.0, String::new()),
+            ];
+            for &t in &times {
+                let opts = ufbx::EvaluateOpts::default();
+                let at = ufbx::evaluate_scene(&scene, &stack.anim, offset + f64::from(t), opts)
+                    .expect("ufbx evaluates the stack");
+                for track in &clip.tracks {
+                    let Some(j) = joint_of(track.target) else {
+                        continue;
+                    };
+                    let Some(k) = track.times.iter().position(|&x| x == t) else {
+                        continue;
+                    };
+                    let name = &asset.skeleton.joint(j).name;
+                    let Some(node) = at.nodes.iter().find(|n| &*n.element.name == name.as_str())
+                    else {
+                        continue;
+                    };
+                    let local = &node.local_transform;
+                    let v = track.key_value(k);
+                    let (slot, d) = match track.target {
+                        Translation(_) => (
+                            0,
+                            Vec3::from_slice(v).distance(super::skeleton::vec3(&local.translation))
+                                / size,
+                        ),
+                        Rotation(_) => {
+                            // The angle between the two, in f64: an f32 `acos` near 1 cannot
+                            // tell apart rotations closer than 6.9e-4 rad.
+                            let q = local.rotation;
+                            let theirs = rigport_model::glam::DQuat::from_xyzw(q.x, q.y, q.z, q.w);
+                            let ours = rigport_model::glam::Quat::from_slice(v).as_dquat();
+                            let d = ours.conjugate() * theirs;
+                            (1, (2.0 * d.xyz().length().atan2(d.w.abs())) as f32)
+                        }
+                        Scale(_) => (
+                            2,
+                            Vec3::from_slice(v).distance(super::skeleton::vec3(&local.scale)),
+                        ),
+                        _ => continue,
+                    };
+                    if d > worst[slot].0 {
+                        worst[slot] = (d, format!("{name} at {t} s"));
+                    }
+                }
+            }
+            eprintln!(
+                "{} [{}]: {} key times, worst translation {:.2e} of the size ({}), rotation {:.2e} rad ({}), scale {:.2e} ({})",
+                path.file_name().unwrap().to_string_lossy(),
+                clip.name,
+                times.len(),
+                worst[0].0, worst[0].1, worst[1].0, worst[1].1, worst[2].0, worst[2].1,
+            );
+            assert!(
+                worst.iter().all(|w| w.0 < 1e-5),
+                "{} [{}]: {worst:?}",
+                path.display(),
+                clip.name
+            );
+            clips += 1;
+        }
+    }
+    assert!(clips >= 6, "{clips} clips compared");
 }
