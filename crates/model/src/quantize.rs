@@ -47,3 +47,26 @@ pub fn rotation_from_i16(c: [i16; 4]) -> [f32; 4] {
 pub fn rotation_as_i16(q: [f32; 4]) -> [f32; 4] {
     rotation_from_i16(rotation_to_i16(q))
 }
+
+/// One component of a CUBICSPLINE rotation output (a value's or a tangent's) as a 16-bit
+/// normalized integer, rounded, component by component and not normalized (a tangent is a
+/// derivative, not a rotation); `None` outside `[-1, 1]`, which a normalized short cannot
+/// hold (a tangent is in units per second and can exceed it).
+///
+/// ```
+/// use rigport_model::quantize::{component_as_i16, component_to_i16};
+///
+/// assert_eq!(component_to_i16(0.5), Some(16384));
+/// assert_eq!(component_to_i16(-1.0), Some(-32767));
+/// assert_eq!(component_to_i16(1.5), None);
+/// assert!((component_as_i16(0.3) - 0.3).abs() <= 0.5 / 32767.0);
+/// ```
+pub fn component_to_i16(c: f32) -> Option<i16> {
+    (c.abs() <= 1.0).then(|| (f64::from(c) * SHORT_MAX).round() as i16)
+}
+
+/// What a reader decodes for [`component_to_i16`] of `c` (`c` itself outside `[-1, 1]`,
+/// where a writer keeps floats).
+pub fn component_as_i16(c: f32) -> f32 {
+    component_to_i16(c).map_or(c, |i| (f64::from(i) / SHORT_MAX).max(-1.0) as f32)
+}

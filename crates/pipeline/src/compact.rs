@@ -195,7 +195,8 @@ pub(crate) fn codec(compression: Compression) -> Codec {
 
 /// The asset's clips reduced within `tolerance` (rig units), with their reports and
 /// whether key values are measured (and so must be written) through `codec`: kept only
-/// when every clip's rounding fits the bound.
+/// when every clip's rounding fits the bound. `cubic` lets tracks become CUBICSPLINE
+/// where that is smaller (glTF outputs; USD time samples are linear).
 ///
 /// # Errors
 /// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
@@ -203,6 +204,7 @@ pub(crate) fn compact_clips(
     asset: &Asset,
     tolerance: f32,
     codec: Option<Codec>,
+    cubic: bool,
 ) -> Result<(Vec<Clip>, Vec<ClipReport>, bool), PipelineError> {
     let points = point_distances(asset);
     let acl_points = vec![(POINT_DISTANCE_M / meters_per_unit(asset)) as f32; points.len()];
@@ -214,6 +216,7 @@ pub(crate) fn compact_clips(
             point_distance: points.clone(),
             codec,
             uniform_rate: true,
+            cubic,
         };
         let mut clips = Vec::with_capacity(asset.clips.len());
         let mut reports = Vec::with_capacity(asset.clips.len());

@@ -369,6 +369,22 @@ impl Builder {
         self.normalized_i16(&i16_keys(values), Type::Vec4)
     }
 
+    /// CUBICSPLINE rotation outputs (in-tangent, value, out-tangent per key, each xyzw) as
+    /// 16-bit normalized components, rounded by the caller: compressed without a filter
+    /// when the export is (the `QUATERNION` filter decodes unit quaternions, which tangents
+    /// are not).
+    pub(crate) fn animation_shorts(&mut self, data: &[i16]) -> Index<json::Accessor> {
+        if self.compressed.is_none() {
+            return self.normalized_i16(data, Type::Vec4);
+        }
+        let raw: Vec<u8> = data.iter().flat_map(|c| c.to_le_bytes()).collect();
+        let index = self.grouped(&raw, 8, Filter::None, ComponentType::I16, Type::Vec4, None);
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
+    }
+
     /// An `UNSIGNED_BYTE` accessor with `normalized: true` (read as `c / 255`), for vertex
     /// weights.
     pub(crate) fn normalized_u8(
