@@ -171,7 +171,7 @@ struct Tuning {
 impl Tuning {
     const DEFAULT: Self = Self {
         budget_scale: 1.0,
-        tighten_rounds: 12,
+        tighten_rounds: 20,
     };
 }
 
@@ -575,7 +575,7 @@ impl<'a> Reducer<'a> {
                 }
                 let can_tighten = round < self.tuning.tighten_rounds
                     && above.iter().any(|&c| self.channels[c].eps > 0.0);
-                let f = (0.9 * tol / err).min(0.5);
+                let f = (0.9 * tol / err).min(0.75);
                 for &c in &above {
                     if can_tighten {
                         factor[c] = factor[c].min(f);

@@ -647,12 +647,24 @@ fn spins_and_steps_over_180_degrees_keep_their_direction() {
     ])
     .expect("valid");
     let step = 12f32.to_radians();
-    let mut angles: Vec<f32> = (0..=90).map(|k| k as f32 * step).collect(); // 3 turns
-    let spun = *angles.last().expect("keys");
-    angles.push(spun + 200f32.to_radians());
-    angles.extend([angles[91]; 10]);
+    // `wobble`: the spin speeds up and slows down (±50% of its 12° per frame, back in
+    // phase after the three turns), which slerp between far keys cannot follow and cubic
+    // Hermite segments can: CUBICSPLINE tracks then win.
+    let spin = |wobble: f32| {
+        let mut angles: Vec<f32> = (0..=90)
+            .map(|k| {
+                let phase = std::f32::consts::TAU * k as f32 / 45.0;
+                k as f32 * step + wobble * 45.0 * step * 0.5 / std::f32::consts::TAU * phase.sin()
+            })
+            .collect(); // 3 turns
+        let spun = *angles.last().expect("keys");
+        angles.push(spun + 200f32.to_radians());
+        angles.extend([angles[91]; 10]);
+        angles
+    };
+    let angles = spin(0.0);
     let times: Vec<f32> = (0..angles.len()).map(|k| k as f32 / 30.0).collect();
-    let clip = Clip {
+    let clip_of = |angles: &[f32]| Clip {
         name: "spin".into(),
         tracks: vec![Track {
             target: TrackTarget::Rotation(JointIndex(0)),
@@ -661,8 +673,10 @@ fn spins_and_steps_over_180_degrees_keep_their_direction() {
             values: quats(angles.iter().map(|&a| Quat::from_rotation_y(a))),
         }],
     };
+    let clip = clip_of(&angles);
+    let wobbly = clip_of(&spin(1.0));
     let mut cubic_tracks = 0;
-    for options in [
+    for (options, clip) in [
         ReduceOptions {
             tolerance: 1e-3,
             point_distance: vec![0.03; 2],
@@ -687,16 +701,37 @@ fn spins_and_steps_over_180_degrees_keep_their_direction() {
             cubic: true,
             ..ReduceOptions::default()
         },
-    ] {
-        let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+        ReduceOptions {
+            tolerance: 1e-2,
+            point_distance: vec![0.03; 2],
+            codec: Some(Codec::I16),
+            uniform_rate: true,
+            cubic: true,
+        },
+    ]
+    .into_iter()
+    // The wobbly spin at the 1 mm and 1 cm bounds (`follows` allows 2 cm between
+    // source frames).
+    .flat_map(|options| {
+        let tight = options.tolerance <= 0.01;
+        let both = [(options.clone(), &clip), (options, &wobbly)];
+        both.into_iter().take(if tight { 2 } else { 1 })
+    }) {
+        let (reduced, stats) = reduce_clip(clip, &skeleton, &options).expect("reduces");
         assert!(stats.max_error <= options.tolerance, "{stats:?}");
-        assert!(stats.keys_after < stats.keys_before, "{stats:?}");
-        follows(&clip, &reduced, &skeleton, &times).expect("same direction");
+        // The wobble at 1 mm on LINEAR keys needs every key.
+        let wobbles = std::ptr::eq(clip, &wobbly);
+        assert!(
+            stats.keys_after < stats.keys_before + usize::from(wobbles),
+            "{stats:?}"
+        );
+        follows(clip, &reduced, &skeleton, &times).expect("same direction");
         cubic_tracks += usize::from(reduced.tracks[0].interpolation == Interpolation::CubicSpline);
     }
-    // A uniform spin is what slerp reproduces exactly: LINEAR keys win; the accelerating
-    // spin below makes cubic keys win.
-    let _ = cubic_tracks;
+    // A uniform spin is what slerp reproduces exactly: LINEAR keys win there, and on the
+    // wobble at 30 keys per second too (a cubic key, 52 bytes as floats, covers too few
+    // frames); `cubic_spins_and_steps_keep_their_direction` has cubic tracks win.
+    assert_eq!(cubic_tracks, 0);
     // The check catches the failure: every 16th key (192° apart) turns backwards.
     let every_16th: Vec<usize> = (0..times.len())
         .step_by(16)
@@ -947,4 +982,87 @@ fn follows_spin(clip: &Clip, reduced: &Clip, skeleton: &Skeleton) {
             assert!(a.distance(b) < 0.01, "t {t}: {a} vs {b}");
         }
     }
+}
+
+/// CUBICSPLINE tracks on a spin of four and a half turns whose speed varies, then one step
+/// of 200° between two keys (played as -160°, as the source's slerp does), then still: the
+/// cubic fit wins, holds the bound, and turns the same way as the source between every
+/// two source frames and by the same total (glTF-Transform #501).
+#[test]
+fn cubic_spins_and_steps_keep_their_direction() {
+    let skeleton = Skeleton::new(vec![
+        Joint {
+            name: "root".into(),
+            parent: None,
+            rest_local: Transform::IDENTITY,
+        },
+        Joint {
+            name: "arm".into(),
+            parent: Some(JointIndex(0)),
+            rest_local: Transform::from_translation(Vec3::new(0.5, 0.0, 0.0)),
+        },
+    ])
+    .expect("valid");
+    let tau = std::f32::consts::TAU;
+    let mut angles: Vec<f32> = (0..=360)
+        .map(|k| {
+            let t = k as f32 / 120.0;
+            1.5 * tau * t + 0.8 * (0.7 * tau * t).sin()
+        })
+        .collect();
+    let spun = *angles.last().expect("keys");
+    angles.push(spun + 200f32.to_radians());
+    let held = *angles.last().expect("keys");
+    angles.extend([held; 20]);
+    let times: Vec<f32> = (0..angles.len()).map(|k| k as f32 / 120.0).collect();
+    let clip = Clip {
+        name: "spin".into(),
+        tracks: vec![Track {
+            target: TrackTarget::Rotation(JointIndex(0)),
+            interpolation: Interpolation::Linear,
+            times: times.clone(),
+            values: quats(angles.iter().map(|&a| Quat::from_rotation_y(a))),
+        }],
+    };
+    let options = ReduceOptions {
+        tolerance: 1e-3,
+        point_distance: vec![0.03; 2],
+        codec: Some(Codec::I16),
+        uniform_rate: true,
+        cubic: true,
+    };
+    let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+    assert_eq!(reduced.tracks[0].interpolation, Interpolation::CubicSpline);
+    assert!(stats.max_error <= 1e-3, "{stats:?}");
+    assert!(stats.keys_after * 4 < stats.keys_before, "{stats:?}");
+    assert!(measured_error(&clip, &reduced, &skeleton) <= 1.05e-3);
+    // The heading, at four sub-steps per source frame: the same signed turn each sub-step
+    // (the source slerps between its frames) and the same total.
+    let pi = std::f32::consts::PI;
+    let wrap = |d: f32| (d + pi).rem_euclid(tau) - pi;
+    let heading = |c: &Clip, t: f32| {
+        let p = naive_positions(c, &skeleton, t)[1];
+        p.z.atan2(p.x)
+    };
+    let (mut total_a, mut total_b) = (0.0f32, 0.0f32);
+    let (mut last_a, mut last_b) = (heading(&clip, 0.0), heading(&reduced, 0.0));
+    for k in 1..(times.len() - 1) * 4 + 1 {
+        let t = k as f32 / 480.0;
+        let (a, b) = (heading(&clip, t), heading(&reduced, t));
+        let (da, db) = (wrap(a - last_a), wrap(b - last_b));
+        // The same way; by the same amount but across the 200° step, where a cubic segment
+        // (components interpolated, then normalized) turns unevenly where slerp does not.
+        let same_way = da.abs() < 1e-3 || da.signum() == db.signum();
+        assert!(
+            same_way && (da - db).abs() < 0.15,
+            "t {t}: turned {da} in the source, {db} reduced"
+        );
+        total_a += da;
+        total_b += db;
+        (last_a, last_b) = (a, b);
+    }
+    // Rotation about +Y turns +X towards -Z: headings (atan2(z, x)) decrease.
+    let expected = -(spun - 160f32.to_radians());
+    assert!((total_a - expected).abs() < 1e-2, "{total_a} vs {expected}");
+    assert!((total_b - total_a).abs() < 1e-2, "{total_b} vs {total_a}");
 }
