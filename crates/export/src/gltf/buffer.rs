@@ -385,6 +385,65 @@ impl Builder {
         index
     }
 
+    /// A vertex attribute of three `SHORT` components per element (quantized positions,
+    /// `KHR_mesh_quantization`), each element padded to 8 bytes (vertex attributes align to
+    /// 4 bytes: glTF 2.0 §3.6.2.4, so the view states `byteStride` 8); `min`/`max` in the
+    /// stored integers with [`Bounds::MinMax`].
+    pub(crate) fn padded_vec3_i16(
+        &mut self,
+        data: &[[i16; 3]],
+        normalized: bool,
+        bounds: Bounds,
+    ) -> Index<json::Accessor> {
+        let raw: Vec<u8> = data
+            .iter()
+            .flat_map(|e| [e[0], e[1], e[2], 0])
+            .flat_map(i16::to_le_bytes)
+            .collect();
+        let bounds = match bounds {
+            Bounds::None => None,
+            Bounds::MinMax => {
+                let wide: Vec<f32> = data.iter().flatten().map(|&c| f32::from(c)).collect();
+                let (lo, hi) = min_max(&wide, 3);
+                Some((lo, hi))
+            }
+        };
+        self.padded_vertex(&raw, 8, data.len(), ComponentType::I16, normalized, bounds)
+    }
+
+    /// A vertex attribute of three `BYTE` normalized components per element (quantized
+    /// normals, `KHR_mesh_quantization`), each element padded to 4 bytes.
+    pub(crate) fn padded_vec3_i8_normalized(&mut self, data: &[[i8; 3]]) -> Index<json::Accessor> {
+        let raw: Vec<u8> = data
+            .iter()
+            .flat_map(|e| [e[0], e[1], e[2], 0])
+            .map(|c| c.to_le_bytes()[0])
+            .collect();
+        self.padded_vertex(&raw, 4, data.len(), ComponentType::I8, true, None)
+    }
+
+    /// A `VEC3` vertex attribute over `raw` (`count` elements of `stride` bytes, padded),
+    /// in a view of its own that states the stride.
+    fn padded_vertex(
+        &mut self,
+        raw: &[u8],
+        stride: usize,
+        count: usize,
+        component: ComponentType,
+        normalized: bool,
+        bounds: Option<(json::Value, json::Value)>,
+    ) -> Index<json::Accessor> {
+        let view = self.vertex_view(Some(Target::ArrayBuffer), raw, stride);
+        if let Some(v) = self.root.buffer_views.get_mut(view.value()) {
+            v.byte_stride = Some(json::buffer::Stride(stride));
+        }
+        let index = self.accessor(view, count, component, Type::Vec3, bounds);
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = normalized;
+        }
+        index
+    }
+
     /// An `UNSIGNED_BYTE` accessor with `normalized: true` (read as `c / 255`), for vertex
     /// weights.
     pub(crate) fn normalized_u8(

@@ -68,6 +68,12 @@ pub struct GltfOptions {
     /// floats; and a skin's weights as normalized bytes when every weight is exactly
     /// `k / 255` (a bone mesh's 0 and 1: lossless, a quarter of the bytes). Default `false`.
     pub compact: bool,
+    /// Skinned meshes without morph targets written with `KHR_mesh_quantization`
+    /// (declared required): positions as 16-bit integers on the mesh's
+    /// [`rigport_model::quantize::PositionGrid`] (folded into the skin's inverse bind
+    /// matrices; a vertex moves by at most the grid's `max_error` times the skinning
+    /// matrices' scale), normals as 8-bit normalized components. Default `false`.
+    pub quantize_mesh: bool,
     /// Compression beyond core glTF: with [`Compression::Meshopt`], animation data is
     /// written through `EXT_meshopt_compression` (declared required): with
     /// `compact`, rotations through its `QUATERNION` filter and translations and
@@ -82,6 +88,7 @@ impl Default for GltfOptions {
         Self {
             max_influences: 4,
             compact: false,
+            quantize_mesh: false,
             compression: Compression::None,
         }
     }
