@@ -91,6 +91,7 @@ pub(crate) fn build(
         version: "2.0".into(),
         ..Default::default()
     });
+    b.group_animation = opts.compact;
     if opts.compression == rigport_model::Compression::Meshopt {
         b.compressed = Some(super::meshopt::Compressed::default());
         b.filter_vectors = opts.compact;
