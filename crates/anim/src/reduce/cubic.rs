@@ -315,7 +315,8 @@ pub(super) fn fit_cubic(chan: &Channel, budget: usize) -> Option<(CubicFit, bool
     let candidate = |keys: Vec<usize>, tangents: &[(Vec4, Vec4)], uniform: bool, under: usize| {
         let track = samples.track(chan, &keys, tangents);
         let value_bytes = output_bytes(&track, chan.kind, codec);
-        let bytes = value_bytes + if uniform { 0 } else { 4 * keys.len() };
+        let times = 4 * keys.len() + super::simplify::TIME_ACCESSOR_JSON;
+        let bytes = value_bytes + if uniform { 0 } else { times };
         if bytes >= under {
             return None;
         }

@@ -22,6 +22,11 @@ use super::curve::{lerp3, Slerp};
 /// for 120 Hz capture) key removal keeps as few keys for a moving channel.
 pub(super) const MAX_STEP: usize = 64;
 
+/// What a time accessor of its own costs besides its 4 bytes per key: its JSON (about 110
+/// bytes with its `min` and `max`, as the glTF writer prints them). On short clips that is
+/// worth several keys, and a uniform rate's times are shared.
+pub(super) const TIME_ACCESSOR_JSON: usize = 110;
+
 /// The keys `chan` keeps for its tolerance `chan.eps` (indices, increasing, first and last
 /// always among them) and, when a CUBICSPLINE fit of them needs fewer bytes than LINEAR
 /// keys (`chan.cubic`), that cubic track.
@@ -45,7 +50,7 @@ fn linear(chan: &Channel) -> (Vec<usize>, usize) {
     }
     let curve = Curve::new(chan);
     let removed = remove_keys(&curve, n);
-    let budget = removed.len() * (value + 4);
+    let budget = removed.len() * (value + 4) + TIME_ACCESSOR_JSON;
     if !chan.decimate {
         return (removed, budget);
     }
