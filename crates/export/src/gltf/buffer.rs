@@ -447,9 +447,14 @@ impl Builder {
         let bounds = match bounds {
             Bounds::None => None,
             Bounds::MinMax => {
-                let wide: Vec<f32> = data.iter().flatten().map(|&c| f32::from(c)).collect();
-                let (lo, hi) = min_max(&wide, 3);
-                Some((lo, hi))
+                // Integers, as the components are (`-32767`, not `-32767.0`).
+                let fold = |pick: fn(i16, i16) -> i16, start: i16| {
+                    let bound = data.iter().fold([start; 3], |acc, e| {
+                        [pick(acc[0], e[0]), pick(acc[1], e[1]), pick(acc[2], e[2])]
+                    });
+                    json::Value::Array(bound.iter().map(|&c| json::Value::from(c)).collect())
+                };
+                Some((fold(i16::min, i16::MAX), fold(i16::max, i16::MIN)))
             }
         };
         self.padded_vertex(&raw, 8, data.len(), ComponentType::I16, normalized, bounds)
