@@ -345,7 +345,8 @@ pub(super) fn fit_cubic(chan: &Channel, budget: usize) -> Option<(CubicFit, bool
             _ => (3, 4),
         };
         let narrowest_bytes = 3 * comps * per;
-        for step in (2..=widest.min(super::simplify::MAX_STEP)).rev() {
+        let steps = (2..=widest.min(super::simplify::MAX_STEP)).rev();
+        for step in steps.filter(|&k| super::simplify::ladder(k)) {
             let keys = super::simplify::uniform_keys(n, step);
             if keys.len() * narrowest_bytes >= best_bytes {
                 break;

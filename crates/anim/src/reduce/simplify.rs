@@ -61,6 +61,7 @@ fn linear(chan: &Channel) -> (Vec<usize>, usize) {
     let widest = ((n - 1) / (removed.len() - 1).max(1)).min(MAX_STEP);
     let step = (2..=widest)
         .rev()
+        .filter(|&k| ladder(k))
         .take_while(|&step| uniform_len(n, step) * value <= budget)
         .find(|&step| fits_uniform(&curve, n, step))
         // Every key (step 1) shares its times with the other full-rate channels.
@@ -70,6 +71,13 @@ fn linear(chan: &Channel) -> (Vec<usize>, usize) {
     } else {
         (removed, budget)
     }
+}
+
+/// The uniform steps tried: a ladder of about 1.5x (2, 3, 4, 6, 8, 12, ...), so that
+/// channels land on the same steps and share their times more often.
+pub(super) fn ladder(step: usize) -> bool {
+    let low = step >> step.ilog2().saturating_sub(1);
+    step >= 2 && (low == 2 || low == 3) && step.trailing_zeros() >= step.ilog2().saturating_sub(1)
 }
 
 /// How many keys [`uniform_keys`] keeps.
@@ -201,6 +209,12 @@ fn remove_keys(curve: &Curve, n: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_ladder_steps_by_about_one_and_a_half() {
+        let steps: Vec<usize> = (0..=MAX_STEP).filter(|&k| ladder(k)).collect();
+        assert_eq!(steps, [2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64]);
+    }
 
     #[test]
     fn uniform_len_counts_uniform_keys() {
