@@ -76,8 +76,13 @@ fn linear(chan: &Channel) -> (Vec<usize>, usize) {
 /// The uniform steps tried: a ladder of about 1.5x (2, 3, 4, 6, 8, 12, ...), so that
 /// channels land on the same steps and share their times more often.
 pub(super) fn ladder(step: usize) -> bool {
-    let low = step >> step.ilog2().saturating_sub(1);
-    step >= 2 && (low == 2 || low == 3) && step.trailing_zeros() >= step.ilog2().saturating_sub(1)
+    if step < 2 {
+        return false;
+    }
+    // 2^k or 3 * 2^(k-1): the two top bits are all the bits.
+    let shift = step.ilog2() - 1;
+    let top = step >> shift;
+    (top == 2 || top == 3) && step.trailing_zeros() >= shift
 }
 
 /// How many keys [`uniform_keys`] keeps.
