@@ -205,8 +205,12 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
         assert!(size(&meshopt) <= size(&plain), "{label}: {report_mo}");
         // The mesh (vertex data through the codec, exactly) loads as the file of the same
         // rest pose does: the core reduced file when both were written reduced (both with
-        // the properties every clip holds moved into the rest pose), else the plain one.
+        // the properties every clip holds moved into the rest pose, and the same quantized
+        // vertices), else the plain one, within the quantization grid's bound.
         let both = report["reduced_written"] == true && report_mo["reduced_written"] == true;
+        let grid = report_mo["mesh_grid_error"].as_f64().expect("grid error")
+            * report["meters_per_unit"].as_f64().expect("unit");
+        let moved = if both { 1e-6 } else { grid + 1e-6 };
         let same_rest = if both { &reduced } else { &plain };
         let ((_, rest_plain), (_, rest_mo)) = (
             crate::three::three_eval(same_rest, &[]).expect("three.js"),
@@ -220,7 +224,27 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
         let worst = (rest_plain.numbers.iter().zip(&rest_mo.numbers))
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
-        assert!(worst < 1e-6, "{label}: meshopt mesh moved by {worst}");
+        assert!(worst < moved, "{label}: meshopt mesh moved by {worst}");
+        // Quantized vertices (KHR_mesh_quantization, required) only with their bound
+        // paid out of the tolerance.
+        for (file, rep) in [(&reduced, &report), (&meshopt, &report_mo)] {
+            let quantized = gltf_json(file)["extensionsRequired"]
+                .as_array()
+                .is_some_and(|r| r.iter().any(|e| e == "KHR_mesh_quantization"));
+            let paid = rep["mesh_grid_error"].as_f64().expect("grid error");
+            assert_eq!(
+                quantized,
+                paid > 0.0 && rep["reduced_written"] == true,
+                "{label}: {rep}"
+            );
+            for clip in rep["clips"].as_array().expect("clips") {
+                let budget = rep["tolerance"].as_f64().expect("tolerance") - paid;
+                assert!(
+                    clip["max_error"].as_f64().expect("max") <= budget + 1e-9,
+                    "{label}: {rep}"
+                );
+            }
+        }
         // Written compressed, the extension is required; else the plain file was written.
         let required = gltf_json(&meshopt)["extensionsRequired"]
             .as_array()

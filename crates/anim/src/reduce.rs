@@ -33,6 +33,7 @@ use rigport_eval::LocalToModelJob;
 
 mod channel;
 mod codec;
+mod cubic;
 mod curve;
 mod error;
 mod loosen;
@@ -43,6 +44,7 @@ pub use codec::Codec;
 pub use error::{ReduceError, TrackProblem};
 
 use channel::{collect_channels, Channel, Kind};
+use cubic::cubic_as_written;
 use curve::{sample_quat, sample_vec3};
 use simplify::simplify;
 
@@ -84,6 +86,10 @@ pub struct ReduceOptions {
     /// Also try a lower uniform rate per track (every k-th key), kept when it needs fewer
     /// bytes than key removal (a key's value without a time of its own).
     pub uniform_rate: bool,
+    /// Also try CUBICSPLINE fits per track (original values at kept keys, Hermite tangents
+    /// fitted to the keys between), kept when they need fewer bytes than LINEAR keys: for
+    /// glTF outputs (USD time samples interpolate linearly).
+    pub cubic: bool,
 }
 
 /// Removes keys from LINEAR joint tracks so that, at every original key time, every
@@ -136,7 +142,7 @@ pub fn reduce(
 ///     interpolation: Interpolation::Linear, times, values };
 /// let clip = Clip { name: "swing".into(), tracks: vec![track] };
 /// let options = ReduceOptions { tolerance: 0.001, point_distance: vec![0.03; 2],
-///     codec: Some(Codec::I16), uniform_rate: true };
+///     codec: Some(Codec::I16), uniform_rate: true, cubic: false };
 /// let (reduced, stats) = reduce_clip(&clip, &skeleton, &options)?;
 /// assert!(stats.keys_after < 10 && stats.max_error <= 0.001 && stats.coded);
 /// assert_eq!(reduced.tracks[0].times.last(), Some(&1.0));
@@ -165,7 +171,7 @@ struct Tuning {
 impl Tuning {
     const DEFAULT: Self = Self {
         budget_scale: 1.0,
-        tighten_rounds: 12,
+        tighten_rounds: 20,
     };
 }
 
@@ -197,7 +203,13 @@ fn reduce_impl(
     let keys_before: usize = clip.tracks.iter().map(|t| t.times.len()).sum();
     let mut codec = options.codec;
     let mut reducer = loop {
-        let channels = collect_channels(clip, skeleton, codec.as_ref(), options.uniform_rate)?;
+        let channels = collect_channels(
+            clip,
+            skeleton,
+            codec.as_ref(),
+            options.uniform_rate,
+            options.cubic,
+        )?;
         let mut reducer = Reducer::new(skeleton, options, tuning, channels)?;
         // The codec's rounding is the one error that restoring tracks cannot undo: measure
         // it alone first, and write exact values when it does not fit.
@@ -212,7 +224,10 @@ fn reduce_impl(
     let mut out = clip.clone();
     for chan in &reducer.channels {
         if let (Some(kept), Some(slot)) = (&chan.kept, out.tracks.get_mut(chan.track)) {
-            *slot = pick_keys(chan.original, kept);
+            *slot = match &chan.fitted {
+                Some(cubic) => cubic.clone(),
+                None => pick_keys(chan.original, kept),
+            };
         }
     }
     let keys_after = out.tracks.iter().map(|t| t.times.len()).sum();
@@ -505,11 +520,15 @@ impl<'a> Reducer<'a> {
     fn simplify_dirty(&mut self, dirty: &mut [bool]) {
         for (chan, dirty) in self.channels.iter_mut().zip(dirty.iter_mut()) {
             if std::mem::take(dirty) && chan.reducible {
-                let kept = simplify(chan);
-                chan.reduced = Some(pick_keys(
-                    chan.as_written.as_ref().unwrap_or(chan.original),
-                    &kept,
-                ));
+                let (kept, cubic) = simplify(chan);
+                chan.reduced = Some(match &cubic {
+                    Some(track) => chan
+                        .codec
+                        .and_then(|codec| cubic_as_written(track, chan.kind, &codec))
+                        .unwrap_or_else(|| track.clone()),
+                    None => pick_keys(chan.as_written.as_ref().unwrap_or(chan.original), &kept),
+                });
+                chan.fitted = cubic;
                 chan.kept = Some(kept);
             }
         }
@@ -556,7 +575,7 @@ impl<'a> Reducer<'a> {
                 }
                 let can_tighten = round < self.tuning.tighten_rounds
                     && above.iter().any(|&c| self.channels[c].eps > 0.0);
-                let f = (0.9 * tol / err).min(0.5);
+                let f = (0.9 * tol / err).min(0.75);
                 for &c in &above {
                     if can_tighten {
                         factor[c] = factor[c].min(f);
@@ -573,6 +592,7 @@ impl<'a> Reducer<'a> {
                 if restore[ci] {
                     chan.reduced = None;
                     chan.kept = None;
+                    chan.fitted = None;
                     chan.reducible = false;
                     changed = true;
                 } else if factor[ci] < 1.0 && chan.eps > 0.0 {
@@ -590,6 +610,7 @@ impl<'a> Reducer<'a> {
                 for chan in &mut self.channels {
                     chan.reduced = None;
                     chan.kept = None;
+                    chan.fitted = None;
                     chan.reducible = false;
                 }
             }

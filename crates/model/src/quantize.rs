@@ -47,3 +47,97 @@ pub fn rotation_from_i16(c: [i16; 4]) -> [f32; 4] {
 pub fn rotation_as_i16(q: [f32; 4]) -> [f32; 4] {
     rotation_from_i16(rotation_to_i16(q))
 }
+
+/// One component of a CUBICSPLINE rotation output (a value's or a tangent's) as a 16-bit
+/// normalized integer, rounded, component by component and not normalized (a tangent is a
+/// derivative, not a rotation); `None` outside `[-1, 1]`, which a normalized short cannot
+/// hold (a tangent is in units per second and can exceed it).
+///
+/// ```
+/// use rigport_model::quantize::{component_as_i16, component_to_i16};
+///
+/// assert_eq!(component_to_i16(0.5), Some(16384));
+/// assert_eq!(component_to_i16(-1.0), Some(-32767));
+/// assert_eq!(component_to_i16(1.5), None);
+/// assert!((component_as_i16(0.3) - 0.3).abs() <= 0.5 / 32767.0);
+/// ```
+pub fn component_to_i16(c: f32) -> Option<i16> {
+    (c.abs() <= 1.0).then(|| (f64::from(c) * SHORT_MAX).round() as i16)
+}
+
+/// What a reader decodes for [`component_to_i16`] of `c` (`c` itself outside `[-1, 1]`,
+/// where a writer keeps floats).
+pub fn component_as_i16(c: f32) -> f32 {
+    component_to_i16(c).map_or(c, |i| (f64::from(i) / SHORT_MAX).max(-1.0) as f32)
+}
+
+/// A uniform grid for a mesh's positions as 16-bit integers (`KHR_mesh_quantization`):
+/// a position is stored as `q = round((p - center) / step)`, each component in
+/// `[-32767, 32767]`, and read back as `center + step * q` (a writer folds that map into
+/// the skin's inverse bind matrices). One step for every axis keeps the map a uniform
+/// scale, so normals skinned with it keep their directions.
+///
+/// ```
+/// use rigport_model::glam::Vec3;
+/// use rigport_model::quantize::PositionGrid;
+///
+/// let points = [Vec3::new(-1.0, 0.0, 0.25), Vec3::new(1.0, 0.5, 0.0), Vec3::new(0.3, 0.1, 0.2)];
+/// let grid = PositionGrid::new(&points).expect("finite");
+/// assert_eq!(grid.encode(points[0])[0], -32767);
+/// for &p in &points {
+///     let back = grid.decode(grid.encode(p));
+///     assert!(back.distance(p) <= grid.max_error());
+/// }
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PositionGrid {
+    /// The middle of the positions' bounding box, in the mesh's space.
+    pub center: glam::Vec3,
+    /// The distance between grid points on every axis, in the mesh's length unit.
+    pub step: f32,
+}
+
+impl PositionGrid {
+    /// The grid spanning `positions`' bounding box with 65,534 steps along its longest
+    /// side; `None` without positions or with a non-finite one.
+    pub fn new(positions: &[glam::Vec3]) -> Option<Self> {
+        let first = *positions.first()?;
+        let (lo, hi) = positions
+            .iter()
+            .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        if !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        let extent = (hi - lo).max_element();
+        // A single point (or a degenerate box): any step holds it exactly.
+        let step = if extent > 0.0 {
+            extent / (2.0 * SHORT_MAX as f32)
+        } else {
+            1.0
+        };
+        Some(Self {
+            center: (lo + hi) * 0.5,
+            step,
+        })
+    }
+
+    /// The grid point nearest `p`, clamped to the 16-bit range.
+    pub fn encode(&self, p: glam::Vec3) -> [i16; 3] {
+        ((p - self.center) / self.step)
+            .to_array()
+            .map(|c| c.round().clamp(-SHORT_MAX as f32, SHORT_MAX as f32) as i16)
+    }
+
+    /// The position a reader gets for `q`.
+    pub fn decode(&self, q: [i16; 3]) -> glam::Vec3 {
+        self.center + glam::Vec3::from_array(q.map(f32::from)) * self.step
+    }
+
+    /// A bound on the distance between a position in the box and what a reader decodes:
+    /// half a step on each axis (`step * √3 / 2`), plus two `f32` roundings of the
+    /// decoded coordinates' size (a reader's matrix arithmetic).
+    pub fn max_error(&self) -> f32 {
+        let size = self.center.abs().max_element() + SHORT_MAX as f32 * self.step;
+        self.step * 0.5 * 3f32.sqrt() + 2.0 * 3f32.sqrt() * f32::EPSILON * size
+    }
+}

@@ -11,6 +11,7 @@
 
 use rigport_anim::reduce::metric::point_error;
 use rigport_anim::reduce::{Codec, ReduceOptions, reduce_clip};
+use rigport_model::quantize::PositionGrid;
 use rigport_model::{Asset, Clip, Compression, Interpolation, JointIndex, Skeleton, TrackTarget};
 use serde::Serialize;
 
@@ -84,6 +85,10 @@ pub struct CompactReport {
     pub tolerance: f32,
     /// Metres per rig unit (1 when the rig states none).
     pub meters_per_unit: f64,
+    /// The most quantizing the skinned meshes' positions moves a vertex, in rig units
+    /// (`KHR_mesh_quantization`), paid out of the bound before the clips are reduced: the
+    /// clips' errors stay within `tolerance - mesh_grid_error`. 0 when positions are floats.
+    pub mesh_grid_error: f32,
     /// Whether key values are written as the compression stores them (16-bit rotations; with
     /// meshopt, its filters), as the error was measured; `false`: exact floats.
     pub rotations_i16: bool,
@@ -181,6 +186,59 @@ fn point_distances(asset: &Asset) -> Vec<f32> {
     out
 }
 
+/// The most a skinned vertex moves, in rig units, when the glTF writer quantizes the
+/// skinned meshes' positions (`KHR_mesh_quantization`: 16-bit integers on each mesh's
+/// [`PositionGrid`]), or `None` when that is not bounded by the grid alone: a skinning
+/// matrix (a joint's model matrix times its inverse bind matrix) with a scale, from a rest
+/// scale, a scale track or an inverse bind matrix, would scale the rounding too; `None`
+/// too without a skinned mesh. The writer quantizes skinned meshes without morph targets;
+/// the bound covers every skinned mesh.
+///
+/// ```
+/// use rigport_pipeline::compact::mesh_grid_error;
+/// let mut asset = rigport_import::bvh::import("../../fixtures/bvh/end_sites.bvh".as_ref())?.asset;
+/// assert_eq!(mesh_grid_error(&asset), None, "no skinned mesh");
+/// assert!(rigport_import::bone_mesh::add_bone_mesh(&mut asset));
+/// // Half a step (the mesh's longest side / 65,534) on each axis.
+/// let error = mesh_grid_error(&asset).expect("rigid");
+/// assert!(error > 0.0 && error < 1e-4 * asset.skeleton.len() as f32, "{error}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn mesh_grid_error(asset: &Asset) -> Option<f32> {
+    const UNIT: f32 = 1e-4;
+    let unit = |v: rigport_model::glam::Vec3| {
+        (v - rigport_model::glam::Vec3::ONE).abs().max_element() <= UNIT
+    };
+    let rigid_rest = asset
+        .skeleton
+        .joints()
+        .iter()
+        .all(|j| unit(j.rest_local.scale));
+    let scale_tracks = asset.clips.iter().flat_map(|c| &c.tracks).any(|t| {
+        matches!(t.target, TrackTarget::Scale(_))
+            && t.values
+                .chunks_exact(3)
+                .any(|v| !unit(rigport_model::glam::Vec3::from_slice(v)))
+    });
+    let rigid_bind = asset.skins.iter().flat_map(|s| &s.inv_bind).all(|m| {
+        [m.x_axis, m.y_axis, m.z_axis]
+            .iter()
+            .all(|c| (c.truncate().length() - 1.0).abs() <= UNIT)
+    });
+    if !rigid_rest || scale_tracks || !rigid_bind {
+        return None;
+    }
+    let skinned = asset
+        .skins
+        .iter()
+        .filter_map(|s| asset.meshes.get(s.mesh.get()));
+    let grids = skinned.filter_map(|m| PositionGrid::new(&m.positions));
+    // The rigid skinning matrices may still scale by UNIT; pay for it.
+    grids
+        .map(|g| g.max_error() * (1.0 + 4.0 * UNIT))
+        .reduce(f32::max)
+}
+
 /// How a glTF writer with `compression` stores key values: 16-bit rotations, or
 /// meshoptimizer's quaternion and exponential filters.
 pub(crate) fn codec(compression: Compression) -> Codec {
@@ -195,7 +253,8 @@ pub(crate) fn codec(compression: Compression) -> Codec {
 
 /// The asset's clips reduced within `tolerance` (rig units), with their reports and
 /// whether key values are measured (and so must be written) through `codec`: kept only
-/// when every clip's rounding fits the bound.
+/// when every clip's rounding fits the bound. `cubic` lets tracks become CUBICSPLINE
+/// where that is smaller (glTF outputs; USD time samples are linear).
 ///
 /// # Errors
 /// A clip that does not fit the skeleton, or a tolerance that is negative or not finite.
@@ -203,6 +262,7 @@ pub(crate) fn compact_clips(
     asset: &Asset,
     tolerance: f32,
     codec: Option<Codec>,
+    cubic: bool,
 ) -> Result<(Vec<Clip>, Vec<ClipReport>, bool), PipelineError> {
     let points = point_distances(asset);
     let acl_points = vec![(POINT_DISTANCE_M / meters_per_unit(asset)) as f32; points.len()];
@@ -214,6 +274,7 @@ pub(crate) fn compact_clips(
             point_distance: points.clone(),
             codec,
             uniform_rate: true,
+            cubic,
         };
         let mut clips = Vec::with_capacity(asset.clips.len());
         let mut reports = Vec::with_capacity(asset.clips.len());

@@ -5,6 +5,7 @@ use glam::Quat;
 use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget};
 
 use super::codec::Codec;
+use super::cubic::cubic_as_written;
 use super::curve::quat_at;
 use super::error::{ReduceError, TrackProblem};
 
@@ -39,6 +40,10 @@ pub(super) struct Channel<'a> {
     pub(super) reducible: bool,
     /// Try a lower uniform rate besides key removal (`simplify`).
     pub(super) decimate: bool,
+    /// Try a CUBICSPLINE fit besides LINEAR keys (`simplify`).
+    pub(super) cubic: bool,
+    /// How the writer stores values (`None`: exactly), for the cubic fit's rounding.
+    pub(super) codec: Option<Codec>,
     /// Bytes of one key's value as written (the simplifier's cost model).
     pub(super) value_bytes: usize,
     /// Local tolerance: length unit (translation), radians (rotation), scale units (scale).
@@ -47,6 +52,9 @@ pub(super) struct Channel<'a> {
     pub(super) kept: Option<Vec<usize>>,
     /// The kept keys of `as_written` (or the original), the track sampled while reduced.
     pub(super) reduced: Option<Track>,
+    /// The cubic track chosen instead of kept LINEAR keys, as handed to the writer
+    /// (`reduced` is it as the writer stores it).
+    pub(super) fitted: Option<Track>,
     /// Normalized rotation keys as written (rotation channels only), for the simplifier.
     pub(super) quats: Vec<Quat>,
 }
@@ -68,6 +76,7 @@ pub(super) fn collect_channels<'a>(
     skeleton: &Skeleton,
     codec: Option<&Codec>,
     decimate: bool,
+    cubic: bool,
 ) -> Result<Vec<Channel<'a>>, ReduceError> {
     let joints = skeleton.len();
     let mut seen = vec![[false; 3]; joints];
@@ -134,16 +143,23 @@ pub(super) fn collect_channels<'a>(
         if std::mem::replace(&mut slot[kind.slot()], true) {
             continue;
         }
-        let cubic = track.interpolation == Interpolation::CubicSpline;
-        let as_written = codec
-            .filter(|_| !cubic)
-            .and_then(|codec| as_written(track, kind, codec));
-        if let Some(written) = as_written.as_ref().filter(|_| kind == Kind::Rotation) {
+        let is_cubic = track.interpolation == Interpolation::CubicSpline;
+        let as_written = codec.and_then(|codec| {
+            if is_cubic {
+                cubic_as_written(track, kind, codec)
+            } else {
+                as_written(track, kind, codec)
+            }
+        });
+        if let Some(written) = as_written
+            .as_ref()
+            .filter(|_| kind == Kind::Rotation && !is_cubic)
+        {
             for (q, chunk) in quats.iter_mut().zip(written.values.chunks_exact(4)) {
                 *q = quat_at(chunk, 0);
             }
         }
-        let rounded = as_written.is_some() && kind == Kind::Rotation;
+        let rounded = as_written.is_some() && kind == Kind::Rotation && !is_cubic;
         out.push(Channel {
             joint: joint.get(),
             kind,
@@ -152,10 +168,13 @@ pub(super) fn collect_channels<'a>(
             as_written,
             reducible: track.interpolation == Interpolation::Linear && track.times.len() > 2,
             decimate,
+            cubic,
+            codec: codec.copied(),
             value_bytes: if rounded { 8 } else { 4 * comps },
             eps: 0.0,
             kept: None,
             reduced: None,
+            fitted: None,
             quats,
         });
     }

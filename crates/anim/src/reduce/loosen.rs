@@ -65,6 +65,7 @@ impl Reducer<'_> {
                     chan.kept.clone(),
                     chan.reduced.clone(),
                     chan.joint,
+                    chan.fitted.clone(),
                 ));
                 chan.eps *= factor;
                 dirty[ci] = true;
@@ -93,6 +94,7 @@ impl Reducer<'_> {
                             chan.eps = entry.1;
                             chan.kept = entry.2.take();
                             chan.reduced = entry.3.take();
+                            chan.fitted = entry.5.take();
                             frozen[entry.0] = true;
                             reverted = true;
                         }
@@ -108,6 +110,7 @@ impl Reducer<'_> {
                             chan.eps = entry.1;
                             chan.kept = entry.2.take();
                             chan.reduced = entry.3.take();
+                            chan.fitted = entry.5.take();
                             frozen[entry.0] = true;
                         }
                     }

@@ -6,6 +6,7 @@
 use rigport_model::{Clip, Interpolation, Skeleton};
 
 use super::channel::{as_written, collect_channels};
+use super::cubic::cubic_as_written;
 use super::{Codec, ReduceError, ReduceOptions, Reducer, Tuning};
 
 /// The largest and the mean model-space error.
@@ -36,7 +37,7 @@ pub struct PointError {
 ///     target: TrackTarget::Rotation(JointIndex(0)), interpolation: Interpolation::Linear,
 ///     times, values }] };
 /// let options = ReduceOptions { tolerance: 1e-4, point_distance: vec![0.03],
-///     codec: Some(Codec::I16), uniform_rate: true };
+///     codec: Some(Codec::I16), uniform_rate: true, cubic: true };
 /// let (reduced, stats) = reduce_clip(&clip, &skeleton, &options)?;
 /// let acl = point_error(&clip, &reduced, &skeleton, &[0.03], Some(&Codec::I16))?;
 /// assert_eq!(acl.max, stats.max_error);
@@ -55,8 +56,8 @@ pub fn point_error(
     codec: Option<&Codec>,
 ) -> Result<PointError, ReduceError> {
     // Validates the reduced clip's tracks too.
-    collect_channels(reduced, skeleton, None, false)?;
-    let channels = collect_channels(original, skeleton, None, false)?;
+    collect_channels(reduced, skeleton, None, false, false)?;
+    let channels = collect_channels(original, skeleton, None, false, false)?;
     let options = ReduceOptions {
         point_distance: point_distance.to_vec(),
         ..ReduceOptions::default()
@@ -71,8 +72,13 @@ pub fn point_error(
                 clip: reduced.name.clone(),
                 track: chan.track,
             })?;
-        let coded = (codec.filter(|_| track.interpolation != Interpolation::CubicSpline))
-            .and_then(|codec| as_written(track, chan.kind, codec));
+        let coded = codec.and_then(|codec| {
+            if track.interpolation == Interpolation::CubicSpline {
+                cubic_as_written(track, chan.kind, codec)
+            } else {
+                as_written(track, chan.kind, codec)
+            }
+        });
         let track = coded.unwrap_or_else(|| track.clone());
         chan.reduced = Some(track);
     }

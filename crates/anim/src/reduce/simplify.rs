@@ -12,43 +12,77 @@
 
 use glam::{Vec3, Vec4};
 
+use rigport_model::Track;
+
 use super::channel::{Channel, Kind};
+use super::cubic::fit_cubic;
 use super::curve::{lerp3, Slerp};
 
 /// The largest decimation step tried: beyond it (a key every 64 source frames, about 2 Hz
 /// for 120 Hz capture) key removal keeps as few keys for a moving channel.
-const MAX_STEP: usize = 64;
+pub(super) const MAX_STEP: usize = 64;
 
-/// The indices of the keys `chan` keeps for its tolerance `chan.eps`, increasing, first
-/// and last always among them.
-pub(super) fn simplify(chan: &Channel) -> Vec<usize> {
+/// What a time accessor of its own costs besides its 4 bytes per key: its JSON (about 110
+/// bytes with its `min` and `max`, as the glTF writer prints them). On short clips that is
+/// worth several keys, and a uniform rate's times are shared.
+pub(super) const TIME_ACCESSOR_JSON: usize = 110;
+
+/// The keys `chan` keeps for its tolerance `chan.eps` (indices, increasing, first and last
+/// always among them) and, when a CUBICSPLINE fit of them needs fewer bytes than LINEAR
+/// keys (`chan.cubic`), that cubic track.
+pub(super) fn simplify(chan: &Channel) -> (Vec<usize>, Option<Track>) {
+    let (kept, bytes) = linear(chan);
+    if chan.cubic {
+        if let Some((fit, _)) = fit_cubic(chan, bytes) {
+            return (fit.kept, Some(fit.track));
+        }
+    }
+    (kept, None)
+}
+
+/// The LINEAR keys `chan` keeps and their bytes as written (a key's value, and its time
+/// unless the keys are at a uniform rate, whose times channels share).
+fn linear(chan: &Channel) -> (Vec<usize>, usize) {
     let n = chan.original.times.len();
+    let value = chan.value_bytes;
     if n <= 2 {
-        return (0..n).collect();
+        return ((0..n).collect(), n * value);
     }
     let curve = Curve::new(chan);
     let removed = remove_keys(&curve, n);
+    let budget = removed.len() * (value + 4) + TIME_ACCESSOR_JSON;
     if !chan.decimate {
-        return removed;
+        return (removed, budget);
     }
-    // Bytes per key: its value, plus a time of its own for key removal. A uniform rate
-    // needs more keys than key removal (which keeps the fewest it can), so only steps up to
-    // key removal's mean spacing can pass, and only those down to where the uniform keys
-    // cost as much as key removal's can win: that range is all that is tried.
-    let value = chan.value_bytes;
-    let budget = removed.len() * (value + 4);
+    // A uniform rate needs more keys than key removal (which keeps the fewest it can), so
+    // only steps up to key removal's mean spacing can pass, and only those down to where
+    // the uniform keys cost as much as key removal's can win: that range is all that is
+    // tried.
     let widest = ((n - 1) / (removed.len() - 1).max(1)).min(MAX_STEP);
     let step = (2..=widest)
         .rev()
+        .filter(|&k| ladder(k))
         .take_while(|&step| uniform_len(n, step) * value <= budget)
         .find(|&step| fits_uniform(&curve, n, step))
         // Every key (step 1) shares its times with the other full-rate channels.
         .unwrap_or(1);
     if uniform_len(n, step) * value <= budget {
-        uniform_keys(n, step)
+        (uniform_keys(n, step), uniform_len(n, step) * value)
     } else {
-        removed
+        (removed, budget)
     }
+}
+
+/// The uniform steps tried: a ladder of about 1.5x (2, 3, 4, 6, 8, 12, ...), so that
+/// channels land on the same steps and share their times more often.
+pub(super) fn ladder(step: usize) -> bool {
+    if step < 2 {
+        return false;
+    }
+    // 2^k or 3 * 2^(k-1): the two top bits are all the bits.
+    let shift = step.ilog2() - 1;
+    let top = step >> shift;
+    (top == 2 || top == 3) && step.trailing_zeros() >= shift
 }
 
 /// How many keys [`uniform_keys`] keeps.
@@ -180,6 +214,12 @@ fn remove_keys(curve: &Curve, n: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_ladder_steps_by_about_one_and_a_half() {
+        let steps: Vec<usize> = (0..=MAX_STEP).filter(|&k| ladder(k)).collect();
+        assert_eq!(steps, [2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64]);
+    }
 
     #[test]
     fn uniform_len_counts_uniform_keys() {

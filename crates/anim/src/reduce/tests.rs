@@ -123,7 +123,7 @@ fn random_clip(rng: &mut Rng, skeleton: &Skeleton, frames: usize) -> Clip {
     }
 }
 
-/// The naive reference: binary search, f64 slerp, recursive FK; STEP and LINEAR only.
+/// The naive reference: binary search, f64 slerp and Hermite, recursive FK.
 fn naive_positions(clip: &Clip, skeleton: &Skeleton, t: f32) -> Vec<Vec3> {
     let mut local: Vec<Transform> = skeleton.joints().iter().map(|j| j.rest_local).collect();
     let mut done = std::collections::BTreeSet::new();
@@ -143,6 +143,40 @@ fn naive_positions(clip: &Clip, skeleton: &Skeleton, t: f32) -> Vec<Vec3> {
                 f64::from((t - times[k]) / (times[k + 1] - times[k])),
             )
         };
+        if track.interpolation == Interpolation::CubicSpline {
+            // glTF 2.0 Appendix C in f64: Hermite on the components, tangents times the
+            // key interval, then (rotations) normalized.
+            let part = |k: usize, p: usize| -> Vec<f64> {
+                let at = (3 * k + p) * c;
+                track.values[at..at + c]
+                    .iter()
+                    .map(|&v| f64::from(v))
+                    .collect()
+            };
+            let dt = f64::from(times[k1] - times[k0]);
+            let (u2, u3) = (u * u, u * u * u);
+            let h = [
+                2.0 * u3 - 3.0 * u2 + 1.0,
+                u3 - 2.0 * u2 + u,
+                -2.0 * u3 + 3.0 * u2,
+                u3 - u2,
+            ];
+            let (p0, m0, p1, m1) = (part(k0, 1), part(k0, 2), part(k1, 1), part(k1, 0));
+            let v: Vec<f32> = (0..c)
+                .map(|i| {
+                    (h[0] * p0[i] + h[1] * dt * m0[i] + h[2] * p1[i] + h[3] * dt * m1[i]) as f32
+                })
+                .collect();
+            match track.target {
+                TrackTarget::Translation(j) => local[j.get()].translation = Vec3::from_slice(&v),
+                TrackTarget::Scale(j) => local[j.get()].scale = Vec3::from_slice(&v),
+                TrackTarget::Rotation(j) => {
+                    local[j.get()].rotation = Quat::from_slice(&v).normalize();
+                }
+                TrackTarget::MorphWeights(_) => {}
+            }
+            continue;
+        }
         let u = if track.interpolation == Interpolation::Step {
             0.0
         } else {
@@ -613,12 +647,24 @@ fn spins_and_steps_over_180_degrees_keep_their_direction() {
     ])
     .expect("valid");
     let step = 12f32.to_radians();
-    let mut angles: Vec<f32> = (0..=90).map(|k| k as f32 * step).collect(); // 3 turns
-    let spun = *angles.last().expect("keys");
-    angles.push(spun + 200f32.to_radians());
-    angles.extend([angles[91]; 10]);
+    // `wobble`: the spin speeds up and slows down (±50% of its 12° per frame, back in
+    // phase after the three turns), which slerp between far keys cannot follow and cubic
+    // Hermite segments can: CUBICSPLINE tracks then win.
+    let spin = |wobble: f32| {
+        let mut angles: Vec<f32> = (0..=90)
+            .map(|k| {
+                let phase = std::f32::consts::TAU * k as f32 / 45.0;
+                k as f32 * step + wobble * 45.0 * step * 0.5 / std::f32::consts::TAU * phase.sin()
+            })
+            .collect(); // 3 turns
+        let spun = *angles.last().expect("keys");
+        angles.push(spun + 200f32.to_radians());
+        angles.extend([angles[91]; 10]);
+        angles
+    };
+    let angles = spin(0.0);
     let times: Vec<f32> = (0..angles.len()).map(|k| k as f32 / 30.0).collect();
-    let clip = Clip {
+    let clip_of = |angles: &[f32]| Clip {
         name: "spin".into(),
         tracks: vec![Track {
             target: TrackTarget::Rotation(JointIndex(0)),
@@ -627,23 +673,65 @@ fn spins_and_steps_over_180_degrees_keep_their_direction() {
             values: quats(angles.iter().map(|&a| Quat::from_rotation_y(a))),
         }],
     };
-    for options in [
+    let clip = clip_of(&angles);
+    let wobbly = clip_of(&spin(1.0));
+    let mut cubic_tracks = 0;
+    for (options, clip) in [
         ReduceOptions {
             tolerance: 1e-3,
             point_distance: vec![0.03; 2],
             codec: Some(Codec::I16),
             uniform_rate: true,
+            cubic: false,
         },
         ReduceOptions {
             tolerance: 0.05,
             ..ReduceOptions::default()
         },
-    ] {
-        let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+        // CUBICSPLINE fits: components interpolated, then normalized, across the turns.
+        ReduceOptions {
+            tolerance: 1e-3,
+            point_distance: vec![0.03; 2],
+            codec: Some(Codec::I16),
+            uniform_rate: true,
+            cubic: true,
+        },
+        ReduceOptions {
+            tolerance: 0.05,
+            cubic: true,
+            ..ReduceOptions::default()
+        },
+        ReduceOptions {
+            tolerance: 1e-2,
+            point_distance: vec![0.03; 2],
+            codec: Some(Codec::I16),
+            uniform_rate: true,
+            cubic: true,
+        },
+    ]
+    .into_iter()
+    // The wobbly spin at the 1 mm and 1 cm bounds (`follows` allows 2 cm between
+    // source frames).
+    .flat_map(|options| {
+        let tight = options.tolerance <= 0.01;
+        let both = [(options.clone(), &clip), (options, &wobbly)];
+        both.into_iter().take(if tight { 2 } else { 1 })
+    }) {
+        let (reduced, stats) = reduce_clip(clip, &skeleton, &options).expect("reduces");
         assert!(stats.max_error <= options.tolerance, "{stats:?}");
-        assert!(stats.keys_after < stats.keys_before, "{stats:?}");
-        follows(&clip, &reduced, &skeleton, &times).expect("same direction");
+        // The wobble at 1 mm on LINEAR keys needs every key.
+        let wobbles = std::ptr::eq(clip, &wobbly);
+        assert!(
+            stats.keys_after < stats.keys_before + usize::from(wobbles),
+            "{stats:?}"
+        );
+        follows(clip, &reduced, &skeleton, &times).expect("same direction");
+        cubic_tracks += usize::from(reduced.tracks[0].interpolation == Interpolation::CubicSpline);
     }
+    // A uniform spin is what slerp reproduces exactly: LINEAR keys win there, and on the
+    // wobble at 30 keys per second too (a cubic key, 52 bytes as floats, covers too few
+    // frames); `cubic_spins_and_steps_keep_their_direction` has cubic tracks win.
+    assert_eq!(cubic_tracks, 0);
     // The check catches the failure: every 16th key (192° apart) turns backwards.
     let every_16th: Vec<usize> = (0..times.len())
         .step_by(16)
@@ -704,6 +792,7 @@ fn bound_holds_with_points_rotations_i16_and_uniform_rates() {
             point_distance: points.clone(),
             codec: Some(Codec::I16),
             uniform_rate: true,
+            cubic: false,
         };
         let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
         assert!(stats.coded);
@@ -732,8 +821,248 @@ fn rounding_that_exceeds_the_bound_falls_back_to_floats() {
         point_distance: vec![0.03; skeleton.len()],
         codec: Some(Codec::I16),
         uniform_rate: true,
+        cubic: false,
     };
     let (_, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
     assert!(!stats.coded);
     assert!(stats.max_error <= 1e-7, "{stats:?}");
+}
+
+/// CUBICSPLINE fits on random smooth motion: the bound holds at every source frame by the
+/// naive reference (f64 Hermite, recursive FK) and by `point_error`, with and without
+/// 16-bit rotations; cubic tracks make the clip fewer bytes than LINEAR keys alone.
+#[test]
+fn cubic_fits_hold_the_bound_at_every_source_frame() {
+    let mut rng = Rng(0xC0B1_C5EE_D000_0001);
+    let skeleton = random_skeleton(&mut rng, 10);
+    let clip = random_clip(&mut rng, &skeleton, 360);
+    let points = vec![0.03; skeleton.len()];
+    for (tolerance, codec) in [
+        (1e-3, Some(Codec::I16)),
+        (1e-3, None),
+        (1e-2, Some(Codec::I16)),
+    ] {
+        let options = |cubic| ReduceOptions {
+            tolerance,
+            point_distance: points.clone(),
+            codec,
+            uniform_rate: true,
+            cubic,
+        };
+        let (reduced, stats) = reduce_clip(&clip, &skeleton, &options(true)).expect("reduces");
+        assert!(stats.max_error <= tolerance, "{stats:?}");
+        let cubic: Vec<&Track> = reduced
+            .tracks
+            .iter()
+            .filter(|t| t.interpolation == Interpolation::CubicSpline)
+            .collect();
+        assert!(
+            !cubic.is_empty(),
+            "tol {tolerance}: smooth motion fits cubics"
+        );
+        for track in &cubic {
+            assert_eq!(
+                track.values.len(),
+                track.times.len() * 3 * track.components()
+            );
+        }
+        let measured = metric::point_error(&clip, &reduced, &skeleton, &points, codec.as_ref())
+            .expect("measures");
+        assert_eq!(measured.max, stats.max_error);
+        // Joints alone, by the naive reference at every source frame (16-bit rounding
+        // included in the reducer's figure, not in the reference's: a few percent).
+        let naive = measured_error(&clip, &reduced, &skeleton);
+        assert!(
+            naive <= tolerance * 1.05,
+            "tol {tolerance}: naive {naive}, {stats:?}"
+        );
+        // Fewer bytes than LINEAR keys: values (8 bytes per 16-bit rotation, 12 per
+        // vector) and a time per key, as an upper bound on both.
+        let bytes = |clip: &Clip| -> usize {
+            clip.tracks
+                .iter()
+                .map(|t| {
+                    let value = if codec.is_some() && t.components() == 4 {
+                        8
+                    } else {
+                        4 * t.components()
+                    };
+                    let per = if t.interpolation == Interpolation::CubicSpline {
+                        3
+                    } else {
+                        1
+                    };
+                    t.times.len() * (per * value + 4)
+                })
+                .sum()
+        };
+        let (linear, _) = reduce_clip(&clip, &skeleton, &options(false)).expect("reduces");
+        assert!(
+            bytes(&reduced) < bytes(&linear),
+            "tol {tolerance}: {} vs {}",
+            bytes(&reduced),
+            bytes(&linear)
+        );
+    }
+}
+
+/// A 16-bit cubic rotation holds tangents in `[-1, 1]` only: a fit whose tangents leave it
+/// is written (and measured) as floats, one inside it as 16-bit components.
+#[test]
+fn cubic_tangents_out_of_16_bit_range_fall_back_to_floats() {
+    let track = |tangent: f32| Track {
+        target: TrackTarget::Rotation(JointIndex(0)),
+        interpolation: Interpolation::CubicSpline,
+        times: vec![0.0, 1.0],
+        values: vec![
+            0.0, 0.0, 0.0, 0.0, /**/ 0.0, 0.0, 0.0, 1.0, /**/ 0.0, tangent, 0.0,
+            0.0, //
+            0.0, tangent, 0.0, 0.0, /**/ 0.0, 0.6, 0.0, 0.8, /**/ 0.0, 0.0, 0.0, 0.0,
+        ],
+    };
+    let inside = cubic::cubic_as_written(&track(0.7), Kind::Rotation, &Codec::I16).expect("16-bit");
+    assert!((inside.values[9] - 0.7).abs() <= 0.5 / 32767.0 && inside.values[9] != 0.7);
+    assert!(cubic::cubic_as_written(&track(1.5), Kind::Rotation, &Codec::I16).is_none());
+    // A fast spin (4 turns a second: quaternion components change by up to 4π per second)
+    // still reduces within the bound with cubic tracks, whatever the storage.
+    let skeleton = Skeleton::new(vec![
+        Joint {
+            name: "root".into(),
+            parent: None,
+            rest_local: Transform::IDENTITY,
+        },
+        Joint {
+            name: "arm".into(),
+            parent: Some(JointIndex(0)),
+            rest_local: Transform::from_translation(Vec3::X),
+        },
+    ])
+    .expect("valid");
+    let times: Vec<f32> = (0..241).map(|k| k as f32 / 120.0).collect();
+    let clip = Clip {
+        name: "fast".into(),
+        tracks: vec![Track {
+            target: TrackTarget::Rotation(JointIndex(0)),
+            interpolation: Interpolation::Linear,
+            times: times.clone(),
+            values: quats(times.iter().map(|&t| {
+                Quat::from_rotation_y(8.0 * std::f32::consts::PI * t)
+                    * Quat::from_rotation_x(0.3 * t)
+            })),
+        }],
+    };
+    let options = ReduceOptions {
+        tolerance: 1e-3,
+        point_distance: vec![0.03; 2],
+        codec: Some(Codec::I16),
+        uniform_rate: true,
+        cubic: true,
+    };
+    let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+    assert!(stats.max_error <= 1e-3, "{stats:?}");
+    assert!(measured_error(&clip, &reduced, &skeleton) <= 1.05e-3);
+    let out = &reduced.tracks[0];
+    if out.interpolation == Interpolation::CubicSpline {
+        let written = cubic::cubic_as_written(out, Kind::Rotation, &Codec::I16);
+        // Either every component fits 16 bits and is rounded, or the track stays floats.
+        let in_range = out.values.iter().all(|v| v.abs() <= 1.0);
+        assert_eq!(written.is_some(), in_range);
+    }
+    follows_spin(&clip, &reduced, &skeleton);
+}
+
+/// The arm's heading turns by the same amount as the source's between source frames.
+fn follows_spin(clip: &Clip, reduced: &Clip, skeleton: &Skeleton) {
+    let times = &clip.tracks[0].times;
+    for w in times.windows(2) {
+        for s in 0..4 {
+            let t = w[0] + (w[1] - w[0]) * s as f32 / 4.0;
+            let a = naive_positions(clip, skeleton, t)[1];
+            let b = naive_positions(reduced, skeleton, t)[1];
+            assert!(a.distance(b) < 0.01, "t {t}: {a} vs {b}");
+        }
+    }
+}
+
+/// CUBICSPLINE tracks on a spin of four and a half turns whose speed varies, then one step
+/// of 200° between two keys (played as -160°, as the source's slerp does), then still: the
+/// cubic fit wins, holds the bound, and turns the same way as the source between every
+/// two source frames and by the same total (glTF-Transform #501).
+#[test]
+fn cubic_spins_and_steps_keep_their_direction() {
+    let skeleton = Skeleton::new(vec![
+        Joint {
+            name: "root".into(),
+            parent: None,
+            rest_local: Transform::IDENTITY,
+        },
+        Joint {
+            name: "arm".into(),
+            parent: Some(JointIndex(0)),
+            rest_local: Transform::from_translation(Vec3::new(0.5, 0.0, 0.0)),
+        },
+    ])
+    .expect("valid");
+    let tau = std::f32::consts::TAU;
+    let mut angles: Vec<f32> = (0..=360)
+        .map(|k| {
+            let t = k as f32 / 120.0;
+            1.5 * tau * t + 0.8 * (0.7 * tau * t).sin()
+        })
+        .collect();
+    let spun = *angles.last().expect("keys");
+    angles.push(spun + 200f32.to_radians());
+    let held = *angles.last().expect("keys");
+    angles.extend([held; 20]);
+    let times: Vec<f32> = (0..angles.len()).map(|k| k as f32 / 120.0).collect();
+    let clip = Clip {
+        name: "spin".into(),
+        tracks: vec![Track {
+            target: TrackTarget::Rotation(JointIndex(0)),
+            interpolation: Interpolation::Linear,
+            times: times.clone(),
+            values: quats(angles.iter().map(|&a| Quat::from_rotation_y(a))),
+        }],
+    };
+    let options = ReduceOptions {
+        tolerance: 1e-3,
+        point_distance: vec![0.03; 2],
+        codec: Some(Codec::I16),
+        uniform_rate: true,
+        cubic: true,
+    };
+    let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+    assert_eq!(reduced.tracks[0].interpolation, Interpolation::CubicSpline);
+    assert!(stats.max_error <= 1e-3, "{stats:?}");
+    assert!(stats.keys_after * 4 < stats.keys_before, "{stats:?}");
+    assert!(measured_error(&clip, &reduced, &skeleton) <= 1.05e-3);
+    // The heading, at four sub-steps per source frame: the same signed turn each sub-step
+    // (the source slerps between its frames) and the same total.
+    let pi = std::f32::consts::PI;
+    let wrap = |d: f32| (d + pi).rem_euclid(tau) - pi;
+    let heading = |c: &Clip, t: f32| {
+        let p = naive_positions(c, &skeleton, t)[1];
+        p.z.atan2(p.x)
+    };
+    let (mut total_a, mut total_b) = (0.0f32, 0.0f32);
+    let (mut last_a, mut last_b) = (heading(&clip, 0.0), heading(&reduced, 0.0));
+    for k in 1..(times.len() - 1) * 4 + 1 {
+        let t = k as f32 / 480.0;
+        let (a, b) = (heading(&clip, t), heading(&reduced, t));
+        let (da, db) = (wrap(a - last_a), wrap(b - last_b));
+        // The same way; by the same amount but across the 200° step, where a cubic segment
+        // (components interpolated, then normalized) turns unevenly where slerp does not.
+        let same_way = da.abs() < 1e-3 || da.signum() == db.signum();
+        assert!(
+            same_way && (da - db).abs() < 0.15,
+            "t {t}: turned {da} in the source, {db} reduced"
+        );
+        total_a += da;
+        total_b += db;
+        (last_a, last_b) = (a, b);
+    }
+    // Rotation about +Y turns +X towards -Z: headings (atan2(z, x)) decrease.
+    let expected = -(spun - 160f32.to_radians());
+    assert!((total_a - expected).abs() < 1e-2, "{total_a} vs {expected}");
+    assert!((total_b - total_a).abs() < 1e-2, "{total_b} vs {total_a}");
 }

@@ -14,7 +14,7 @@ use json::accessor::Type;
 use json::animation::{Interpolation as GltfInterpolation, Property};
 use json::validation::Checked;
 use json::Index;
-use rigport_model::quantize::rotation_to_i16;
+use rigport_model::quantize::{component_to_i16, rotation_to_i16};
 use rigport_model::{Asset, Clip, Interpolation, Track, TrackTarget, Transform, Warning};
 
 use super::buffer::{Bounds, Builder};
@@ -135,10 +135,13 @@ pub(crate) fn write_animations(
                 Property::MorphTargetWeights => Type::Scalar,
             };
             // Animation data views carry no target (they are not vertex or index data).
-            let output = if rotations_i16
-                && path == Property::Rotation
-                && interpolation != Interpolation::CubicSpline
-            {
+            let cubic = interpolation == Interpolation::CubicSpline;
+            let cubic_shorts = (rotations_i16 && cubic && path == Property::Rotation)
+                .then(|| cubic_i16(fate, track))
+                .flatten();
+            let output = if let Some(shorts) = cubic_shorts {
+                b.animation_shorts(&shorts)
+            } else if rotations_i16 && path == Property::Rotation && !cubic {
                 let raw = match fate {
                     Constancy::Constant => track.key_value(0).repeat(times.len()),
                     _ => track.values.clone(),
@@ -389,6 +392,17 @@ fn i16_rotations(values: &[f32]) -> Vec<i16> {
         previous = Some(q);
     }
     out
+}
+
+/// A varying CUBICSPLINE rotation track's values and tangents as 16-bit normalized
+/// components, each rounded on its own as it is in the track (not normalized, no sign
+/// change: what the key reducer measures, `component_as_i16`); `None` when a component is
+/// outside `[-1, 1]` (a tangent, in units per second, can be), which floats then hold.
+fn cubic_i16(fate: Constancy, track: &Track) -> Option<Vec<i16>> {
+    if fate != Constancy::Varying {
+        return None;
+    }
+    track.values.iter().map(|&c| component_to_i16(c)).collect()
 }
 
 /// The sampler output values of a track (flat, same layout as [`Track::values`]).

@@ -24,6 +24,11 @@ pub(crate) struct Builder {
     /// Compressed three-component animation outputs go through the `EXPONENTIAL` filter
     /// (set when the key reducer measured it; else they are stored exactly).
     pub filter_vectors: bool,
+    /// Uncompressed animation data goes into one buffer view (accessors at offsets in it)
+    /// instead of a view per accessor: less JSON (set for compact exports).
+    pub group_animation: bool,
+    /// That view's bytes and the accessors reading them, until [`Builder::finish_groups`].
+    plain_group: meshopt::Group,
 }
 
 /// Per-component bounds of float data, for `accessor.min` / `accessor.max`.
@@ -45,6 +50,13 @@ impl Builder {
             bin: Vec::new(),
             compressed: None,
             filter_vectors: false,
+            group_animation: false,
+            plain_group: meshopt::Group {
+                stride: 4,
+                filter: Filter::None,
+                raw: Vec::new(),
+                accessors: Vec::new(),
+            },
         }
     }
 
@@ -287,9 +299,14 @@ impl Builder {
         } else {
             (meshopt::floats(data), Filter::None)
         };
-        if self.compressed.is_none() {
+        if self.compressed.is_none() && !self.group_animation {
             return self.floats(data, type_, None, bounds);
         }
+        let raw = if self.compressed.is_none() {
+            meshopt::floats(data)
+        } else {
+            raw
+        };
         let bounds = match bounds {
             Bounds::None => None,
             Bounds::MinMax => Some(min_max(data, width)),
@@ -311,17 +328,35 @@ impl Builder {
     ) -> Index<json::Accessor> {
         // The view is set by `finish_groups`; 0 until then.
         let index = self.accessor(Index::new(0), raw.len() / stride, component, type_, bounds);
-        if let Some(compressed) = self.compressed.as_mut() {
-            let offset = compressed.group(stride, filter, raw, index.value());
-            if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-                accessor.byte_offset = (offset > 0).then(|| USize64::from(offset));
+        let offset = match self.compressed.as_mut() {
+            Some(compressed) => compressed.group(stride, filter, raw, index.value()),
+            None => {
+                // Every element size here is a multiple of 4: offsets stay aligned.
+                let group = &mut self.plain_group;
+                let offset = group.raw.len();
+                group.raw.extend_from_slice(raw);
+                group.accessors.push(index.value());
+                offset
             }
+        };
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.byte_offset = (offset > 0).then(|| USize64::from(offset));
         }
         index
     }
 
-    /// Writes each compressed animation group as one view and points its accessors at it.
+    /// Writes each compressed animation group, or the uncompressed one, as one view and
+    /// points its accessors at it.
     pub(crate) fn finish_groups(&mut self) {
+        let plain = std::mem::take(&mut self.plain_group.raw);
+        if !plain.is_empty() {
+            let view = self.view(None, |bin| bin.extend_from_slice(&plain));
+            for accessor in std::mem::take(&mut self.plain_group.accessors) {
+                if let Some(a) = self.root.accessors.get_mut(accessor) {
+                    a.buffer_view = Some(view);
+                }
+            }
+        }
         let Some(groups) = self
             .compressed
             .as_mut()
@@ -366,7 +401,96 @@ impl Builder {
             }
             return index;
         }
-        self.normalized_i16(&i16_keys(values), Type::Vec4)
+        let keys = i16_keys(values);
+        if self.group_animation {
+            return self.grouped_shorts(&keys);
+        }
+        self.normalized_i16(&keys, Type::Vec4)
+    }
+
+    /// `VEC4` 16-bit normalized animation outputs in the grouped animation view.
+    fn grouped_shorts(&mut self, data: &[i16]) -> Index<json::Accessor> {
+        let raw: Vec<u8> = data.iter().flat_map(|c| c.to_le_bytes()).collect();
+        let index = self.grouped(&raw, 8, Filter::None, ComponentType::I16, Type::Vec4, None);
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
+    }
+
+    /// CUBICSPLINE rotation outputs (in-tangent, value, out-tangent per key, each xyzw) as
+    /// 16-bit normalized components, rounded by the caller: compressed without a filter
+    /// when the export is (the `QUATERNION` filter decodes unit quaternions, which tangents
+    /// are not).
+    pub(crate) fn animation_shorts(&mut self, data: &[i16]) -> Index<json::Accessor> {
+        if self.compressed.is_none() && !self.group_animation {
+            return self.normalized_i16(data, Type::Vec4);
+        }
+        self.grouped_shorts(data)
+    }
+
+    /// A vertex attribute of three `SHORT` components per element (quantized positions,
+    /// `KHR_mesh_quantization`), each element padded to 8 bytes (vertex attributes align to
+    /// 4 bytes: glTF 2.0 §3.6.2.4, so the view states `byteStride` 8); `min`/`max` in the
+    /// stored integers with [`Bounds::MinMax`].
+    pub(crate) fn padded_vec3_i16(
+        &mut self,
+        data: &[[i16; 3]],
+        normalized: bool,
+        bounds: Bounds,
+    ) -> Index<json::Accessor> {
+        let raw: Vec<u8> = data
+            .iter()
+            .flat_map(|e| [e[0], e[1], e[2], 0])
+            .flat_map(i16::to_le_bytes)
+            .collect();
+        let bounds = match bounds {
+            Bounds::None => None,
+            Bounds::MinMax => {
+                // Integers, as the components are (`-32767`, not `-32767.0`).
+                let fold = |pick: fn(i16, i16) -> i16, start: i16| {
+                    let bound = data.iter().fold([start; 3], |acc, e| {
+                        [pick(acc[0], e[0]), pick(acc[1], e[1]), pick(acc[2], e[2])]
+                    });
+                    json::Value::Array(bound.iter().map(|&c| json::Value::from(c)).collect())
+                };
+                Some((fold(i16::min, i16::MAX), fold(i16::max, i16::MIN)))
+            }
+        };
+        self.padded_vertex(&raw, 8, data.len(), ComponentType::I16, normalized, bounds)
+    }
+
+    /// A vertex attribute of three `BYTE` normalized components per element (quantized
+    /// normals, `KHR_mesh_quantization`), each element padded to 4 bytes.
+    pub(crate) fn padded_vec3_i8_normalized(&mut self, data: &[[i8; 3]]) -> Index<json::Accessor> {
+        let raw: Vec<u8> = data
+            .iter()
+            .flat_map(|e| [e[0], e[1], e[2], 0])
+            .map(|c| c.to_le_bytes()[0])
+            .collect();
+        self.padded_vertex(&raw, 4, data.len(), ComponentType::I8, true, None)
+    }
+
+    /// A `VEC3` vertex attribute over `raw` (`count` elements of `stride` bytes, padded),
+    /// in a view of its own that states the stride.
+    fn padded_vertex(
+        &mut self,
+        raw: &[u8],
+        stride: usize,
+        count: usize,
+        component: ComponentType,
+        normalized: bool,
+        bounds: Option<(json::Value, json::Value)>,
+    ) -> Index<json::Accessor> {
+        let view = self.vertex_view(Some(Target::ArrayBuffer), raw, stride);
+        if let Some(v) = self.root.buffer_views.get_mut(view.value()) {
+            v.byte_stride = Some(json::buffer::Stride(stride));
+        }
+        let index = self.accessor(view, count, component, Type::Vec3, bounds);
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = normalized;
+        }
+        index
     }
 
     /// An `UNSIGNED_BYTE` accessor with `normalized: true` (read as `c / 255`), for vertex

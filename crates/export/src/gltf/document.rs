@@ -9,6 +9,7 @@ use json::buffer::Target;
 use json::mesh::{Mode, Semantic};
 use json::validation::Checked;
 use json::Index;
+use rigport_model::quantize::PositionGrid;
 use rigport_model::{Asset, Mesh, Skeleton, SkinBinding, Warning};
 
 use super::animation;
@@ -90,6 +91,7 @@ pub(crate) fn build(
         version: "2.0".into(),
         ..Default::default()
     });
+    b.group_animation = opts.compact;
     if opts.compression == rigport_model::Compression::Meshopt {
         b.compressed = Some(super::meshopt::Compressed::default());
         b.filter_vectors = opts.compact;
@@ -149,10 +151,32 @@ pub(crate) fn build(
             on_joint_count[j] += 1;
         }
     }
+    // KHR_mesh_quantization: the grid of each skinned mesh without morph targets (its
+    // skin's inverse bind matrices decode it).
+    let grids: Vec<Option<PositionGrid>> = asset
+        .meshes
+        .iter()
+        .enumerate()
+        .map(|(mi, mesh)| {
+            let quantized = opts.quantize_mesh
+                && skin_of_mesh.contains_key(&mi)
+                && mesh.morph_targets.is_empty();
+            quantized
+                .then(|| PositionGrid::new(&mesh.positions))
+                .flatten()
+        })
+        .collect();
+    if grids.iter().any(Option::is_some) {
+        let name = "KHR_mesh_quantization".to_owned();
+        b.root.extensions_used.push(name.clone());
+        // "must be required": readers without it would read integers as floats.
+        b.root.extensions_required.push(name);
+    }
     let mut mesh_nodes = Vec::with_capacity(asset.meshes.len());
     for (mi, mesh) in asset.meshes.iter().enumerate() {
         let skin = skin_of_mesh.get(&mi).map(|&si| (si, &asset.skins[si]));
-        let gltf_mesh = write_mesh(&mut b, asset, mi, mesh, skin, opts, &mut warnings)?;
+        let grid = grids[mi];
+        let gltf_mesh = write_mesh(&mut b, asset, (mi, grid), mesh, skin, opts, &mut warnings)?;
         if let Some(j) = on_joint(mi, mesh).filter(|&j| on_joint_count[j] == 1) {
             nodes[j].mesh = Some(gltf_mesh);
             mesh_nodes.push(j);
@@ -184,7 +208,15 @@ pub(crate) fn build(
     // Skins.
     for (si, skin) in asset.skins.iter().enumerate() {
         let skeleton_node = skin_roots[si].or(extra_root);
-        write_skin(&mut b, asset, si, skin, skeleton_node, &mut warnings);
+        let grid = grids.get(skin.mesh.get()).copied().flatten();
+        write_skin(
+            &mut b,
+            asset,
+            (si, grid),
+            skin,
+            skeleton_node,
+            &mut warnings,
+        );
     }
 
     animation::write_animations(&mut b, asset, &mesh_nodes, opts.compact, &mut warnings);
@@ -284,7 +316,7 @@ fn flat3(v: &[Vec3]) -> Vec<f32> {
 fn write_mesh(
     b: &mut Builder,
     asset: &Asset,
-    mi: usize,
+    (mi, grid): (usize, Option<PositionGrid>),
     mesh: &Mesh,
     skin: Option<(usize, &SkinBinding)>,
     opts: &GltfOptions,
@@ -294,7 +326,13 @@ fn write_mesh(
     let mut attributes = BTreeMap::new();
     let array = Some(Target::ArrayBuffer);
 
-    let positions = b.floats(&flat3(&mesh.positions), Type::Vec3, array, Bounds::MinMax);
+    let positions = match grid {
+        Some(grid) => {
+            let q: Vec<[i16; 3]> = mesh.positions.iter().map(|&p| grid.encode(p)).collect();
+            b.padded_vec3_i16(&q, false, Bounds::MinMax)
+        }
+        None => b.floats(&flat3(&mesh.positions), Type::Vec3, array, Bounds::MinMax),
+    };
     attributes.insert(Checked::Valid(Semantic::Positions), positions);
 
     // Normals must be unit length (validator ACCESSOR_VECTOR3_NON_UNIT).
@@ -330,7 +368,19 @@ fn write_mesh(
             out
         }
     };
-    let normals = b.floats(&flat3(&normals), Type::Vec3, array, Bounds::None);
+    let normals = if grid.is_some() {
+        // 8-bit normalized (KHR_mesh_quantization), as gltfpack writes them: shading only.
+        let q: Vec<[i8; 3]> = normals
+            .iter()
+            .map(|n| {
+                n.to_array()
+                    .map(|c| (c * 127.0).round().clamp(-127.0, 127.0) as i8)
+            })
+            .collect();
+        b.padded_vec3_i8_normalized(&q)
+    } else {
+        b.floats(&flat3(&normals), Type::Vec3, array, Bounds::None)
+    };
     attributes.insert(Checked::Valid(Semantic::Normals), normals);
 
     let mut uv_sets = 0;
@@ -513,14 +563,19 @@ fn write_mesh(
 fn write_skin(
     b: &mut Builder,
     asset: &Asset,
-    si: usize,
+    (si, grid): (usize, Option<PositionGrid>),
     skin: &SkinBinding,
     skeleton_node: Option<usize>,
     warnings: &mut Vec<Warning>,
 ) {
     let mut projective = 0;
     let mut ibm = Vec::with_capacity(16 * skin.inv_bind.len());
+    // Quantized positions decode as `center + step * q`: that map goes first.
+    let decode = grid.map_or(glam::Mat4::IDENTITY, |g| {
+        glam::Mat4::from_translation(g.center) * glam::Mat4::from_scale(glam::Vec3::splat(g.step))
+    });
     for m in &skin.inv_bind {
+        let m = &(*m * decode);
         // Column-major: elements 3, 7, 11, 15 are the last row. glTF requires it to be
         // exactly (0, 0, 0, 1) (validator ACCESSOR_INVALID_IBM); force it.
         let mut cols = m.to_cols_array();

@@ -68,6 +68,12 @@ pub struct GltfOptions {
     /// floats; and a skin's weights as normalized bytes when every weight is exactly
     /// `k / 255` (a bone mesh's 0 and 1: lossless, a quarter of the bytes). Default `false`.
     pub compact: bool,
+    /// Skinned meshes without morph targets written with `KHR_mesh_quantization`
+    /// (declared required): positions as 16-bit integers on the mesh's
+    /// [`rigport_model::quantize::PositionGrid`] (folded into the skin's inverse bind
+    /// matrices; a vertex moves by at most the grid's `max_error` times the skinning
+    /// matrices' scale), normals as 8-bit normalized components. Default `false`.
+    pub quantize_mesh: bool,
     /// Compression beyond core glTF: with [`Compression::Meshopt`], animation data is
     /// written through `EXT_meshopt_compression` (declared required): with
     /// `compact`, rotations through its `QUATERNION` filter and translations and
@@ -82,6 +88,7 @@ impl Default for GltfOptions {
         Self {
             max_influences: 4,
             compact: false,
+            quantize_mesh: false,
             compression: Compression::None,
         }
     }
@@ -170,7 +177,7 @@ pub fn to_glb(asset: &Asset, opts: &GltfOptions) -> Result<Exported, ExportError
     if !built.bin.is_empty() {
         built.root.buffers.push(buffer_entry(built.bin.len(), None));
     }
-    let json = finish_json(built.root, built.compressed.as_ref(), false)?;
+    let json = finish_json(built.root, built.compressed.as_ref(), false, opts.compact)?;
     let glb = glb_container(json, &built.bin)?;
     Ok(Exported {
         glb,
@@ -203,7 +210,7 @@ pub fn to_gltf(
             .buffers
             .push(buffer_entry(built.bin.len(), Some(bin_uri.to_owned())));
     }
-    let mut json = finish_json(built.root, built.compressed.as_ref(), true)?;
+    let mut json = finish_json(built.root, built.compressed.as_ref(), true, opts.compact)?;
     json.push(b'\n');
     let images = asset
         .images
@@ -448,33 +455,57 @@ fn buffer_entry(len: usize, uri: Option<String>) -> json::Buffer {
 /// The document's JSON; with compressed views, the fallback buffer (buffer 1, no data),
 /// each view's `EXT_meshopt_compression` object, and the extension declared used and
 /// required (Khronos `EXT_meshopt_compression`: a reader without it cannot read the data).
+/// With `omit_linear` (compact exports), samplers leave out `"interpolation": "LINEAR"`,
+/// the default (glTF 2.0 §5.10): 25 bytes per sampler.
 fn finish_json(
     mut root: json::Root,
     compressed: Option<&meshopt::Compressed>,
     pretty: bool,
+    omit_linear: bool,
 ) -> Result<Vec<u8>, ExportError> {
-    let Some(compressed) = compressed.filter(|c| !c.views.is_empty()) else {
+    let compressed = compressed.filter(|c| !c.views.is_empty());
+    if compressed.is_none() && !omit_linear {
         return Ok(if pretty {
             root.to_vec_pretty()?
         } else {
             root.to_vec()?
         });
-    };
+    }
     let name = "EXT_meshopt_compression".to_owned();
-    root.extensions_used.push(name.clone());
-    root.extensions_required.push(name.clone());
-    root.buffers
-        .push(buffer_entry(compressed.fallback_len, None));
-    let fallback = root.buffers.len() - 1;
+    let mut fallback = None;
+    if let Some(compressed) = compressed {
+        root.extensions_used.push(name.clone());
+        root.extensions_required.push(name.clone());
+        root.buffers
+            .push(buffer_entry(compressed.fallback_len, None));
+        fallback = Some(root.buffers.len() - 1);
+    }
     // Through the serialized text, not `to_value`: `f32` fields keep their shortest form
     // (`to_value` widens them to `f64` digits).
     let mut value: serde_json::Value = serde_json::from_slice(&root.to_vec()?)?;
-    if let Some(buffer) = value.pointer_mut(&format!("/buffers/{fallback}")) {
-        buffer["extensions"] = serde_json::json!({ name.clone(): { "fallback": true } });
+    if let (Some(compressed), Some(fallback)) = (compressed, fallback) {
+        if let Some(buffer) = value.pointer_mut(&format!("/buffers/{fallback}")) {
+            buffer["extensions"] = serde_json::json!({ name.clone(): { "fallback": true } });
+        }
+        for view in &compressed.views {
+            if let Some(v) = value.pointer_mut(&format!("/bufferViews/{}", view.view)) {
+                v["extensions"] = serde_json::json!({ name.clone(): view.extension });
+            }
+        }
     }
-    for view in &compressed.views {
-        if let Some(v) = value.pointer_mut(&format!("/bufferViews/{}", view.view)) {
-            v["extensions"] = serde_json::json!({ name.clone(): view.extension });
+    if omit_linear {
+        let animations = value.get_mut("animations").and_then(|a| a.as_array_mut());
+        for animation in animations.into_iter().flatten() {
+            let samplers = animation.get_mut("samplers").and_then(|s| s.as_array_mut());
+            for sampler in samplers
+                .into_iter()
+                .flatten()
+                .filter_map(|s| s.as_object_mut())
+            {
+                if sampler.get("interpolation").is_some_and(|i| i == "LINEAR") {
+                    sampler.remove("interpolation");
+                }
+            }
         }
     }
     Ok(if pretty {

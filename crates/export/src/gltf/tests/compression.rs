@@ -268,3 +268,143 @@ fn exact_weights_are_normalized_bytes_in_compact_exports() {
     assert_eq!((plain.0, compact.0), (5126, 5121));
     assert_eq!(plain.1, compact.1);
 }
+
+/// `KHR_mesh_quantization`: a skinned mesh's positions as 16-bit integers that its inverse
+/// bind matrices decode. Every vertex in every palette joint's bind frame (inverse bind
+/// matrix times position, as a skinning reader computes it) is within the grid's bound of
+/// the float file's; normals are normalized bytes; the extension is required; the file is
+/// smaller and valid.
+#[test]
+fn quantized_skinned_mesh_decodes_within_the_grid_bound() {
+    let mut asset = test_assets::rig();
+    // The writer quantizes skinned meshes without morph targets.
+    asset.meshes[0].morph_targets.clear();
+    asset.meshes[0].morph_weights.clear();
+    for clip in &mut asset.clips {
+        clip.tracks
+            .retain(|t| !matches!(t.target, TrackTarget::MorphWeights(m) if m.get() == 0));
+    }
+    let export = |quantize_mesh| {
+        let options = GltfOptions {
+            compact: true,
+            quantize_mesh,
+            ..Default::default()
+        };
+        to_glb(&asset, &options).expect("export").glb
+    };
+    let (plain, quantized) = (export(false), export(true));
+    assert!(quantized.len() < plain.len());
+    assert_khronos_valid(&quantized);
+    let (pj, qj) = (glb_json(&plain), glb_json(&quantized));
+    let required = qj["extensionsRequired"].as_array().expect("required");
+    assert!(required.iter().any(|e| e == "KHR_mesh_quantization"));
+    // Element `k` of accessor `a` as `n` little-endian values read by `read`.
+    let element = |json: &Value, glb: &[u8], a: u64, k: usize, n: usize, size: usize| {
+        let accessor = &json["accessors"][a as usize];
+        let view = &json["bufferViews"][accessor["bufferView"].as_u64().expect("view") as usize];
+        let stride = view["byteStride"].as_u64().map_or(n * size, |s| s as usize);
+        let at = view["byteOffset"].as_u64().unwrap_or(0) as usize
+            + accessor["byteOffset"].as_u64().unwrap_or(0) as usize
+            + k * stride;
+        bin(glb)[at..at + n * size].to_vec()
+    };
+    let floats = |bytes: Vec<u8>| -> Vec<f32> {
+        bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().expect("4")))
+            .collect()
+    };
+    let attribute = |json: &Value, name: &str| {
+        json["meshes"][0]["primitives"][0]["attributes"][name]
+            .as_u64()
+            .expect("attribute")
+    };
+    let (p_plain, p_quant) = (attribute(&pj, "POSITION"), attribute(&qj, "POSITION"));
+    let normals = &qj["accessors"][attribute(&qj, "NORMAL") as usize];
+    assert_eq!(
+        (
+            normals["componentType"].as_u64(),
+            normals["normalized"].as_bool()
+        ),
+        (Some(5120), Some(true))
+    );
+    assert_eq!(qj["accessors"][p_quant as usize]["componentType"], 5122);
+    let count = pj["accessors"][p_plain as usize]["count"]
+        .as_u64()
+        .expect("count") as usize;
+    let positions: Vec<Vec3> = (0..count)
+        .map(|k| Vec3::from_slice(&floats(element(&pj, &plain, p_plain, k, 3, 4))))
+        .collect();
+    let grid = rigport_model::quantize::PositionGrid::new(&positions).expect("finite");
+    let ibm = |json: &Value, glb: &[u8], j: usize| {
+        let a = json["skins"][0]["inverseBindMatrices"]
+            .as_u64()
+            .expect("ibm");
+        Mat4::from_cols_slice(&floats(element(json, glb, a, j, 16, 4)))
+    };
+    let joints = pj["skins"][0]["joints"].as_array().expect("joints").len();
+    let mut worst = 0.0f32;
+    for (k, p) in positions.iter().enumerate() {
+        let q = element(&qj, &quantized, p_quant, k, 3, 2);
+        let q: Vec<f32> = q
+            .chunks_exact(2)
+            .map(|c| f32::from(i16::from_le_bytes([c[0], c[1]])))
+            .collect();
+        for j in 0..joints {
+            let expected = ibm(&pj, &plain, j).transform_point3(*p);
+            let decoded = ibm(&qj, &quantized, j).transform_point3(Vec3::from_slice(&q));
+            worst = worst.max(decoded.distance(expected));
+        }
+    }
+    assert!(worst <= grid.max_error(), "{worst} > {}", grid.max_error());
+    assert!(worst > 0.0, "rounded, not exact");
+}
+
+/// CUBICSPLINE rotation outputs in compact exports: 16-bit normalized components (each
+/// rounded as it is, tangents too) when every component fits `[-1, 1]`, floats when a
+/// tangent (units per second) does not.
+#[test]
+fn cubic_rotations_are_shorts_only_when_every_tangent_fits() {
+    let output_type = |tangent: f32| {
+        let mut asset = test_assets::rig();
+        let track = rigport_model::Track {
+            target: TrackTarget::Rotation(rigport_model::JointIndex(1)),
+            interpolation: rigport_model::Interpolation::CubicSpline,
+            times: vec![0.0, 1.0],
+            values: vec![
+                0.0, 0.0, 0.0, 0.0, /**/ 0.0, 0.0, 0.0, 1.0, /**/ 0.0, tangent, 0.0,
+                0.0, //
+                0.0, tangent, 0.0, 0.0, /**/ 0.0, 0.6, 0.0, 0.8, /**/ 0.0, 0.0, 0.0, 0.0,
+            ],
+        };
+        asset.clips = vec![rigport_model::Clip {
+            name: "cubic".into(),
+            tracks: vec![track],
+        }];
+        let options = GltfOptions {
+            compact: true,
+            ..Default::default()
+        };
+        let glb = to_glb(&asset, &options).expect("export").glb;
+        assert_khronos_valid(&glb);
+        let json = glb_json(&glb);
+        let output = json["animations"][0]["samplers"][0]["output"]
+            .as_u64()
+            .expect("output");
+        let accessor = &json["accessors"][output as usize];
+        let short = (
+            accessor["componentType"].as_u64(),
+            accessor["normalized"].as_bool(),
+        );
+        (short, accessor_bytes(&json, bin(&glb), output as usize, 8))
+    };
+    let ((component, normalized), bytes) = output_type(0.7);
+    assert_eq!((component, normalized), (Some(5122), Some(true)));
+    // Key 0's out-tangent y: 0.7 rounded on its own (22937 / 32767).
+    assert_eq!(
+        i16::from_le_bytes([bytes[8 * 2 + 2], bytes[8 * 2 + 3]]),
+        22937
+    );
+    let ((component, _), _) = output_type(1.5);
+    assert_eq!(component, Some(5126));
+}
