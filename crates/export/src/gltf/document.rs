@@ -571,11 +571,13 @@ fn write_skin(
     let mut projective = 0;
     let mut ibm = Vec::with_capacity(16 * skin.inv_bind.len());
     // Quantized positions decode as `center + step * q`: that map goes first.
-    let decode = grid.map_or(glam::Mat4::IDENTITY, |g| {
+    // (Without a grid the matrices are written as they are: multiplying by the identity
+    // would turn their -0.0 into 0.0 and change the bytes of every plain file.)
+    let decode = grid.map(|g| {
         glam::Mat4::from_translation(g.center) * glam::Mat4::from_scale(glam::Vec3::splat(g.step))
     });
     for m in &skin.inv_bind {
-        let m = &(*m * decode);
+        let m = &decode.map_or(*m, |d| *m * d);
         // Column-major: elements 3, 7, 11, 15 are the last row. glTF requires it to be
         // exactly (0, 0, 0, 1) (validator ACCESSOR_INVALID_IBM); force it.
         let mut cols = m.to_cols_array();
