@@ -38,13 +38,14 @@ mod curve;
 mod error;
 mod loosen;
 pub mod metric;
+mod rate;
 mod simplify;
 
 pub use codec::Codec;
 pub use error::{ReduceError, TrackProblem};
 
 use channel::{collect_channels, Channel, Kind};
-use cubic::cubic_as_written;
+use codec::cubic_as_written;
 use curve::{sample_quat, sample_vec3};
 use simplify::simplify;
 
@@ -524,7 +525,9 @@ impl<'a> Reducer<'a> {
                 chan.reduced = Some(match &cubic {
                     Some(track) => chan
                         .codec
-                        .and_then(|codec| cubic_as_written(track, chan.kind, &codec))
+                        .and_then(|codec| {
+                            cubic_as_written(track, chan.kind == Kind::Rotation, &codec)
+                        })
                         .unwrap_or_else(|| track.clone()),
                     None => pick_keys(chan.as_written.as_ref().unwrap_or(chan.original), &kept),
                 });

@@ -4,8 +4,7 @@
 use glam::Quat;
 use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget};
 
-use super::codec::Codec;
-use super::cubic::cubic_as_written;
+use super::codec::{cubic_as_written, Codec};
 use super::curve::quat_at;
 use super::error::{ReduceError, TrackProblem};
 
@@ -146,7 +145,7 @@ pub(super) fn collect_channels<'a>(
         let is_cubic = track.interpolation == Interpolation::CubicSpline;
         let as_written = codec.and_then(|codec| {
             if is_cubic {
-                cubic_as_written(track, kind, codec)
+                cubic_as_written(track, kind == Kind::Rotation, codec)
             } else {
                 as_written(track, kind, codec)
             }

@@ -1,5 +1,8 @@
 //! How a writer stores key values, for the reducer to measure what a reader gets.
 
+use rigport_model::quantize::component_as_i16;
+use rigport_model::Track;
+
 /// How a writer stores key values, as functions from a value to what a reader gets back.
 #[derive(Clone, Copy, Debug)]
 pub struct Codec {
@@ -15,4 +18,28 @@ impl Codec {
         rotation: rigport_model::quantize::rotation_as_i16,
         vector: None,
     };
+}
+
+/// A cubic track's values as `codec` stores them (`None`: exactly): rotations (`rotation`) as 16-bit
+/// normalized components when every value and tangent fits in `[-1, 1]` (else floats),
+/// translations and scales through the codec's vector rounding.
+pub(super) fn cubic_as_written(track: &Track, rotation: bool, codec: &Codec) -> Option<Track> {
+    let mut written = track.clone();
+    match rotation {
+        true => {
+            if track.values.iter().any(|v| v.abs() > 1.0) {
+                return None;
+            }
+            for v in &mut written.values {
+                *v = component_as_i16(*v);
+            }
+        }
+        false => {
+            let vector = codec.vector?;
+            for chunk in written.values.chunks_exact_mut(3) {
+                chunk.copy_from_slice(&vector([chunk[0], chunk[1], chunk[2]]));
+            }
+        }
+    }
+    Some(written)
 }

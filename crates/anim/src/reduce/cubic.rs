@@ -13,7 +13,7 @@
 //! A reader evaluates a cubic rotation component by component with tangents scaled by the
 //! key interval, then normalizes (three.js `GLTFCubicSplineQuaternionInterpolant`, glTF 2.0
 //! Appendix C); the fit measures the same, on the values as the writer stores them
-//! ([`cubic_as_written`]). Consecutive key values keep a positive dot product, so the
+//! ([`cubic_as_written`](super::codec::cubic_as_written)). Consecutive key values keep a positive dot product, so the
 //! writer's sign continuity never flips a key (flipping one key's value and tangents
 //! changes the segments on both sides of it).
 
@@ -22,8 +22,10 @@ use rigport_model::quantize::component_as_i16;
 use rigport_model::{Interpolation, Track};
 
 use super::channel::{Channel, Kind};
+use super::codec::cubic_as_written;
 use super::codec::Codec;
 use super::curve::{hermite, quat_at, sample_quat, sample_vec3};
+use super::rate::{ladder, uniform_keys, MAX_STEP, TIME_ACCESSOR_JSON};
 
 /// A fitted cubic track: the original keys it keeps and the track as handed to the writer.
 pub(super) struct CubicFit {
@@ -255,30 +257,6 @@ impl<'a> Samples<'a> {
     }
 }
 
-/// A cubic track's values as `codec` stores them (`None`: exactly): rotations as 16-bit
-/// normalized components when every value and tangent fits in `[-1, 1]` (else floats),
-/// translations and scales through the codec's vector rounding.
-pub(super) fn cubic_as_written(track: &Track, kind: Kind, codec: &Codec) -> Option<Track> {
-    let mut written = track.clone();
-    match kind {
-        Kind::Rotation => {
-            if track.values.iter().any(|v| v.abs() > 1.0) {
-                return None;
-            }
-            for v in &mut written.values {
-                *v = component_as_i16(*v);
-            }
-        }
-        Kind::Translation | Kind::Scale => {
-            let vector = codec.vector?;
-            for chunk in written.values.chunks_exact_mut(3) {
-                chunk.copy_from_slice(&vector([chunk[0], chunk[1], chunk[2]]));
-            }
-        }
-    }
-    Some(written)
-}
-
 /// Bytes of a cubic track's outputs as written: 16-bit rotations when
 /// [`cubic_as_written`] rounds them, floats otherwise.
 fn output_bytes(track: &Track, kind: Kind, codec: Option<&Codec>) -> usize {
@@ -315,12 +293,12 @@ pub(super) fn fit_cubic(chan: &Channel, budget: usize) -> Option<(CubicFit, bool
     let candidate = |keys: Vec<usize>, tangents: &[(Vec4, Vec4)], uniform: bool, under: usize| {
         let track = samples.track(chan, &keys, tangents);
         let value_bytes = output_bytes(&track, chan.kind, codec);
-        let times = 4 * keys.len() + super::simplify::TIME_ACCESSOR_JSON;
+        let times = 4 * keys.len() + TIME_ACCESSOR_JSON;
         let bytes = value_bytes + if uniform { 0 } else { times };
         if bytes >= under {
             return None;
         }
-        let written = codec.and_then(|c| cubic_as_written(&track, chan.kind, c));
+        let written = codec.and_then(|c| cubic_as_written(&track, chan.kind == Kind::Rotation, c));
         samples.fits(written.as_ref().unwrap_or(&track)).then_some((
             bytes,
             CubicFit { kept: keys, track },
@@ -345,9 +323,9 @@ pub(super) fn fit_cubic(chan: &Channel, budget: usize) -> Option<(CubicFit, bool
             _ => (3, 4),
         };
         let narrowest_bytes = 3 * comps * per;
-        let steps = (2..=widest.min(super::simplify::MAX_STEP)).rev();
-        for step in steps.filter(|&k| super::simplify::ladder(k)) {
-            let keys = super::simplify::uniform_keys(n, step);
+        let steps = (2..=widest.min(MAX_STEP)).rev();
+        for step in steps.filter(|&k| ladder(k)) {
+            let keys = uniform_keys(n, step);
             if keys.len() * narrowest_bytes >= best_bytes {
                 break;
             }

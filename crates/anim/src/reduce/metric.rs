@@ -5,8 +5,8 @@
 
 use rigport_model::{Clip, Interpolation, Skeleton};
 
-use super::channel::{as_written, collect_channels};
-use super::cubic::cubic_as_written;
+use super::channel::{as_written, collect_channels, Kind};
+use super::codec::cubic_as_written;
 use super::{Codec, ReduceError, ReduceOptions, Reducer, Tuning};
 
 /// The largest and the mean model-space error.
@@ -74,7 +74,7 @@ pub fn point_error(
             })?;
         let coded = codec.and_then(|codec| {
             if track.interpolation == Interpolation::CubicSpline {
-                cubic_as_written(track, chan.kind, codec)
+                cubic_as_written(track, chan.kind == Kind::Rotation, codec)
             } else {
                 as_written(track, chan.kind, codec)
             }

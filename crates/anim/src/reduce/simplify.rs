@@ -17,15 +17,7 @@ use rigport_model::Track;
 use super::channel::{Channel, Kind};
 use super::cubic::fit_cubic;
 use super::curve::{lerp3, Slerp};
-
-/// The largest decimation step tried: beyond it (a key every 64 source frames, about 2 Hz
-/// for 120 Hz capture) key removal keeps as few keys for a moving channel.
-pub(super) const MAX_STEP: usize = 64;
-
-/// What a time accessor of its own costs besides its 4 bytes per key: its JSON (about 110
-/// bytes with its `min` and `max`, as the glTF writer prints them). On short clips that is
-/// worth several keys, and a uniform rate's times are shared.
-pub(super) const TIME_ACCESSOR_JSON: usize = 110;
+use super::rate::{ladder, uniform_keys, uniform_len, MAX_STEP, TIME_ACCESSOR_JSON};
 
 /// The keys `chan` keeps for its tolerance `chan.eps` (indices, increasing, first and last
 /// always among them) and, when a CUBICSPLINE fit of them needs fewer bytes than LINEAR
@@ -73,38 +65,12 @@ fn linear(chan: &Channel) -> (Vec<usize>, usize) {
     }
 }
 
-/// The uniform steps tried: a ladder of about 1.5x (2, 3, 4, 6, 8, 12, ...), so that
-/// channels land on the same steps and share their times more often.
-pub(super) fn ladder(step: usize) -> bool {
-    if step < 2 {
-        return false;
-    }
-    // 2^k or 3 * 2^(k-1): the two top bits are all the bits.
-    let shift = step.ilog2() - 1;
-    let top = step >> shift;
-    (top == 2 || top == 3) && step.trailing_zeros() >= shift
-}
-
-/// How many keys [`uniform_keys`] keeps.
-fn uniform_len(n: usize, step: usize) -> usize {
-    (n - 1) / step.max(1) + 1 + usize::from((n - 1) % step.max(1) != 0)
-}
-
 /// Whether every `step`-th key (and the last) reproduces every original key within the
 /// limit.
 fn fits_uniform(curve: &Curve, n: usize, step: usize) -> bool {
     uniform_keys(n, step)
         .windows(2)
         .all(|w| curve.fits(w[0], w[1]))
-}
-
-/// Keys `0, step, 2 step, ...` and the last.
-pub(super) fn uniform_keys(n: usize, step: usize) -> Vec<usize> {
-    let mut keys: Vec<usize> = (0..n).step_by(step.max(1)).collect();
-    if keys.last() != Some(&(n - 1)) {
-        keys.push(n - 1);
-    }
-    keys
 }
 
 /// One channel's keys as the simplifier reads them.
@@ -209,28 +175,4 @@ fn remove_keys(curve: &Curve, n: usize) -> Vec<usize> {
         }
     }
     (0..n).filter(|&k| keep[k]).collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_ladder_steps_by_about_one_and_a_half() {
-        let steps: Vec<usize> = (0..=MAX_STEP).filter(|&k| ladder(k)).collect();
-        assert_eq!(steps, [2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64]);
-    }
-
-    #[test]
-    fn uniform_len_counts_uniform_keys() {
-        for n in 2..40 {
-            for step in 1..12 {
-                assert_eq!(
-                    uniform_len(n, step),
-                    uniform_keys(n, step).len(),
-                    "{n} {step}"
-                );
-            }
-        }
-    }
 }

@@ -920,9 +920,9 @@ fn cubic_tangents_out_of_16_bit_range_fall_back_to_floats() {
             0.0, tangent, 0.0, 0.0, /**/ 0.0, 0.6, 0.0, 0.8, /**/ 0.0, 0.0, 0.0, 0.0,
         ],
     };
-    let inside = cubic::cubic_as_written(&track(0.7), Kind::Rotation, &Codec::I16).expect("16-bit");
+    let inside = codec::cubic_as_written(&track(0.7), true, &Codec::I16).expect("16-bit");
     assert!((inside.values[9] - 0.7).abs() <= 0.5 / 32767.0 && inside.values[9] != 0.7);
-    assert!(cubic::cubic_as_written(&track(1.5), Kind::Rotation, &Codec::I16).is_none());
+    assert!(codec::cubic_as_written(&track(1.5), true, &Codec::I16).is_none());
     // A fast spin (4 turns a second: quaternion components change by up to 4π per second)
     // still reduces within the bound with cubic tracks, whatever the storage.
     let skeleton = Skeleton::new(vec![
@@ -963,7 +963,7 @@ fn cubic_tangents_out_of_16_bit_range_fall_back_to_floats() {
     assert!(measured_error(&clip, &reduced, &skeleton) <= 1.05e-3);
     let out = &reduced.tracks[0];
     if out.interpolation == Interpolation::CubicSpline {
-        let written = cubic::cubic_as_written(out, Kind::Rotation, &Codec::I16);
+        let written = codec::cubic_as_written(out, true, &Codec::I16);
         // Either every component fits 16 bits and is rounded, or the track stays floats.
         let in_range = out.values.iter().all(|v| v.abs() <= 1.0);
         assert_eq!(written.is_some(), in_range);
