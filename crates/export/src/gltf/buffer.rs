@@ -546,10 +546,20 @@ fn min_max(data: &[f32], width: usize) -> (json::Value, json::Value) {
             hi[c] = hi[c].max(v);
         }
     }
+    // Each bound as the shortest decimal that reads back as the same f32 (`-98.97249`, not
+    // the f64 expansion `-98.97248840332031`; whole numbers without `.0`): glTF 2.0
+    // (3.6.2.5) has readers round a float accessor's bounds to single precision, and the
+    // JSON is shorter.
     let to_json = |v: Vec<f32>| {
         json::Value::Array(
             v.into_iter()
-                .map(|x| json::Value::from(f64::from(x)))
+                .map(|x| match x.fract() == 0.0 && x.abs() < 16_777_216.0 {
+                    // `0`, not `0.0`.
+                    true => json::Value::from(x as i64),
+                    false => {
+                        json::Value::from(format!("{x}").parse::<f64>().unwrap_or(f64::from(x)))
+                    }
+                })
                 .collect(),
         )
     };
@@ -605,8 +615,9 @@ mod tests {
         let a = &b.root.accessors[acc.value()];
         assert!(a.buffer_view.is_none());
         assert_eq!(a.count.0, 5);
-        assert_eq!(a.min, Some(serde_json::json!([0.0, -4.0, 0.0])));
-        assert_eq!(a.max, Some(serde_json::json!([1.0, 2.0, 3.0])));
+        // Whole numbers without `.0`.
+        assert_eq!(a.min, Some(serde_json::json!([0, -4, 0])));
+        assert_eq!(a.max, Some(serde_json::json!([1, 2, 3])));
         let sparse = a.sparse.as_ref().unwrap();
         assert_eq!(sparse.count.0, 2);
         let iv = &b.root.buffer_views[sparse.indices.buffer_view.value()];
@@ -629,6 +640,17 @@ mod tests {
         let acc = b.sparse_floats(&[0.0; 9], Type::Vec3);
         let a = &b.root.accessors[acc.value()];
         assert_eq!(a.sparse.as_ref().unwrap().count.0, 1);
-        assert_eq!(a.min, Some(serde_json::json!([0.0, 0.0, 0.0])));
+        assert_eq!(a.min, Some(serde_json::json!([0, 0, 0])));
+    }
+
+    #[test]
+    fn float_bounds_are_the_shortest_text_of_their_f32() {
+        let (lo, hi) = min_max(&[-98.97248840332031, 0.1, 3.0, 1e-7], 2);
+        assert_eq!(lo.to_string(), "[-98.97249,1e-7]");
+        assert_eq!(hi.to_string(), "[3,0.1]");
+        // Each reads back as the same f32.
+        for (text, x) in [("-98.97249", -98.97248840332031f32), ("0.1", 0.1), ("1e-7", 1e-7)] {
+            assert_eq!(text.parse::<f64>().unwrap() as f32, x);
+        }
     }
 }
