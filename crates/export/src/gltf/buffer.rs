@@ -645,11 +645,11 @@ mod tests {
 
     #[test]
     fn float_bounds_are_the_shortest_text_of_their_f32() {
-        let (lo, hi) = min_max(&[-98.97248840332031, 0.1, 3.0, 1e-7], 2);
+        let (lo, hi) = min_max(&[-98.972_49, 0.1, 3.0, 1e-7], 2);
         assert_eq!(lo.to_string(), "[-98.97249,1e-7]");
         assert_eq!(hi.to_string(), "[3,0.1]");
         // Each reads back as the same f32.
-        for (text, x) in [("-98.97249", -98.97248840332031f32), ("0.1", 0.1), ("1e-7", 1e-7)] {
+        for (text, x) in [("-98.97249", -98.972_49_f32), ("0.1", 0.1), ("1e-7", 1e-7)] {
             assert_eq!(text.parse::<f64>().unwrap() as f32, x);
         }
     }
