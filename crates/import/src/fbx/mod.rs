@@ -67,7 +67,7 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
     let guess = anim::curve_nodes(&scene);
     let (baked, built) = std::thread::scope(|s| {
         let baking = (!scene.anim_stacks.is_empty()).then(|| s.spawn(|| anim::bake(&scene, path)));
-        let built = structure(&scene, bytes, &guess, path);
+        let built = structure(&scene, &guess, path);
         let baked = baking.map_or(Ok(Vec::new()), |b| {
             b.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
         });
@@ -75,10 +75,14 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
     });
     let baked = baked?;
     let animated = anim::animated_nodes(&baked);
-    let (skel, mats, built, warnings) = match built {
+    let (skel, mats, built, mut warnings) = match built {
         Ok(built) if animated == guess => built,
-        _ => structure(&scene, bytes, &animated, path)?,
+        _ => structure(&scene, &animated, path)?,
     };
+    // Once, whichever way the structure was built (it reads the file again).
+    if let Some(drift) = scale_helper_warning(&scene, bytes, path) {
+        warnings.insert(0, drift);
+    }
     let clips = anim::clips(&baked, &skel, &built);
     let unit = scene.settings.unit_meters;
     let name = path
@@ -108,7 +112,6 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
 /// As `skeleton::build`.
 fn structure(
     scene: &ufbx::Scene,
-    bytes: &[u8],
     animated: &HashSet<u32>,
     path: &Path,
 ) -> Result<
@@ -122,25 +125,29 @@ fn structure(
 > {
     let mut warnings = Vec::new();
     let skel = skeleton::build(scene, animated, path)?;
-    if let Some((node, drift, size)) = load::scale_helper_drift(bytes, scene) {
-        if drift > 1e-4 * size {
-            warnings.push(incomplete(
-                path,
-                &node,
-                format!(
-                    "placed {drift:.3e} units ({:.2}% of the skeleton's size) from where the \
-                     file puts it: a non-uniform scale above a node that inherits it its own \
-                     way (InheritType 0, RrSs, or 2, Rrs: segment scale compensate) and has a \
-                     scaling pivot or rotation offset has no exact joint transform (ufbx's \
-                     scale helper drops the offset)",
-                    100.0 * drift / size
-                ),
-            ));
-        }
-    }
     let mats = material::build(scene, path, &mut warnings);
     let built = mesh::build(scene, &skel, path, &mut warnings);
     Ok((skel, mats, built, warnings))
+}
+
+/// The W004 warning for a node ufbx's scale helper places away from the file's definition
+/// (`load::scale_helper_drift`) by more than 1e-4 of the skeleton's size, if any.
+fn scale_helper_warning(scene: &ufbx::Scene, bytes: &[u8], path: &Path) -> Option<Warning> {
+    let (node, drift, size) = load::scale_helper_drift(bytes, scene)?;
+    (drift > 1e-4 * size).then(|| {
+        incomplete(
+            path,
+            &node,
+            format!(
+                "placed {drift:.3e} units ({:.2}% of the skeleton's size) from where the \
+                 file puts it: a non-uniform scale above a node that inherits it its own \
+                 way (InheritType 0, RrSs, or 2, Rrs: segment scale compensate) and has a \
+                 scaling pivot or rotation offset has no exact joint transform (ufbx's \
+                 scale helper drops the offset)",
+                100.0 * drift / size
+            ),
+        )
+    })
 }
 
 /// A warning at the file, about one named FBX element.
