@@ -86,27 +86,12 @@ pub(crate) fn bind_unskinned(
             &counter(progress, mesh.positions.len()),
         )
         .map_err(|e| PipelineError::Invalid(format!("{source}: mesh {:?}: {e}", mesh.name)))?;
-        warnings.push(Warning::Note {
-            location: source.to_string(),
-            message: format!(
-                "mesh {:?}: skin weights computed by bone heat for {} vertices and {} bones \
-                 ({} vertices see no bone and take their neighbours' weights)",
-                mesh.name,
-                mesh.positions.len(),
-                bound.bones,
-                bound.repairs.unseen
-            ),
-        });
-        let repairs = Repairs {
-            unseen: 0,
-            ..bound.repairs
-        };
-        if repairs.any() {
-            warnings.push(Warning::Repaired {
-                location: format!("{source}: mesh {:?}", mesh.name),
-                message: repairs_text(&repairs),
-            });
-        }
+        warnings.extend(heat_warnings(
+            (source.to_string(), format!("mesh {:?}", mesh.name)),
+            format!("{source}: mesh {:?}", mesh.name),
+            (mesh.positions.len(), bound.bones),
+            &bound.repairs,
+        ));
         skins.push(bound.binding);
     }
     let count = skins.len();
@@ -146,29 +131,44 @@ fn weigh(
             }
         }
     }
-    // Vertices that see no bone are part of the method (Pinocchio's too): the note counts
-    // them; the repairs of a broken mesh are a warning.
+    let at = path.display().to_string();
+    let warnings = heat_warnings(
+        (at.clone(), "no attachment".to_string()),
+        at,
+        (mesh.positions.len(), bones.len()),
+        &heat.repairs,
+    );
+    Ok((rows, warnings))
+}
+
+/// What bone heat did, for the user: a note at `(location, subject)` with the vertices and
+/// bones weighted and the vertices that see no bone (part of the method, Pinocchio's too),
+/// and the other repairs, of a broken mesh, as a W003 warning at `repaired_at`.
+fn heat_warnings(
+    (location, subject): (String, String),
+    repaired_at: String,
+    (vertices, bones): (usize, usize),
+    repairs: &Repairs,
+) -> Vec<Warning> {
     let mut warnings = vec![Warning::Note {
-        location: path.display().to_string(),
+        location,
         message: format!(
-            "no attachment: skin weights computed by bone heat for {} vertices and {} bones \
-             ({} vertices see no bone and take their neighbours' weights)",
-            mesh.positions.len(),
-            bones.len(),
-            heat.repairs.unseen
+            "{subject}: skin weights computed by bone heat for {vertices} vertices and {bones} \
+             bones ({} vertices see no bone and take their neighbours' weights)",
+            repairs.unseen
         ),
     }];
     let repairs = Repairs {
         unseen: 0,
-        ..heat.repairs
+        ..*repairs
     };
     if repairs.any() {
         warnings.push(Warning::Repaired {
-            location: path.display().to_string(),
+            location: repaired_at,
             message: repairs_text(&repairs),
         });
     }
-    Ok((rows, warnings))
+    warnings
 }
 
 /// What bone heat repaired, as one sentence.
