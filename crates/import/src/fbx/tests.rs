@@ -459,32 +459,45 @@ fn pivots_pre_post_rotation_and_segment_scale_compensate_place_joints_as_ufbx_do
         let skeleton = &imported.asset.skeleton;
         let world = skeleton.model_rest_matrices();
         let scene = ufbx::load_memory(text.as_bytes(), ufbx::LoadOpts::default()).unwrap();
-        let mut checked = 0;
-        for node in scene.nodes.iter().filter(|n| !n.is_root) {
-            let names: Vec<&str> = skeleton.joints().iter().map(|j| j.name.as_str()).collect();
-            if node.element.name.is_empty() {
-                continue;
-            }
-            let j = (skeleton.find(&node.element.name))
-                .unwrap_or_else(|| panic!("{:?} not among {names:?}", node.element.name));
-            let expected = super::skeleton::mat(&node.node_to_world).as_mat4();
-            // Where the joint is, and where a point one unit along each axis goes.
-            let points = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
-            for p in points {
-                let (ours, theirs) = (
-                    world[j.get()].transform_point3(p),
-                    expected.transform_point3(p),
-                );
-                assert!(
-                    ours.distance(theirs) < 1e-4,
-                    "InheritType {inherit}: {}: {p} -> {ours} vs ufbx {theirs}",
-                    node.element.name
-                );
-            }
-            checked += 1;
-        }
+        let checked =
+            assert_joints_at_nodes(skeleton, &world, &scene, &format!("InheritType {inherit}"));
         assert_eq!(checked, 3);
     }
+}
+
+/// Asserts that every named node of `scene` (not its root) is a joint of `skeleton` whose
+/// model matrix in `world` puts the origin and a point one unit along each axis where the
+/// node's `node_to_world` does, within 1e-4 (`label` in messages); returns how many.
+fn assert_joints_at_nodes(
+    skeleton: &rigport_model::Skeleton,
+    world: &[rigport_model::glam::Mat4],
+    scene: &ufbx::Scene,
+    label: &str,
+) -> usize {
+    let nodes = scene
+        .nodes
+        .iter()
+        .filter(|n| !n.is_root && !n.element.name.is_empty());
+    let mut checked = 0;
+    for node in nodes {
+        let names: Vec<&str> = skeleton.joints().iter().map(|j| j.name.as_str()).collect();
+        let j = (skeleton.find(&node.element.name))
+            .unwrap_or_else(|| panic!("{label}: {:?} not among {names:?}", node.element.name));
+        let expected = super::skeleton::mat(&node.node_to_world).as_mat4();
+        for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z] {
+            let (ours, theirs) = (
+                world[j.get()].transform_point3(p),
+                expected.transform_point3(p),
+            );
+            assert!(
+                ours.distance(theirs) < 1e-4,
+                "{label}: {}: {p} -> {ours} vs ufbx {theirs}",
+                node.element.name
+            );
+        }
+        checked += 1;
+    }
+    checked
 }
 
 #[test]
@@ -606,27 +619,7 @@ fn nodes_baked_for_their_inherit_type_alone_become_animated_joints() {
     let anim = &scene.anim_stacks[0].anim;
     let at = ufbx::evaluate_scene(&scene, anim, f64::from(t), ufbx::EvaluateOpts::default())
         .expect("ufbx evaluates the stack");
-    let mut checked = 0;
-    for node in at
-        .nodes
-        .iter()
-        .filter(|n| !n.is_root && !n.element.name.is_empty())
-    {
-        let j = skeleton.find(&node.element.name).unwrap();
-        let theirs = super::skeleton::mat(&node.node_to_world).as_mat4();
-        for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z] {
-            let (a, b) = (
-                world[j.get()].transform_point3(p),
-                theirs.transform_point3(p),
-            );
-            assert!(
-                a.distance(b) < 1e-4,
-                "{}: {p} -> {a} vs ufbx {b}",
-                node.element.name
-            );
-        }
-        checked += 1;
-    }
+    let checked = assert_joints_at_nodes(skeleton, &world, &at, "mid-way");
     assert_eq!(checked, 3);
 }
 
