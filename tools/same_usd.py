@@ -7,8 +7,8 @@ Used for rigport's `.usdc` / `.usdz` outputs against its `.usda` of the same inp
    paths (target and connection specs included) with every info key and its value.
 2. The composed stages under every selection of every variant set (one set at a time, and
    the authored selections): every prim's type, applied schemas and every attribute's
-   value at the default time and at each time code of the stage's range and each
-   authored sample time, compared exactly (`==` on the values usd-core returns; asset
+   value at the default time and, for an attribute with time samples, at each time code
+   of the stage's range and each authored sample time, compared exactly (`==` on the values usd-core returns; asset
    paths as authored, since a package resolves them to its members).
 3. UsdSkel's evaluation at those times under those selections: per Skeleton the skinning
    transforms (`SkeletonQuery.ComputeSkinningTransforms`) and per skinned prim the
@@ -77,8 +77,13 @@ def stage_values(stage, times):
         out.append((str(prim.GetPath()), prim.GetTypeName(), list(prim.GetAppliedSchemas())))
         for attr in prim.GetAttributes():
             out.append((str(attr.GetPath()), "default", authored(attr.Get(Usd.TimeCode.Default()))))
-            for t in times:
-                out.append((str(attr.GetPath()), t, authored(attr.Get(t))))
+            # An attribute without samples (nor value clips, which rigport never writes) holds
+            # its default at every time: its times are compared, its value once.
+            samples = attr.GetTimeSamples()
+            out.append((str(attr.GetPath()), "samples", list(samples)))
+            if samples:
+                for t in times:
+                    out.append((str(attr.GetPath()), t, authored(attr.Get(t))))
         for rel in prim.GetRelationships():
             out.append((str(rel.GetPath()), [str(p) for p in rel.GetTargets()]))
     return out
@@ -98,14 +103,15 @@ def skel_values(stage, times):
             skel_query = cache.GetSkelQuery(binding.GetSkeleton())
             for t in times:
                 xforms = skel_query.ComputeSkinningTransforms(t)
-                out.append((str(binding.GetSkeleton().GetPath()), t, list(xforms)))
+                # Vt arrays compare element by element in C++ (`==`), without a Python list.
+                out.append((str(binding.GetSkeleton().GetPath()), t, xforms))
                 for target in binding.GetSkinningTargets():
                     points_attr = UsdGeom.PointBased(target.GetPrim()).GetPointsAttr()
                     points = points_attr.Get(t)
                     if points is None:
                         continue
                     target.ComputeSkinnedPoints(xforms, points, t)
-                    out.append((str(target.GetPrim().GetPath()), t, list(points)))
+                    out.append((str(target.GetPrim().GetPath()), t, points))
     return out
 
 

@@ -189,8 +189,7 @@ fn plays_as_viewers_do(file: &Path, dir: &Path) -> f64 {
 #[test]
 fn every_demo_file_plays_in_eval_as_in_the_viewers() {
     let dir = common::scratch();
-    let demo = dir.path().join("demo");
-    rigport_ok(&["demo", "-q", "--no-corpus", "-o", demo.to_str().unwrap()]);
+    let demo = common::demo_outputs();
     let mut files: Vec<_> = std::fs::read_dir(&demo)
         .unwrap()
         .map(|e| e.unwrap().path())

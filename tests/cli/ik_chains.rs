@@ -281,9 +281,8 @@ fn bad_chain_fields_name_their_json_path() {
 /// 1e-4 of the height, as `rigport ik`'s own test allows).
 #[test]
 fn demo_reach_moves_only_the_reaching_arm() {
-    let dir = scratch();
-    let p = |n: &str| dir.path().join(n);
-    rigport_ok(&["demo", "-o", s(dir.path()), "--quiet"]);
+    let dir = demo_outputs();
+    let p = |n: &str| dir.join(n);
     assert_valid(&p("demo.glb"));
     let scene = gltf_read::read(&p("demo.glb"));
     let by_name = scene.node_by_name();

@@ -93,16 +93,14 @@ fn check_sheet(dir: &Path, label: &str, inputs: &[&str], extra: &[&str]) -> Path
     out
 }
 
-fn demo_glb(dir: &Path) -> PathBuf {
-    let demo = dir.join("demo");
-    rigport_ok(&["demo", "--no-corpus", "-o", s(&demo)]);
-    demo.join("demo.glb")
+fn demo_glb() -> PathBuf {
+    crate::common::demo_outputs().join("demo.glb")
 }
 
 #[test]
 fn demo_renders_in_every_view_and_skinning_and_is_deterministic() {
     let dir = tempfile::tempdir().unwrap();
-    let glb = demo_glb(dir.path());
+    let glb = demo_glb();
     let first = check_sheet(dir.path(), "demo", &[s(&glb)], &[]);
     for view in ["side", "top", "three-quarter"] {
         check_sheet(
@@ -182,7 +180,7 @@ fn demo_renders_in_every_view_and_skinning_and_is_deterministic() {
 #[test]
 fn bad_render_arguments_fail_cleanly() {
     let dir = tempfile::tempdir().unwrap();
-    let glb = demo_glb(dir.path());
+    let glb = demo_glb();
     for (extra, out, needle) in [
         (&["--clip", "nope"][..], "a.png", "no clip named"),
         (&[][..], "a.bmp", "unknown picture format"),
@@ -385,8 +383,8 @@ fn perspective_render_is_deterministic_and_inside_the_picture() {
 #[test]
 fn demo_reach_shows_its_targets_in_every_view_and_camera() {
     let dir = tempfile::tempdir().unwrap();
-    let glb = demo_glb(dir.path());
-    let handles = dir.path().join("demo/reach.handles.json");
+    let glb = demo_glb();
+    let handles = crate::common::demo_outputs().join("reach.handles.json");
     for camera in ["ortho", "perspective"] {
         for view in ["front", "side", "top", "three-quarter"] {
             let label = format!("reach_{camera}_{view}");
@@ -481,8 +479,7 @@ fn handles_fixture_on_its_corpus_rig_marks_the_targets() {
 #[test]
 fn render_shows_the_baked_skirt_moving() {
     let dir = tempfile::tempdir().unwrap();
-    let demo = dir.path().join("demo");
-    rigport_ok(&["demo", "-q", "--no-corpus", "-o", s(&demo)]);
+    let demo = crate::common::demo_outputs();
     let png = dir.path().join("skirt.png");
     rigport_ok(&[
         "render",

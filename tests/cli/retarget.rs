@@ -95,14 +95,7 @@ fn cross_rig_walks_plant_feet_and_follow_limbs() {
         return;
     };
     let dir = scratch();
-    rigport_ok(&[
-        "demo",
-        "-o",
-        s(&dir.path().join("demo")),
-        "--no-corpus",
-        "--quiet",
-    ]);
-    let demo = dir.path().join("demo/demo.glb");
+    let demo = demo_outputs().join("demo.glb");
     for (label, motion) in walks {
         for (rig_label, rig) in [("human_model1", &model1), ("demo", &demo)] {
             let out = dir.path().join(format!("{}_{rig_label}.glb", motion.len()));
@@ -380,20 +373,13 @@ fn usd_output_and_matched_hands() {
         assert!(ok, "{log}");
     }
     // The demo has hand joints: --match-hands puts its wrists on the source's, scaled.
-    rigport_ok(&[
-        "demo",
-        "-o",
-        s(&dir.path().join("demo")),
-        "--no-corpus",
-        "--quiet",
-    ]);
     let out = dir.path().join("hands.glb");
     let run = rigport(&[
         "retarget",
         s(&asf),
         s(&amc),
         "--onto",
-        s(&dir.path().join("demo/demo.glb")),
+        s(&demo_outputs().join("demo.glb")),
         "-o",
         s(&out),
         "--match-hands",

@@ -565,8 +565,7 @@ fn lbs_and_dqs_match_usdskel_on_every_shared_rig_under_random_poses() {
         let tag = rel.replace('/', "_");
         check_rig(&py, &[s(&folder)], seed, dir.path(), &tag);
     }
-    let demo = dir.path().join("demo");
-    rigport_ok(&["demo", "--quiet", "--no-corpus", "-o", s(&demo)]);
+    let demo = crate::common::demo_outputs();
     check_rig(
         &py,
         &[s(&demo.join("demo.glb"))],

@@ -222,8 +222,7 @@ fn demo_and_motion_commands_write_usda_too() {
     ]);
     let (ok, text) = check_usd(&py, &p("fast.usda"), Some(&p("fast.npz")));
     assert!(ok, "{text}");
-    let demo = p("demo");
-    rigport_ok(&["demo", "-o", s(&demo), "--quiet", "--no-corpus"]);
+    let demo = crate::common::demo_outputs();
     let usda = demo.join("demo.usda");
     assert!(usda.exists(), "the demo writes demo.usda");
     let (ok, text) = check_usd(&py, &usda, None);

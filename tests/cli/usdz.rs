@@ -29,9 +29,8 @@ fn tool(python: &Path, script: &str, args: &[&Path]) -> (bool, String) {
 }
 
 /// `demo.glb` written by `rigport demo` into `dir`.
-fn demo_glb(dir: &Path) -> PathBuf {
-    rigport_ok(&["demo", "-o", s(&dir.join("demo")), "--quiet"]);
-    dir.join("demo/demo.glb")
+fn demo_glb() -> PathBuf {
+    crate::common::demo_outputs().join("demo.glb")
 }
 
 /// (name, data start, stored, data) of every member, in order.
@@ -53,7 +52,7 @@ fn members(usdz: &Path) -> Vec<(String, u64, bool, Vec<u8>)> {
 #[test]
 fn demo_usdz_passes_every_usd_core_validator() {
     let dir = scratch();
-    let glb = demo_glb(dir.path());
+    let glb = demo_glb();
     let usdz = dir.path().join("demo.usdz");
     rigport_ok(&["convert", s(&glb), "-o", s(&usdz), "--quiet"]);
     // The package: a .usdc root layer first, every member stored and 64-byte aligned.
@@ -68,7 +67,7 @@ fn demo_usdz_passes_every_usd_core_validator() {
     }
     // No file beside it: the package is the whole output.
     let beside: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
-    assert_eq!(beside.len(), 2, "{beside:?}");
+    assert_eq!(beside.len(), 1, "{beside:?}");
     let Some(py) = crate::usd::python() else {
         return;
     };
@@ -87,8 +86,8 @@ fn demo_usdz_passes_every_usd_core_validator() {
 }
 
 /// The inputs the `.usdc` / `.usdz` outputs are compared on: (label, rigport arguments).
-fn inputs(dir: &Path) -> Vec<(String, Vec<PathBuf>)> {
-    let mut out = vec![("demo".to_string(), vec![demo_glb(dir)])];
+fn inputs() -> Vec<(String, Vec<PathBuf>)> {
+    let mut out = vec![("demo".to_string(), vec![demo_glb()])];
     let pinocchio = PINOCCHIO_RIGS[0];
     if let (Some(m), Some(sk), Some(a)) = (
         corpus(pinocchio.1),
@@ -145,7 +144,7 @@ fn usdc_and_usdz_hold_the_usda_layer_and_evaluate_the_same() {
     let dir = scratch();
     let py = crate::usd::python();
     let mut compared = 0;
-    for (label, files) in inputs(dir.path()) {
+    for (label, files) in inputs() {
         let out = |ext: &str| dir.path().join(format!("{label}.{ext}"));
         for ext in ["usda", "usdc", "usdz"] {
             let args = convert_args(&files, &out(ext));
@@ -230,7 +229,7 @@ fn usdz_packs_the_textures_with_relative_paths() {
 #[test]
 fn usd_without_an_encoding_is_refused() {
     let dir = scratch();
-    let glb = demo_glb(dir.path());
+    let glb = demo_glb();
     let out = rigport(&["convert", s(&glb), "-o", s(&dir.path().join("x.usd"))]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
