@@ -2,7 +2,7 @@
 """Check rigport's skinned positions against usd-core's UsdSkel.SkinPoints.
 
 Usage:
-  tools/.venv/bin/python tools/check_skinning.py DUMP [--method lbs|dqs] [--tolerance T]
+  tools/.venv/bin/python tools/check_skinning.py DUMP [DUMP ...] [--method lbs|dqs] [--tolerance T]
   tools/.venv/bin/python tools/check_skinning.py --export-usd IN.usda --baseline BAKED.usda --out OUT
 
 DUMP is what `rigport eval ... -o DUMP.npz` writes (src/commands/eval.rs, `Dump`), or a
@@ -165,13 +165,13 @@ def usd_skin(method: str, rest, mats, joints, weights):
     return np.array(points, dtype=np.float32).reshape(v, 3)
 
 
-def check(args) -> int:
-    arrays = load_arrays(args.dump)
+def check(args, dump) -> int:
+    arrays = load_arrays(dump)
     method = method_of(arrays, args.method)
     rest, pos, mats, joints, weights, times = normalized_dump(arrays)
     unweighted = ~(weights != 0).any(axis=1) if weights.size else np.ones(rest.shape[0], bool)
     worst = 0.0
-    print(f"{args.dump}: {pos.shape[0]} frame(s), {rest.shape[0]} vertices, {mats.shape[1]} joints, "
+    print(f"{dump}: {pos.shape[0]} frame(s), {rest.shape[0]} vertices, {mats.shape[1]} joints, "
           f"{joints.shape[1]} influences/vertex, method {method} ({TOKENS[method]}), "
           f"{int(unweighted.sum())} unweighted vertices kept at rest")
     print(f"{'frame':>5} {'time':>9} {'max/diag':>10} {'mean/diag':>10} {'max abs':>10} {'diag':>10}")
@@ -289,7 +289,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 epilog="Exit status: 0 within tolerance, 1 over it, 2 bad input.")
-    p.add_argument("dump", nargs="?", help="rigport eval dump (.npz or directory of .npy)")
+    p.add_argument("dump", nargs="*",
+                   help="rigport eval dumps (.npz or directory of .npy), each checked in turn")
     p.add_argument("--method", choices=sorted(TOKENS), help="override the dump's skinning method")
     p.add_argument("--tolerance", type=float, default=1e-5,
                    help="max deviation as a fraction of the bounding-box diagonal (default 1e-5)")
@@ -309,7 +310,8 @@ def main(argv=None) -> int:
         if not args.dump:
             print("check_skinning.py: need a DUMP (or --export-usd)", file=sys.stderr)
             return EXIT_BAD
-        return check(args)
+        # Each dump's summary line ends in OK or FAIL; the exit status is the worst.
+        return max(check(args, dump) for dump in args.dump)
     except BadInput as e:
         print(f"check_skinning.py: {e}", file=sys.stderr)
         return EXIT_BAD

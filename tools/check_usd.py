@@ -43,11 +43,20 @@
 
 Exit status: 0 all checks pass; 1 a validator error, a rigport check failure or a
 deviation over tolerance; 2 usage error, unreadable input or no validator available.
+
+    tools/.venv/bin/python tools/check_usd.py --batch JOBS.json
+
+runs several checks in one process (usd-core loads once): JOBS.json is a list of argument
+lists, each what one call above takes. Each job's output, its error output included, comes
+between a line `==> check_usd job I` and a line `<== check_usd job I exit N`, N its exit
+status as above; the batch exits with the largest.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import sys
 from dataclasses import dataclass, field
 
@@ -577,5 +586,24 @@ def main(argv: list[str] | None = None) -> int:
     return 1 if failed else 0
 
 
+def main_batch(path: str) -> int:
+    """Runs every job of the JSON list at `path` (see the module text)."""
+    with open(path, encoding="utf-8") as f:
+        jobs = json.load(f)
+    worst = 0
+    for i, argv in enumerate(jobs):
+        print(f"==> check_usd job {i}", flush=True)
+        with contextlib.redirect_stderr(sys.stdout):
+            try:
+                rc = main([str(a) for a in argv])
+            except SystemExit as exc:  # argparse's usage errors
+                rc = exc.code if isinstance(exc.code, int) else 2
+        print(f"<== check_usd job {i} exit {rc}", flush=True)
+        worst = max(worst, rc)
+    return worst
+
+
 if __name__ == "__main__":
+    if len(sys.argv) == 3 and sys.argv[1] == "--batch":
+        sys.exit(main_batch(sys.argv[2]))
     sys.exit(main())

@@ -283,8 +283,15 @@ t0=$SECONDS
 BIN_DIR="$( [[ "$PROFILE" == release ]] && echo release || echo debug)"
 hash_rc=0
 hash_log="$(mktemp)"
-if cargo build --locked "${PROFILE_ARGS[@]}" --bin rigport; then
-  RIGPORT_BIN="${CARGO_TARGET_DIR:-$ROOT/target}/$BIN_DIR/rigport" bash tools/output_hashes.sh \
+# The binary step 3 built for the CLI tests (`CARGO_BIN_EXE_rigport`) when it is there and
+# no older than the sources: `cargo build --bin rigport` would build the workspace a second
+# time (without the dev-dependencies, some shared crates get other features), about 110 s
+# on 2 cores from cold.
+hash_bin="${CARGO_TARGET_DIR:-$ROOT/target}/$BIN_DIR/rigport"
+newer_source="$(find "$ROOT/src" "$ROOT/crates" "$ROOT/Cargo.toml" "$ROOT/Cargo.lock" -newer "$hash_bin" \
+  -name '*.rs' -o -newer "$hash_bin" -name 'Cargo.*' 2>/dev/null | head -1 || true)"
+if [[ -x "$hash_bin" && -z "$newer_source" ]] || cargo build --locked "${PROFILE_ARGS[@]}" --bin rigport; then
+  RIGPORT_BIN="$hash_bin" bash tools/output_hashes.sh \
     2> >(tee "$hash_log" >&2) || hash_rc=$?
 else
   hash_rc=1

@@ -1,7 +1,6 @@
 //! Shared helpers for the end-to-end tests: running the CLI, finding the corpus, running
 //! Khronos glTF-Validator, reading glTF back with the independent `gltf` crate.
 
-use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::UNIX_EPOCH;
@@ -76,9 +75,11 @@ pub fn scratch() -> tempfile::TempDir {
 /// The folder of `rigport demo --no-corpus`'s outputs, written once per build of the CLI and
 /// shared by the tests that only read them: nextest runs every test in a process of its
 /// own, so the outputs are shared on disk (under cargo's `CARGO_TARGET_TMPDIR`, named by
-/// the binary's modification time and size), with a lock file ordering the first callers.
-/// Read it, never write into it: a test's own files go to its [`scratch`] folder. The
-/// demo's own tests (`demo.rs`) run the demo themselves.
+/// the binary's modification time and size). The first callers each write the demo into a
+/// folder of their own and rename it into place; a rename onto a folder that another
+/// caller placed first fails, and that caller's folder is used. Read it, never write into
+/// it: a test's own files go to its [`scratch`] folder. The demo's own tests (`demo.rs`)
+/// run the demo themselves.
 pub fn demo_outputs() -> PathBuf {
     let exe = Path::new(env!("CARGO_BIN_EXE_rigport"));
     let meta = std::fs::metadata(exe).expect("the rigport binary exists");
@@ -88,31 +89,33 @@ pub fn demo_outputs() -> PathBuf {
         .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
         .map_or(0, |d| d.as_nanos());
     let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
-    std::fs::create_dir_all(&root).expect("CARGO_TARGET_TMPDIR");
     let name = format!("demo-{stamp:x}-{:x}", meta.len());
     let dir = root.join(&name);
-    let lock = File::create(root.join("demo.lock")).expect("the demo lock file");
-    lock.lock().expect("the demo lock");
-    if !dir.exists() {
-        // Outputs of earlier builds go; the new ones appear whole (renamed when complete).
-        for old in std::fs::read_dir(&root)
-            .expect("CARGO_TARGET_TMPDIR lists")
-            .flatten()
-        {
-            let old_name = old.file_name();
-            if old_name.to_string_lossy().starts_with("demo-") {
-                let _ = std::fs::remove_dir_all(old.path());
-            }
+    if dir.exists() {
+        return dir;
+    }
+    std::fs::create_dir_all(&root).expect("CARGO_TARGET_TMPDIR");
+    // Outputs of earlier builds go.
+    for old in std::fs::read_dir(&root)
+        .expect("CARGO_TARGET_TMPDIR lists")
+        .flatten()
+    {
+        let old_name = old.file_name().to_string_lossy().into_owned();
+        if old_name.starts_with("demo-") && !old_name.starts_with(&name) {
+            let _ = std::fs::remove_dir_all(old.path());
         }
-        let part = root.join(format!("{name}.part"));
-        rigport_ok(&[
-            "demo",
-            "--no-corpus",
-            "--quiet",
-            "-o",
-            part.to_str().unwrap(),
-        ]);
-        std::fs::rename(&part, &dir).expect("the demo folder renames");
+    }
+    let part = root.join(format!("{name}.{}", std::process::id()));
+    rigport_ok(&[
+        "demo",
+        "--no-corpus",
+        "--quiet",
+        "-o",
+        part.to_str().unwrap(),
+    ]);
+    if std::fs::rename(&part, &dir).is_err() {
+        assert!(dir.exists(), "{} cannot be renamed", part.display());
+        let _ = std::fs::remove_dir_all(&part);
     }
     dir
 }

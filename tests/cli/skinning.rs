@@ -497,7 +497,9 @@ fn joint_names(input: &[&str]) -> Vec<String> {
         .collect()
 }
 
-fn check_rig(py: &Path, input: &[&str], seed: u64, dir: &Path, tag: &str) {
+/// Evaluates `input` under a random pose (from `seed`) with LBS and with DQS into `dir`;
+/// returns the two dumps.
+fn posed_dumps(input: &[&str], seed: u64, dir: &Path, tag: &str) -> Vec<PathBuf> {
     let names = joint_names(input);
     let mut rng = Rng(seed);
     let mut pose = serde_json::Map::new();
@@ -508,6 +510,7 @@ fn check_rig(py: &Path, input: &[&str], seed: u64, dir: &Path, tag: &str) {
     }
     let pose_path = dir.join(format!("{tag}.pose.json"));
     std::fs::write(&pose_path, serde_json::Value::Object(pose).to_string()).unwrap();
+    let mut dumps = Vec::new();
     for method in ["lbs", "dqs"] {
         let dump = dir.join(format!("{tag}.{method}.npz"));
         let mut args = vec!["eval"];
@@ -522,21 +525,32 @@ fn check_rig(py: &Path, input: &[&str], seed: u64, dir: &Path, tag: &str) {
             "--quiet",
         ]);
         rigport_ok(&args);
-        let out = Command::new(py)
-            .arg(repo().join("tools/check_skinning.py"))
-            .arg(&dump)
-            .arg("--quiet")
-            .output()
-            .unwrap();
-        let text = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{tag} {method}: check_skinning.py exit {:?}\n{text}\n{}",
-            out.status.code(),
-            String::from_utf8_lossy(&out.stderr)
-        );
-        assert!(text.contains("OK"), "{tag} {method}: {text}");
+        dumps.push(dump);
     }
+    dumps
+}
+
+/// Runs tools/check_skinning.py on every dump in one call (usd-core loads once): each
+/// dump's summary must say OK.
+fn check_dumps(py: &Path, dumps: &[PathBuf]) {
+    let out = Command::new(py)
+        .arg(repo().join("tools/check_skinning.py"))
+        .args(dumps)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "check_skinning.py exit {:?}\n{text}\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let ok = text
+        .lines()
+        .filter(|l| l.starts_with("max deviation") && l.ends_with(": OK"))
+        .count();
+    assert_eq!(ok, dumps.len(), "{text}");
 }
 
 #[test]
@@ -545,13 +559,15 @@ fn lbs_and_dqs_match_usdskel_on_every_shared_rig_under_random_poses() {
         return;
     };
     let dir = scratch();
+    let mut dumps = Vec::new();
     let mut seed = 520;
     for (label, mesh, skel, att) in PINOCCHIO_RIGS {
         seed += 1;
         let (Some(mesh), Some(skel), Some(att)) = (corpus(mesh), corpus(skel), corpus(att)) else {
             continue;
         };
-        check_rig(&py, &[s(&mesh), s(&skel), s(&att)], seed, dir.path(), label);
+        let input = [s(&mesh), s(&skel), s(&att)];
+        dumps.extend(posed_dumps(&input, seed, dir.path(), label));
     }
     for rel in [
         "2_csci520_ik_skinning/tydia/armadillo",
@@ -563,14 +579,10 @@ fn lbs_and_dqs_match_usdskel_on_every_shared_rig_under_random_poses() {
             continue;
         };
         let tag = rel.replace('/', "_");
-        check_rig(&py, &[s(&folder)], seed, dir.path(), &tag);
+        dumps.extend(posed_dumps(&[s(&folder)], seed, dir.path(), &tag));
     }
     let demo = crate::common::demo_outputs();
-    check_rig(
-        &py,
-        &[s(&demo.join("demo.glb"))],
-        seed + 1,
-        dir.path(),
-        "demo",
-    );
+    let glb = demo.join("demo.glb");
+    dumps.extend(posed_dumps(&[s(&glb)], seed + 1, dir.path(), "demo"));
+    check_dumps(&py, &dumps);
 }

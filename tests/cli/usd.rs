@@ -35,6 +35,51 @@ pub fn check_usd(python: &Path, usda: &Path, against: Option<&Path>) -> (bool, S
     (out.status.success(), text)
 }
 
+/// Runs tools/check_usd.py on each (file, dump) in one Python process (`--batch`: usd-core
+/// loads once); returns each job's (success, output), in order.
+pub fn check_usd_all(python: &Path, jobs: &[(PathBuf, Option<PathBuf>)]) -> Vec<(bool, String)> {
+    let argv: Vec<Vec<String>> = jobs
+        .iter()
+        .map(|(usd, dump)| {
+            let mut a = vec![usd.display().to_string()];
+            if let Some(d) = dump {
+                a.extend(["--against".to_string(), d.display().to_string()]);
+            }
+            a
+        })
+        .collect();
+    let list = tempfile::NamedTempFile::new().expect("a jobs file");
+    std::fs::write(list.path(), serde_json::to_string(&argv).unwrap()).unwrap();
+    let out = Command::new(python)
+        .arg(repo().join("tools/check_usd.py"))
+        .arg("--batch")
+        .arg(list.path())
+        .output()
+        .expect("python runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let mut results = Vec::new();
+    let mut text = String::new();
+    for line in stdout.lines() {
+        if line.starts_with("==> check_usd job ") {
+            text.clear();
+        } else if let Some(rest) = line.strip_prefix("<== check_usd job ") {
+            let rc = rest.rsplit(' ').next().unwrap_or("?");
+            results.push((rc == "0", std::mem::take(&mut text)));
+        } else {
+            text.push_str(line);
+            text.push('\n');
+        }
+    }
+    assert_eq!(
+        results.len(),
+        jobs.len(),
+        "check_usd.py --batch ended early ({:?}):\n{stdout}\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    results
+}
+
 /// One corpus asset as `rigport` arguments, or `None` when its files are absent.
 fn assets() -> Vec<(String, Vec<PathBuf>)> {
     let mut out = Vec::new();
@@ -110,6 +155,8 @@ fn corpus_assets_export_to_usd_that_usdskel_evaluates_like_rigport() {
     }
     let dir = scratch();
     let mut failures = Vec::new();
+    let mut jobs = Vec::new();
+    let mut labels = Vec::new();
     for (label, inputs) in &assets {
         let args: Vec<&str> = inputs.iter().map(|p| s(p)).collect();
         for method in ["lbs", "dqs"] {
@@ -123,16 +170,19 @@ fn corpus_assets_export_to_usd_that_usdskel_evaluates_like_rigport() {
             eval.extend(&args);
             eval.extend(["--skinning", method, "--out", s(&dump), "--quiet"]);
             rigport_ok(&eval);
-            let (ok, text) = check_usd(&py, &usda, Some(&dump));
-            let summary: Vec<&str> = text
-                .lines()
-                .filter(|l| l.contains("max") || l.contains("FAIL") || l.contains("error"))
-                .take(6)
-                .collect();
-            eprintln!("{label} {method}: {}", summary.join(" | "));
-            if !ok {
-                failures.push(format!("{label} ({method}):\n{text}"));
-            }
+            jobs.push((usda, Some(dump)));
+            labels.push(format!("{label} {method}"));
+        }
+    }
+    for (label, (ok, text)) in labels.iter().zip(check_usd_all(&py, &jobs)) {
+        let summary: Vec<&str> = text
+            .lines()
+            .filter(|l| l.contains("max") || l.contains("FAIL") || l.contains("error"))
+            .take(6)
+            .collect();
+        eprintln!("{label}: {}", summary.join(" | "));
+        if !ok {
+            failures.push(format!("{label}:\n{text}"));
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
