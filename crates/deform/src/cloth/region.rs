@@ -4,12 +4,15 @@
 //! A garment is modelled on the body at rest, and the parts it lies on or hangs beside
 //! there are the ones it is made to meet: a skirt's hips and thighs, a sleeve's arm. The
 //! bones above them carry it (a flag tied to a hand falls along the upper arm). Other
-//! parts swinging into it (a hand hanging beside a flared skirt on a walk) are left out
-//! unless [`ClothOptions::collide_all`](super::ClothOptions::collide_all) asks for the
-//! whole body: with them, the demo's skirt was pinched between hand and thigh on every
-//! stride of the corpus's cgspeed walk and tore to 140% stretch, while without them it
-//! stays under 5%. The measurements ([`FrameStats`](super::FrameStats)) look at the whole
-//! body either way, so a hand that goes deep into a garment is still counted.
+//! parts swinging into it (a hand hanging beside a flared skirt on a walk) do not keep
+//! the garment a thickness away, unless
+//! [`ClothOptions::collide_all`](super::ClothOptions::collide_all) asks for the whole
+//! body: with them as full colliders, the demo's skirt was pinched between hand and thigh
+//! on every stride of the corpus's cgspeed walk and tore to 140% stretch. They push it
+//! softly instead (the solver's `collide_others`): a particle deeper in them than 3/4 of
+//! the thickness goes half way back to that depth per substep, and half way between the
+//! hand and the hip when pinched there. The measurements
+//! ([`FrameStats`](super::FrameStats)) look at the whole body either way.
 //!
 //! A joint is near when a skinned vertex whose heaviest joint it is lies inside the
 //! garment's rest bounding box grown by [`NEAR`] of the body's diagonal. The garment

@@ -437,6 +437,16 @@ pub fn simulate(
     // The whole body (normals, measurements) and the parts the garment collides with.
     let whole_template = Surface::new(&body.bind, &body.triangles);
     let surface_template = Surface::new(&body.bind, &collide_triangles);
+    // The rest of the body: a particle inside it goes onto its skin (a hand swinging into
+    // a skirt pushes the cloth), half way when pinched against the parts above.
+    let other_triangles: Vec<[u32; 3]> = body
+        .triangles
+        .iter()
+        .copied()
+        .filter(|t| !t.iter().any(|&i| collides_with(body.heaviest[i as usize])))
+        .collect();
+    let others_template = (!other_triangles.is_empty())
+        .then(|| Surface::new(&body.bind, &other_triangles).inside_as(&whole_template));
     let joints = asset.skeleton.len();
     let eval_frame = |m: Moment| -> Result<FrameBody, ClothError> {
         let mut pose = rest.clone();
@@ -480,6 +490,7 @@ pub fn simulate(
     }
     let mut stepper = Stepper {
         surface: surface_template.clone(),
+        others: others_template.clone(),
         collisions: opts.collisions,
         reach: thickness.max(SURFACE_REACH * diagonal),
         substeps,
@@ -631,6 +642,8 @@ pub fn simulate(
 struct Stepper {
     /// The body surface's tree (boxes around the frame being stepped).
     surface: Surface,
+    /// The rest of the body's (see `Collider::others`).
+    others: Option<Surface>,
     collisions: bool,
     /// How far below the thickness the surface pushes ([`SURFACE_REACH`]).
     reach: f32,
@@ -648,11 +661,18 @@ impl Stepper {
             solver.x[p as usize] = t.as_dvec3();
         }
         self.surface.refit(&fb.skinned, &fb.skinned);
+        if let Some(o) = &mut self.others {
+            o.refit(&fb.skinned, &fb.skinned);
+        }
+        let posed = Posed::at(&fb.skinned, &fb.normals);
         let collider = Collider {
             capsules: &fb.capsules,
-            surface: self
-                .collisions
-                .then(|| (&self.surface, Posed::at(&fb.skinned, &fb.normals))),
+            surface: self.collisions.then_some((&self.surface, posed)),
+            others: self
+                .others
+                .as_ref()
+                .filter(|_| self.collisions)
+                .map(|o| (o, posed)),
             // Anywhere inside: the garment may start deep in the body.
             reach: f32::INFINITY,
         };
@@ -672,6 +692,9 @@ impl Stepper {
         settle: bool,
     ) {
         self.surface.refit(&prev.skinned, &cur.skinned);
+        if let Some(o) = &mut self.others {
+            o.refit(&prev.skinned, &cur.skinned);
+        }
         let h = span / f64::from(self.substeps);
         for s in 1..=self.substeps {
             let a = f64::from(s) / f64::from(self.substeps);
@@ -703,6 +726,11 @@ impl Stepper {
             let collider = Collider {
                 capsules: &self.caps,
                 surface: self.collisions.then_some((&self.surface, posed)),
+                others: self
+                    .others
+                    .as_ref()
+                    .filter(|_| self.collisions)
+                    .map(|o| (o, posed)),
                 reach: self.reach,
             };
             solver.substep(h, params, &self.pin_targets, &collider);

@@ -26,6 +26,10 @@ pub(crate) struct Collider<'a> {
     pub(crate) capsules: &'a [Capsule],
     /// The skinned body surface at the substep's time, when collisions are on.
     pub(crate) surface: Option<(&'a Surface, Posed<'a>)>,
+    /// The rest of the body (the parts the garment is not made to meet, such as a hand
+    /// swinging beside a skirt), at the same time: a particle inside it goes onto its skin,
+    /// or half way when the skin it would go onto lies within the gap of `surface`.
+    pub(crate) others: Option<(&'a Surface, Posed<'a>)>,
     /// How far beyond the thickness a particle may be and still be pushed out of the
     /// surface (how deep below it the surface search reaches).
     pub(crate) reach: f32,
@@ -290,6 +294,15 @@ impl Solver {
                     0.0
                 };
                 self.collide_surface(i, surface, posed, gap, collider);
+                if let Some((others, posed_others)) = &collider.others {
+                    self.collide_others(
+                        i,
+                        others,
+                        posed_others,
+                        (surface, posed),
+                        (gap, thickness),
+                    );
+                }
             }
         }
         self.faces.push(
@@ -336,6 +349,54 @@ impl Solver {
         self.x[i] = target;
     }
 }
+
+impl Solver {
+    /// Moves particle `i`, when it is more than [`OTHERS_ALLOW`] of the `thickness` deep in
+    /// another part of the body (`others`, searched twice the thickness deep: deeper, the
+    /// nearest skin may be the far side of a hand), [`OTHERS_SHARE`] of the way back to
+    /// that depth. When that point is within `gap` of a part the garment lies on (`near`:
+    /// cloth between a hand and a hip) the goal is half way between the two instead, as in
+    /// [`Solver::collide_surface`]'s pinch.
+    fn collide_others(
+        &mut self,
+        i: usize,
+        others: &Surface,
+        posed: &Posed<'_>,
+        near: (&Surface, &Posed<'_>),
+        (gap, thickness): (f64, f64),
+    ) {
+        // Twice the thickness deep at most (the start's reach is unbounded, and a part's
+        // cut edges make far points look inside).
+        let reach = (2.0 * thickness) as f32;
+        let Some(hit) = others.nearest(posed, self.x[i].as_vec3(), reach) else {
+            return;
+        };
+        let allow = OTHERS_ALLOW * thickness;
+        if f64::from(hit.signed) >= -allow {
+            return;
+        }
+        let out = hit.out.as_dvec3();
+        let onto = hit.point.as_dvec3() - out * allow;
+        self.contact[i] = out;
+        let pinch = near
+            .0
+            .nearest_closed(near.1, onto.as_vec3(), gap.max(0.0) as f32)
+            .filter(|n| f64::from(n.signed) < gap && n.out.dot(hit.out) < 0.0);
+        let goal = match pinch {
+            Some(n) => (onto + n.point.as_dvec3()) * 0.5,
+            None => onto,
+        };
+        self.x[i] = self.x[i].lerp(goal, OTHERS_SHARE);
+    }
+}
+
+/// How deep inside a part of the body it is not made to meet (a hand) a particle may be,
+/// as a fraction of the thickness, before the part pushes it.
+const OTHERS_ALLOW: f64 = 0.75;
+
+/// The share of the way to the allowed depth a particle in another part goes per substep:
+/// the rest is left to the next substeps, so the cloth's edges spread the push.
+const OTHERS_SHARE: f64 = 0.5;
 
 /// How far from the body surface a particle is kept, per unit of its distance along the
 /// garment from the nearest pin, at most (the thickness caps it). A pin sits on the skin;
@@ -443,6 +504,7 @@ mod tests {
             iterations: 1,
         };
         let none = Collider {
+            others: None,
             capsules: &[],
             surface: None,
             reach: 0.0,

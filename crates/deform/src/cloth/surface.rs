@@ -144,6 +144,15 @@ impl Surface {
         s
     }
 
+    /// This surface, a part of `whole` (some of its triangles), with the whole's inside:
+    /// a part cut out of a closed body has edges with one triangle, yet a point deep in a
+    /// hand is inside the body.
+    pub(crate) fn inside_as(mut self, whole: &Surface) -> Self {
+        self.outward = whole.outward;
+        self.closed = whole.closed;
+        self
+    }
+
     /// Fits every box around the triangles at `from` and at `to` (same vertex count).
     pub(crate) fn refit(&mut self, from: &[Vec3], to: &[Vec3]) {
         let vertex = |p: &[Vec3], v: u32| p.get(v as usize).copied().unwrap_or(Vec3::ZERO);
@@ -211,6 +220,17 @@ impl Surface {
     /// The nearest point of the surface `posed` to `p` no farther than `max` (the boxes
     /// must hold `posed`: [`Surface::refit`] to its frame). `None` without one.
     pub(crate) fn nearest(&self, posed: &Posed<'_>, p: Vec3, max: f32) -> Option<Nearest> {
+        self.nearest_with(posed, p, max, self.closed)
+    }
+
+    /// [`Surface::nearest`] with an inside as if the surface were closed: for a part of a
+    /// closed body (its own cut edges make it open), where a point past the part's skin is
+    /// inside the body.
+    pub(crate) fn nearest_closed(&self, posed: &Posed<'_>, p: Vec3, max: f32) -> Option<Nearest> {
+        self.nearest_with(posed, p, max, true)
+    }
+
+    fn nearest_with(&self, posed: &Posed<'_>, p: Vec3, max: f32, closed: bool) -> Option<Nearest> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -243,7 +263,7 @@ impl Surface {
                 top += 2;
             }
         }
-        self.finish(posed, p, best)
+        self.finish(posed, p, best, closed)
     }
 
     /// The signed hit of the best triangle found.
@@ -252,6 +272,7 @@ impl Surface {
         posed: &Posed<'_>,
         p: Vec3,
         best: Option<(u32, [f32; 3], Vec3)>,
+        closed: bool,
     ) -> Option<Nearest> {
         let (t, w, q) = best?;
         let tri = self.triangles[t as usize];
@@ -271,7 +292,7 @@ impl Surface {
         let d = p - q;
         let len = d.length();
         // An open surface (a sheet) has no inside: a point is off it on either side.
-        let inside = self.closed && d.dot(n) < 0.0;
+        let inside = closed && d.dot(n) < 0.0;
         let out = if len > 1e-7 * (1.0 + q.abs().max_element()) {
             if inside {
                 -d / len
@@ -422,6 +443,16 @@ mod tests {
                 .nearest(&posed, Vec3::new(0.5, 0.5, 0.9), 10.0)
                 .unwrap();
             assert!(hit.signed > 0.0, "{hit:?}");
+            // As a part of the closed box, it has the box's inside, near its own faces.
+            let part = Surface::new(&p, &t[..10]).inside_as(&s);
+            let hit = part
+                .nearest(&posed, Vec3::new(0.5, 0.5, 0.1), 10.0)
+                .unwrap();
+            assert!((hit.signed + 0.1).abs() < 1e-6, "{hit:?}");
+            let hit = open
+                .nearest_closed(&posed, Vec3::new(0.5, 0.5, 0.1), 10.0)
+                .unwrap();
+            assert!((hit.signed + 0.1).abs() < 1e-6, "{hit:?}");
         }
     }
 
