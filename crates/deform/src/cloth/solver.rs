@@ -481,6 +481,71 @@ fn project(x: &mut [Vec3], w: &[f64], constraints: &[Distance], alpha: f64) {
 mod tests {
     use super::*;
 
+    /// Two unit boxes side by side along x: the body part a garment lies on (`near`, x in
+    /// 0..1) and another (`others`, from `x0`), as one closed body's parts.
+    fn two_parts(x0: f32) -> (Vec<glam::Vec3>, Vec<glam::Vec3>, Surface, Surface) {
+        let corner = |k: u32, dx: f32| {
+            glam::Vec3::new(
+                (k & 1) as f32 + dx,
+                ((k >> 1) & 1) as f32,
+                ((k >> 2) & 1) as f32,
+            )
+        };
+        let mut p: Vec<glam::Vec3> = (0..8).map(|k| corner(k, 0.0)).collect();
+        p.extend((0..8).map(|k| corner(k, x0)));
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let box_triangles = |o: u32| -> Vec<[u32; 3]> {
+            quads
+                .iter()
+                .flat_map(|&[a, b, c, d]| [[a + o, b + o, c + o], [a + o, c + o, d + o]])
+                .collect()
+        };
+        let (a, b) = (box_triangles(0), box_triangles(8));
+        let whole = Surface::new(&p, &[a.clone(), b.clone()].concat());
+        let mut normals = Vec::new();
+        whole.normals(&p, &mut normals);
+        let near = Surface::new(&p, &a);
+        let others = Surface::new(&p, &b).inside_as(&whole);
+        (p, normals, near, others)
+    }
+
+    /// A particle at `x` (y = z = 0.5) after one push of `others` (thickness 0.2, so it
+    /// may be 0.15 deep; `gap` from `near`).
+    fn pushed(x0: f32, x: f64, gap: f64) -> f64 {
+        let (p, normals, near, others) = two_parts(x0);
+        let posed = Posed::at(&p, &normals);
+        let mut solver = Solver::new(&[glam::Vec3::new(x as f32, 0.5, 0.5)], &[], &[]);
+        solver.collide_others(0, &others, &posed, (&near, &posed), (gap, 0.2));
+        let at = solver.x[0];
+        assert!(
+            (at.y - 0.5).abs() < 1e-6 && (at.z - 0.5).abs() < 1e-6,
+            "{at}"
+        );
+        at.x
+    }
+
+    #[test]
+    fn another_part_pushes_only_past_the_allowed_depth_and_halves_a_pinch() {
+        // 0.1 inside the other box (at 1.2): within 3/4 of the thickness, left alone.
+        assert!((pushed(1.2, 1.3, 0.2) - 1.3).abs() < 1e-6);
+        // 0.25 inside: half way back to 0.15 deep (1.35).
+        assert!((pushed(1.2, 1.45, 0.2) - 1.4).abs() < 1e-6);
+        // The other box at 1.05: 0.15 deep is 0.2 from the near box, within its gap of
+        // 0.3, so the goal is half way between the near skin (1.0) and that point (1.2).
+        assert!((pushed(1.05, 1.3, 0.3) - 1.2).abs() < 1e-6);
+        // With a gap of 0.1 there is no pinch: half way to 1.2.
+        assert!((pushed(1.05, 1.3, 0.1) - 1.25).abs() < 1e-6);
+        // Deeper than twice the thickness (0.45 in a box 1 wide): out of reach.
+        assert!((pushed(1.05, 1.5, 0.1) - 1.5).abs() < 1e-6);
+    }
+
     #[test]
     fn topology_of_a_quad() {
         let (edges, bends) = topology(&[[0, 1, 2], [2, 1, 3]]);
