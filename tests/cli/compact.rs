@@ -342,3 +342,63 @@ fn gltf_samples_never_grow() {
         }
     }
 }
+
+/// rigport plays what it writes (issue 28): the reduced glb with its mesh quantized
+/// (`KHR_mesh_quantization`, required) is read back by `rigport eval`, and its skinned
+/// points are within the reduction's bound of the unreduced file's, frame by frame.
+#[test]
+fn eval_reads_the_quantized_compact_glb_within_the_bound() {
+    let Some(clips) = corpus_clips() else {
+        return;
+    };
+    let (label, args) = clips
+        .iter()
+        .find(|(l, _)| l.contains("kick"))
+        .unwrap_or(&clips[0]);
+    let dir = common::scratch();
+    let at = |n: &str| dir.path().join(n);
+    convert(args, &at("plain.glb"), &[]);
+    let report = convert(args, &at("reduced.glb"), &["--reduce-tolerance"]);
+    let required = gltf_json(&at("reduced.glb"))["extensionsRequired"].clone();
+    assert!(
+        required
+            .as_array()
+            .is_some_and(|r| r.iter().any(|e| e == "KHR_mesh_quantization")),
+        "{label}: {required}"
+    );
+    // The bound in the glb's metres.
+    let bound = report["tolerance"].as_f64().expect("tolerance")
+        * report["meters_per_unit"].as_f64().expect("unit");
+    let mut points = Vec::new();
+    for name in ["plain", "reduced"] {
+        let dump = at(&format!("{name}.npz"));
+        common::rigport_ok(&[
+            "eval",
+            at(&format!("{name}.glb")).to_str().unwrap(),
+            "--out",
+            dump.to_str().unwrap(),
+            "-q",
+        ]);
+        points.push(
+            common::read_npz(&dump)
+                .remove("positions")
+                .expect("positions"),
+        );
+    }
+    let (a, b) = (&points[0], &points[1]);
+    assert_eq!(a.shape, b.shape, "{label}");
+    let worst = a
+        .numbers
+        .chunks(3)
+        .zip(b.numbers.chunks(3))
+        .map(|(p, q)| {
+            p.iter()
+                .zip(q)
+                .map(|(x, y)| (x - y) * (x - y))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0f64, f64::max);
+    eprintln!("{label}: eval of the quantized glb is {worst:e} from the plain one (bound {bound})");
+    assert!(worst <= bound * 1.0001, "{label}: {worst} > {bound}");
+}

@@ -1,7 +1,7 @@
 //! Accessors: range checks before every read (glTF 2.0 §3.6), and typed readers.
 
 use ::gltf::accessor::{DataType, Dimensions};
-use ::gltf::mesh::util::{ReadIndices, ReadJoints, ReadTexCoords, ReadWeights};
+use ::gltf::mesh::util::{ReadIndices, ReadJoints, ReadWeights};
 use rigport_model::glam::{Vec2, Vec3};
 
 use crate::ImportError;
@@ -48,7 +48,63 @@ pub(super) const FLOAT_OR_NORM: &[DataType] = &[
     DataType::U16,
 ];
 
+/// Any component type: `KHR_mesh_quantization` lets mesh attributes (positions, normals,
+/// texture coordinates, morph target deltas) be 8- or 16-bit integers, normalized or not.
+const QUANTIZED: &[DataType] = &[
+    DataType::F32,
+    DataType::I8,
+    DataType::U8,
+    DataType::I16,
+    DataType::U16,
+];
+
 impl<'a> Importer<'a> {
+    /// Whether the file uses `KHR_mesh_quantization` (integer mesh attributes).
+    fn quantized(&self) -> bool {
+        self.doc
+            .extensions_used()
+            .any(|e| e == "KHR_mesh_quantization")
+    }
+
+    /// The elements of a `N`-component accessor of any component type, as floats: a
+    /// normalized integer as glTF 2.0 (3.11, "Animations" and 3.6.2.2) maps it (`c / 127`
+    /// at least -1, `c / 255`, `c / 32767` at least -1, `c / 65535`), any other integer as
+    /// its value.
+    fn floats<const N: usize>(
+        &self,
+        acc: &::gltf::Accessor<'a>,
+        at: &str,
+    ) -> Result<Vec<[f32; N]>, ImportError>
+    where
+        [i8; N]: ::gltf::accessor::Item,
+        [u8; N]: ::gltf::accessor::Item,
+        [i16; N]: ::gltf::accessor::Item,
+        [u16; N]: ::gltf::accessor::Item,
+        [f32; N]: ::gltf::accessor::Item,
+    {
+        let norm = acc.normalized();
+        let scale = |max: f32, c: f32| if norm { (c / max).max(-1.0) } else { c };
+        Ok(match acc.data_type() {
+            DataType::I8 => self
+                .iter::<[i8; N]>(acc, at)?
+                .map(|v| v.map(|c| scale(127.0, f32::from(c))))
+                .collect(),
+            DataType::U8 => self
+                .iter::<[u8; N]>(acc, at)?
+                .map(|v| v.map(|c| scale(255.0, f32::from(c))))
+                .collect(),
+            DataType::I16 => self
+                .iter::<[i16; N]>(acc, at)?
+                .map(|v| v.map(|c| scale(32767.0, f32::from(c))))
+                .collect(),
+            DataType::U16 => self
+                .iter::<[u16; N]>(acc, at)?
+                .map(|v| v.map(|c| scale(65535.0, f32::from(c))))
+                .collect(),
+            _ => self.iter::<[f32; N]>(acc, at)?.collect(),
+        })
+    }
+
     /// Checks everything the `gltf` readers assume: element type, count, and that every
     /// byte read lies inside its buffer view and buffer. Returns the element count.
     pub(super) fn check(
@@ -202,11 +258,16 @@ impl<'a> Importer<'a> {
         acc: &::gltf::Accessor<'a>,
         at: &str,
     ) -> Result<Vec<Vec3>, ImportError> {
-        let count = self.check(acc, Dimensions::Vec3, FLOAT, at)?;
+        let types = if self.quantized() { QUANTIZED } else { FLOAT };
+        let count = self.check(acc, Dimensions::Vec3, types, at)?;
         if Self::zero_filled(acc) {
             return Ok(vec![Vec3::ZERO; count]);
         }
-        let values: Vec<Vec3> = self.iter::<[f32; 3]>(acc, at)?.map(Vec3::from).collect();
+        let values: Vec<Vec3> = self
+            .floats::<3>(acc, at)?
+            .into_iter()
+            .map(Vec3::from)
+            .collect();
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
             return Err(self.err(at, format!("element {k} is not finite: {}", values[k])));
         }
@@ -230,16 +291,20 @@ impl<'a> Importer<'a> {
         acc: &::gltf::Accessor<'a>,
         at: &str,
     ) -> Result<Vec<Vec2>, ImportError> {
-        let count = self.check(acc, Dimensions::Vec2, FLOAT_OR_UNORM, at)?;
+        let types = if self.quantized() {
+            QUANTIZED
+        } else {
+            FLOAT_OR_UNORM
+        };
+        let count = self.check(acc, Dimensions::Vec2, types, at)?;
         if Self::zero_filled(acc) {
             return Ok(vec![Vec2::ZERO; count]);
         }
-        let read = match acc.data_type() {
-            DataType::U8 => ReadTexCoords::U8(self.iter(acc, at)?),
-            DataType::U16 => ReadTexCoords::U16(self.iter(acc, at)?),
-            _ => ReadTexCoords::F32(self.iter(acc, at)?),
-        };
-        let values: Vec<Vec2> = read.into_f32().map(Vec2::from).collect();
+        let values: Vec<Vec2> = self
+            .floats::<2>(acc, at)?
+            .into_iter()
+            .map(Vec2::from)
+            .collect();
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
             return Err(self.err(at, format!("element {k} is not finite: {}", values[k])));
         }

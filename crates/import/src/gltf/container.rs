@@ -262,6 +262,10 @@ pub(super) fn parse_document(
         ]
         .iter()
         .any(|prefix| value.is_some_and(|v| v.starts_with(prefix)));
+        if error == SchemaError::Unsupported && value == Some("KHR_mesh_quantization") {
+            // Read: integer mesh attributes are decoded (`accessor.rs`).
+            continue;
+        }
         if error == SchemaError::Unsupported && material_only {
             warnings.push(Warning::Incomplete {
                 location: Location::json(path, json_pointer(at_path)).to_string(),
