@@ -344,10 +344,11 @@ fn gltf_samples_never_grow() {
 }
 
 /// rigport plays what it writes (issue 28): the reduced glb with its mesh quantized
-/// (`KHR_mesh_quantization`, required) is read back by `rigport eval`, and its skinned
-/// points are within the reduction's bound of the unreduced file's, frame by frame.
+/// (`KHR_mesh_quantization`, required), and the one with `EXT_meshopt_compression`
+/// (required: its views are decoded on import), are read back by `rigport eval`, and their
+/// skinned points are within the reduction's bound of the unreduced file's, frame by frame.
 #[test]
-fn eval_reads_the_quantized_compact_glb_within_the_bound() {
+fn eval_reads_the_quantized_and_meshopt_compact_glb_within_the_bound() {
     let Some(clips) = corpus_clips() else {
         return;
     };
@@ -358,19 +359,7 @@ fn eval_reads_the_quantized_compact_glb_within_the_bound() {
     let dir = common::scratch();
     let at = |n: &str| dir.path().join(n);
     convert(args, &at("plain.glb"), &[]);
-    let report = convert(args, &at("reduced.glb"), &["--reduce-tolerance"]);
-    let required = gltf_json(&at("reduced.glb"))["extensionsRequired"].clone();
-    assert!(
-        required
-            .as_array()
-            .is_some_and(|r| r.iter().any(|e| e == "KHR_mesh_quantization")),
-        "{label}: {required}"
-    );
-    // The bound in the glb's metres.
-    let bound = report["tolerance"].as_f64().expect("tolerance")
-        * report["meters_per_unit"].as_f64().expect("unit");
-    let mut points = Vec::new();
-    for name in ["plain", "reduced"] {
+    let evaluate = |name: &str| {
         let dump = at(&format!("{name}.npz"));
         common::rigport_ok(&[
             "eval",
@@ -379,26 +368,49 @@ fn eval_reads_the_quantized_compact_glb_within_the_bound() {
             dump.to_str().unwrap(),
             "-q",
         ]);
-        points.push(
-            common::read_npz(&dump)
-                .remove("positions")
-                .expect("positions"),
+        common::read_npz(&dump)
+            .remove("positions")
+            .expect("positions")
+    };
+    let plain = evaluate("plain");
+    for (name, flags, extension) in [
+        (
+            "reduced",
+            &["--reduce-tolerance"][..],
+            "KHR_mesh_quantization",
+        ),
+        (
+            "meshopt",
+            &["--compress", "meshopt"][..],
+            "EXT_meshopt_compression",
+        ),
+    ] {
+        let report = convert(args, &at(&format!("{name}.glb")), flags);
+        let required = gltf_json(&at(&format!("{name}.glb")))["extensionsRequired"].clone();
+        assert!(
+            required
+                .as_array()
+                .is_some_and(|r| r.iter().any(|e| e == extension)),
+            "{label} {name}: {required}"
         );
+        // The bound in the glb's metres.
+        let bound = report["tolerance"].as_f64().expect("tolerance")
+            * report["meters_per_unit"].as_f64().expect("unit");
+        let played = evaluate(name);
+        assert_eq!(plain.shape, played.shape, "{label} {name}");
+        let worst = plain
+            .numbers
+            .chunks(3)
+            .zip(played.numbers.chunks(3))
+            .map(|(p, q)| {
+                p.iter()
+                    .zip(q)
+                    .map(|(x, y)| (x - y) * (x - y))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .fold(0.0f64, f64::max);
+        eprintln!("{label} {name}: eval is {worst:e} from the plain glb (bound {bound})");
+        assert!(worst <= bound * 1.0001, "{label} {name}: {worst} > {bound}");
     }
-    let (a, b) = (&points[0], &points[1]);
-    assert_eq!(a.shape, b.shape, "{label}");
-    let worst = a
-        .numbers
-        .chunks(3)
-        .zip(b.numbers.chunks(3))
-        .map(|(p, q)| {
-            p.iter()
-                .zip(q)
-                .map(|(x, y)| (x - y) * (x - y))
-                .sum::<f64>()
-                .sqrt()
-        })
-        .fold(0.0f64, f64::max);
-    eprintln!("{label}: eval of the quantized glb is {worst:e} from the plain one (bound {bound})");
-    assert!(worst <= bound * 1.0001, "{label}: {worst} > {bound}");
 }

@@ -2,6 +2,8 @@
 //! the buffers (the GLB `BIN` chunk, external files, `data:` URIs).
 
 use std::borrow::Cow;
+
+use super::ext_meshopt::Meshopt;
 use std::path::{Path, PathBuf};
 
 use ::gltf::Semantic;
@@ -262,8 +264,11 @@ pub(super) fn parse_document(
         ]
         .iter()
         .any(|prefix| value.is_some_and(|v| v.starts_with(prefix)));
-        if error == SchemaError::Unsupported && value == Some("KHR_mesh_quantization") {
-            // Read: integer mesh attributes are decoded (`accessor.rs`).
+        if error == SchemaError::Unsupported
+            && (value == Some("KHR_mesh_quantization") || value == Some("EXT_meshopt_compression"))
+        {
+            // Read: integer mesh attributes are decoded (`accessor.rs`), compressed views
+            // decoded into their buffers (`ext_meshopt.rs`).
             continue;
         }
         if error == SchemaError::Unsupported && material_only {
@@ -286,7 +291,9 @@ pub(super) fn parse_document(
         .iter()
         .map(String::as_str)
         .filter(|e| {
-            *e != "KHR_mesh_quantization" && !root.extensions_required.iter().any(|r| r == e)
+            *e != "KHR_mesh_quantization"
+                && *e != "EXT_meshopt_compression"
+                && !root.extensions_required.iter().any(|r| r == e)
         })
         .collect();
     if !unread.is_empty() {
@@ -417,14 +424,34 @@ pub(super) fn read_uri(
     std::fs::read(&file).map_err(|error| err(Uri::File { what, file, error }))
 }
 
+/// Largest `EXT_meshopt_compression` fallback buffer decoded (256 MiB, as for zero-filled
+/// accessors: its size is not bounded by the file's bytes).
+const MAX_FALLBACK_BYTES: usize = 1 << 28;
+
 pub(super) fn load_buffers<'b>(
     doc: &::gltf::Document,
     mut blob: Option<&'b [u8]>,
     path: &Path,
+    meshopt: &Meshopt,
 ) -> Result<Vec<Cow<'b, [u8]>>, ImportError> {
     let mut out = Vec::new();
     for buffer in doc.buffers() {
         let at = format!("/buffers/{}", buffer.index());
+        if meshopt.is_fallback(buffer.index()) {
+            // Filled by decoding (`ext_meshopt.rs`); its length is not bounded by the file's
+            // bytes, so it is capped as zero-filled accessors are.
+            if buffer.length() > MAX_FALLBACK_BYTES {
+                return Err(ImportError::invalid(
+                    Location::json(path, format!("{at}/byteLength")),
+                    format!(
+                        "a fallback buffer of {} bytes; rigport decodes at most {MAX_FALLBACK_BYTES}",
+                        buffer.length()
+                    ),
+                ));
+            }
+            out.push(Cow::Owned(vec![0; buffer.length()]));
+            continue;
+        }
         let data: Cow<'b, [u8]> = match buffer.source() {
             ::gltf::buffer::Source::Bin => Cow::Borrowed(
                 blob.take()

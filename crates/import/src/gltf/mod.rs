@@ -27,6 +27,7 @@
 mod accessor;
 mod animation;
 mod container;
+mod ext_meshopt;
 mod importer;
 mod material;
 mod mesh;
@@ -45,6 +46,7 @@ use rigport_model::{Asset, Mesh, MeshIndex, SkinBinding};
 use crate::{read_file, ImportError, Imported, Location, Problem};
 
 use self::container::{load_buffers, parse_document, split_glb};
+use self::ext_meshopt::Meshopt;
 use self::importer::Importer;
 use self::nodes::SceneNodes;
 use self::skin::SkinData;
@@ -83,7 +85,20 @@ pub fn import_slice(bytes: &[u8], path: &Path) -> Result<Imported, ImportError> 
         (bytes, None)
     };
     let document = parse_document(json, path, is_glb, &mut warnings)?;
-    let buffers = load_buffers(&document, blob, path)?;
+    let fault =
+        |(at, message): ext_meshopt::Fault| ImportError::invalid(Location::json(path, at), message);
+    let meshopt = if document
+        .extensions_used()
+        .any(|e| e == "EXT_meshopt_compression")
+    {
+        // The JSON parsed above: it is valid, only the extension's fields are read here.
+        let value: serde_json::Value = serde_json::from_slice(json).unwrap_or_default();
+        Meshopt::of(&value).map_err(fault)?
+    } else {
+        Meshopt::default()
+    };
+    let mut buffers = load_buffers(&document, blob, path, &meshopt)?;
+    meshopt.decode(&mut buffers).map_err(fault)?;
     let mut importer = Importer {
         path,
         doc: &document,
