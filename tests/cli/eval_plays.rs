@@ -276,10 +276,29 @@ fn every_kind_of_output_plays_in_eval_as_in_the_viewers() {
                 "0.5".into(),
             ],
         ),
+        // Compact clips: reduced keys, the mesh quantized (`KHR_mesh_quantization`), and
+        // `EXT_meshopt_compression` (three.js with its meshopt decoder).
+        (
+            "compact",
+            vec![
+                "convert".into(),
+                fixture("fixtures/bvh/mixed_orders.bvh"),
+                "--reduce-tolerance".into(),
+            ],
+        ),
+        (
+            "meshopt",
+            vec![
+                "convert".into(),
+                fixture("fixtures/bvh/mixed_orders.bvh"),
+                "--compress".into(),
+                "meshopt".into(),
+            ],
+        ),
     ];
     for (name, args) in &runs {
         let exts: &[&str] = match *name {
-            "dqs" => &["glb"],
+            "dqs" | "meshopt" => &["glb"],
             "dqs_declared" => &["usda"],
             _ => &["glb", "usda"],
         };

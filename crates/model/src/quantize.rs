@@ -9,16 +9,17 @@
 /// The largest magnitude of a `SHORT` normalized component.
 const SHORT_MAX: f64 = 32767.0;
 
-/// `q` (xyzw, any non-zero length) normalized in `f64` and rounded to the nearest 16-bit
-/// normalized component. Odd: `rotation_to_i16(-q) == -rotation_to_i16(q)` component by
+/// `q` (xyzw, any non-zero length) normalized in `f64` and rounded to 16-bit normalized
+/// components whose length is nearest 1 (see the body). Odd: `rotation_to_i16(-q) == -rotation_to_i16(q)` component by
 /// component, so flipping a key's sign after encoding equals encoding the flipped key.
 ///
 /// ```
 /// use rigport_model::quantize::{rotation_from_i16, rotation_to_i16};
 ///
 /// let q = [0.0, 0.6, 0.0, 0.8];
-/// assert_eq!(rotation_to_i16(q), [0, 19660, 0, 26214]);
-/// assert_eq!(rotation_to_i16([-0.0, -0.6, -0.0, -0.8]), [0, -19660, 0, -26214]);
+/// // Rounded, (0, 19660, 0, 26214) would be 1.2e-5 too long; this is 1e-9 off.
+/// assert_eq!(rotation_to_i16(q), [0, 19661, 0, 26213]);
+/// assert_eq!(rotation_to_i16([-0.0, -0.6, -0.0, -0.8]), [0, -19661, 0, -26213]);
 /// let back = rotation_from_i16(rotation_to_i16(q));
 /// assert!((back[1] - 0.6).abs() < 1.0 / 32767.0);
 /// ```
@@ -33,8 +34,37 @@ pub fn rotation_to_i16(q: [f32; 4]) -> [i16; 4] {
     } else {
         1.0
     };
-    // |c / len| <= 1, so the rounded value is within i16 (the cast saturates anyway).
-    q.map(|c| (f64::from(c) / len * SHORT_MAX).round() as i16)
+    // |c / len| <= 1, so the rounded values are within i16 (the casts saturate anyway).
+    let r = q.map(|c| f64::from(c) / len * SHORT_MAX);
+    // Readers compose the decoded quaternion as it is (three.js, as glTF's own sample
+    // viewer: a matrix from x, y, z, w without normalizing), and a length off 1 scales
+    // the joint by its square. So of the integers within one step of each rounded
+    // component (exact zeros kept), the one whose length is nearest 32767 is written, the
+    // nearest to `q` among equals. In magnitudes, signs restored: odd as promised.
+    let base = r.map(|x| x.abs().round());
+    let mut best = base;
+    let mut best_key = (f64::INFINITY, f64::INFINITY);
+    for k in 0..81u32 {
+        let mut c = base;
+        let mut valid = true;
+        for (i, ci) in c.iter_mut().enumerate() {
+            let step = f64::from((k / 3u32.pow(i as u32)) % 3) - 1.0;
+            if step != 0.0 && (r[i] == 0.0 || *ci + step < 0.0 || *ci + step > SHORT_MAX) {
+                valid = false;
+            }
+            *ci += step;
+        }
+        if !valid {
+            continue;
+        }
+        let length = (c.iter().map(|x| x * x).sum::<f64>() - SHORT_MAX * SHORT_MAX).abs();
+        let distance: f64 = c.iter().zip(&r).map(|(a, b)| (a - b.abs()).powi(2)).sum();
+        if (length, distance) < best_key {
+            best_key = (length, distance);
+            best = c;
+        }
+    }
+    std::array::from_fn(|i| (best[i].copysign(r[i])) as i16)
 }
 
 /// The rotation a reader decodes from 16-bit normalized components: `max(c / 32767, -1)`

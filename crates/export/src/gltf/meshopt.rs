@@ -32,10 +32,51 @@ const CODEC_VERSION: i32 = 0;
 /// assert!(near(1.0) || near(-1.0), "{q:?}");
 /// ```
 pub fn rotation_as_written(q: [f32; 4]) -> [f32; 4] {
-    let mut encoded = meshopt::encode_filter_quat(&[unit(q)], QUAT_BITS);
+    let mut encoded = [encode_rotation(q)];
     meshopt::decode_filter_quat(&mut encoded);
-    let [c] = encoded[..] else { return q };
-    rigport_model::quantize::rotation_from_i16(c)
+    rigport_model::quantize::rotation_from_i16(encoded[0])
+}
+
+/// The `QUATERNION` filter's encoding of `q`: of the encodings whose three stored
+/// components are within one step of the filter's own, the one that decodes to the 16-bit
+/// quaternion whose length is nearest 1 (nearest to `q` among equals). Readers compose the
+/// decoded quaternion without normalizing it (three.js), and a length off 1 scales the
+/// joint by its square (see `rigport_model::quantize::rotation_to_i16`).
+fn encode_rotation(q: [f32; 4]) -> [i16; 4] {
+    let u = unit(q);
+    let [first] = meshopt::encode_filter_quat(&[u], QUAT_BITS)[..] else {
+        return [0, 0, 0, 0];
+    };
+    let short_max = 32767.0f64;
+    let mut best = first;
+    let mut best_key = (f64::INFINITY, f64::INFINITY);
+    for k in 0..27i32 {
+        let mut c = first;
+        let mut valid = true;
+        for (i, ci) in c.iter_mut().take(3).enumerate() {
+            let step = (k / 3i32.pow(i as u32)) % 3 - 1;
+            let v = i32::from(*ci) + step;
+            if v.abs() > 32767 {
+                valid = false;
+            }
+            *ci = v.clamp(-32767, 32767) as i16;
+        }
+        if !valid {
+            continue;
+        }
+        let mut decoded = [c];
+        meshopt::decode_filter_quat(&mut decoded);
+        let d = decoded[0].map(f64::from);
+        let length = (d.iter().map(|x| x * x).sum::<f64>() - short_max * short_max).abs();
+        // Distance to `q` up to sign (the filter may flip it).
+        let dot: f64 = d.iter().zip(u).map(|(a, b)| a * f64::from(b)).sum();
+        let distance = short_max * short_max - dot.abs();
+        if (length, distance) < best_key {
+            best_key = (length, distance);
+            best = c;
+        }
+    }
+    best
 }
 
 /// A translation or scale key as a reader gets it back through the `EXPONENTIAL` filter.
@@ -118,11 +159,10 @@ fn encode(raw: &[u8], stride: usize) -> Vec<u8> {
 
 /// Filtered bytes of rotation keys (flat xyzw).
 pub(crate) fn quaternions(values: &[f32]) -> Vec<u8> {
-    let quats: Vec<[f32; 4]> = values
+    values
         .chunks_exact(4)
-        .map(|c| unit([c[0], c[1], c[2], c[3]]))
-        .collect();
-    meshopt::encode_filter_quat(&quats, QUAT_BITS)
+        .map(|c| encode_rotation([c[0], c[1], c[2], c[3]]))
+        .collect::<Vec<[i16; 4]>>()
         .iter()
         .flatten()
         .flat_map(|c| c.to_le_bytes())
