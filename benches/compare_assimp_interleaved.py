@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Peer comparison robust to machine drift: rigport vs Assimp, runs interleaved.
 
-    python3 benches/compare_assimp_interleaved.py [--case model1|bvh|asf] [--pairs N] [--bin target/dist/rigport]
+    python3 benches/compare_assimp_interleaved.py [--case model1|bvh|asf|fbx] [--pairs N]
+        [--bin target/dist/rigport] [--fbx FILE.fbx] [--assimp PATH]
 
 hyperfine (benches/compare_assimp.sh) times all runs of one command, then all of the other;
 on a shared VM the load drifts between the two blocks and the ratio swings (0.24x to 0.46x
@@ -14,6 +15,9 @@ Cases (inputs under ../shared/corpus):
   bvh     the largest corpus BVH (Bandai Namco kick, 443 KB) -> .glb; Assimp reads the BVH.
   asf     131-dance.asf + 131_04-dance.amc -> .glb; Assimp has no ASF/AMC reader, so its
           column times the BVH case instead and only rigport's median is meaningful.
+  fbx     --fbx FILE (issue 29: a Mixamo-size FBX, e.g. the one `tools/blender/make_fbx.py DIR
+          mixamo_bench` writes) -> .glb; Assimp reads the same FBX.
+--assimp picks the Assimp binary (default: `assimp` on PATH).
 Needs: the dist build of rigport (cargo build --profile dist) and `assimp` (Debian assimp-utils). Exit 2 if missing.
 """
 import argparse
@@ -32,8 +36,13 @@ KICK = os.path.join(CORPUS, "4_bvh/bandai_namco_ds1/dataset-1_kick_normal_001.bv
 DANCE = os.path.join(CORPUS, "3_acclaim_asf_amc/usc_csci520_mocapPlayer__shreyabhaumik")
 
 
-def case_files(case: str):
+def case_files(case: str, fbx: str | None):
     """(label, rigport inputs, assimp input) for a case."""
+    if case == "fbx":
+        if fbx is None:
+            raise SystemExit("--case fbx needs --fbx FILE")
+        size = os.path.getsize(fbx) / 1e6 if os.path.exists(fbx) else 0.0
+        return f"{os.path.basename(fbx)} ({size:.1f} MB)", [fbx], fbx
     if case == "model1":
         files = [os.path.join(MODEL, f) for f in ("Model1.obj", "skeleton.out", "attachment.out")]
         return "Model1", files, files[0]
@@ -48,22 +57,24 @@ def case_files(case: str):
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=120)
-    ap.add_argument("--case", default="model1", choices=["model1", "bvh", "asf"])
+    ap.add_argument("--case", default="model1", choices=["model1", "bvh", "asf", "fbx"])
     ap.add_argument("--bin", default=os.path.join(ROOT, "target/dist/rigport"))
+    ap.add_argument("--fbx", help="the FBX of --case fbx")
+    ap.add_argument("--assimp", default="assimp", help="the Assimp command (default: on PATH)")
     args = ap.parse_args()
     if not os.path.exists(args.bin):
         print(f"compare: {args.bin} missing: run cargo build --profile dist", file=sys.stderr)
         return 2
-    if shutil.which("assimp") is None:
+    if shutil.which(args.assimp) is None:
         print("compare: assimp missing: apt-get install -y assimp-utils", file=sys.stderr)
         return 2
-    label, files, assimp_in = case_files(args.case)
+    label, files, assimp_in = case_files(args.case, args.fbx)
     if not all(os.path.exists(f) for f in files + [assimp_in]):
         print(f"compare: corpus inputs missing: {files}", file=sys.stderr)
         return 2
     with tempfile.TemporaryDirectory() as out:
         ours = [args.bin, "convert", "-q", *files, "-o", os.path.join(out, "rigport.glb")]
-        theirs = ["assimp", "export", assimp_in, os.path.join(out, "assimp.glb"), "-fglb2"]
+        theirs = [args.assimp, "export", assimp_in, os.path.join(out, "assimp.glb"), "-fglb2"]
         for _ in range(5):  # warm-up
             subprocess.run(ours, capture_output=True, check=True)
             subprocess.run(theirs, capture_output=True, check=True)
