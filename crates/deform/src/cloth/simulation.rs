@@ -345,12 +345,12 @@ pub fn simulate(
     } else {
         Vec::new()
     };
-    let collide_triangles: Vec<[u32; 3]> = body
+    // The parts the garment collides with, and the rest of the body (which pushes it only
+    // softly: `Collider::others`).
+    let (collide_triangles, other_triangles): (Vec<[u32; 3]>, Vec<[u32; 3]>) = body
         .triangles
         .iter()
-        .copied()
-        .filter(|t| t.iter().any(|&i| collides_with(body.heaviest[i as usize])))
-        .collect();
+        .partition(|t| t.iter().any(|&i| collides_with(body.heaviest[i as usize])));
     {
         let rest = asset.skeleton.model_rest_matrices();
         let placed: Vec<Capsule> = capsules.iter().map(|c| Capsule::place(c, &rest)).collect();
@@ -437,15 +437,7 @@ pub fn simulate(
     // The whole body (normals, measurements) and the parts the garment collides with.
     let whole_template = Surface::new(&body.bind, &body.triangles);
     let surface_template = Surface::new(&body.bind, &collide_triangles);
-    // The rest of the body: a particle inside it goes onto its skin (a hand swinging into
-    // a skirt pushes the cloth), half way when pinched against the parts above.
-    let other_triangles: Vec<[u32; 3]> = body
-        .triangles
-        .iter()
-        .copied()
-        .filter(|t| !t.iter().any(|&i| collides_with(body.heaviest[i as usize])))
-        .collect();
-    let others_template = (!other_triangles.is_empty())
+    let others_template = (opts.collisions && !other_triangles.is_empty())
         .then(|| Surface::new(&body.bind, &other_triangles).inside_as(&whole_template));
     let joints = asset.skeleton.len();
     let eval_frame = |m: Moment| -> Result<FrameBody, ClothError> {
@@ -642,7 +634,7 @@ pub fn simulate(
 struct Stepper {
     /// The body surface's tree (boxes around the frame being stepped).
     surface: Surface,
-    /// The rest of the body's (see `Collider::others`).
+    /// The rest of the body's (see `Collider::others`), when collisions are on.
     others: Option<Surface>,
     collisions: bool,
     /// How far below the thickness the surface pushes ([`SURFACE_REACH`]).
@@ -660,23 +652,35 @@ impl Stepper {
         for (&p, &t) in solver.pinned().to_vec().iter().zip(&fb.pins) {
             solver.x[p as usize] = t.as_dvec3();
         }
-        self.surface.refit(&fb.skinned, &fb.skinned);
-        if let Some(o) = &mut self.others {
-            o.refit(&fb.skinned, &fb.skinned);
-        }
+        self.refit(&fb.skinned, &fb.skinned);
+        // Anywhere inside: the garment may start deep in the body.
         let posed = Posed::at(&fb.skinned, &fb.normals);
-        let collider = Collider {
-            capsules: &fb.capsules,
-            surface: self.collisions.then_some((&self.surface, posed)),
-            others: self
-                .others
-                .as_ref()
-                .filter(|_| self.collisions)
-                .map(|o| (o, posed)),
-            // Anywhere inside: the garment may start deep in the body.
-            reach: f32::INFINITY,
-        };
+        let collider = self.collider(&fb.capsules, posed, f32::INFINITY);
         solver.relax(&collider, thickness, RELAX_ITERATIONS);
+    }
+
+    /// Fits the body surfaces' boxes around `from` and `to`.
+    fn refit(&mut self, from: &[Vec3], to: &[Vec3]) {
+        self.surface.refit(from, to);
+        if let Some(o) = &mut self.others {
+            o.refit(from, to);
+        }
+    }
+
+    /// The colliders at one instant: `capsules`, and the body surfaces posed as `posed` when
+    /// collisions are on.
+    fn collider<'a>(
+        &'a self,
+        capsules: &'a [Capsule],
+        posed: Posed<'a>,
+        reach: f32,
+    ) -> Collider<'a> {
+        Collider {
+            capsules,
+            surface: self.collisions.then_some((&self.surface, posed)),
+            others: self.others.as_ref().map(|o| (o, posed)),
+            reach,
+        }
     }
 
     /// The substeps from `prev` to `cur` over `span` seconds: pins and capsules lerped,
@@ -691,10 +695,7 @@ impl Stepper {
         params: &Params,
         settle: bool,
     ) {
-        self.surface.refit(&prev.skinned, &cur.skinned);
-        if let Some(o) = &mut self.others {
-            o.refit(&prev.skinned, &cur.skinned);
-        }
+        self.refit(&prev.skinned, &cur.skinned);
         let h = span / f64::from(self.substeps);
         for s in 1..=self.substeps {
             let a = f64::from(s) / f64::from(self.substeps);
@@ -723,16 +724,7 @@ impl Stepper {
                 to_normals: &cur.normals,
                 a: a as f32,
             };
-            let collider = Collider {
-                capsules: &self.caps,
-                surface: self.collisions.then_some((&self.surface, posed)),
-                others: self
-                    .others
-                    .as_ref()
-                    .filter(|_| self.collisions)
-                    .map(|o| (o, posed)),
-                reach: self.reach,
-            };
+            let collider = self.collider(&self.caps, posed, self.reach);
             solver.substep(h, params, &self.pin_targets, &collider);
             if settle {
                 let ke: f64 = solver.v.iter().map(|v| v.length_squared()).sum();

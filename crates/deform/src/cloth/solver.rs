@@ -484,30 +484,10 @@ mod tests {
     /// Two unit boxes side by side along x: the body part a garment lies on (`near`, x in
     /// 0..1) and another (`others`, from `x0`), as one closed body's parts.
     fn two_parts(x0: f32) -> (Vec<glam::Vec3>, Vec<glam::Vec3>, Surface, Surface) {
-        let corner = |k: u32, dx: f32| {
-            glam::Vec3::new(
-                (k & 1) as f32 + dx,
-                ((k >> 1) & 1) as f32,
-                ((k >> 2) & 1) as f32,
-            )
-        };
-        let mut p: Vec<glam::Vec3> = (0..8).map(|k| corner(k, 0.0)).collect();
-        p.extend((0..8).map(|k| corner(k, x0)));
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let box_triangles = |o: u32| -> Vec<[u32; 3]> {
-            quads
-                .iter()
-                .flat_map(|&[a, b, c, d]| [[a + o, b + o, c + o], [a + o, c + o, d + o]])
-                .collect()
-        };
-        let (a, b) = (box_triangles(0), box_triangles(8));
+        let (corners, a) = super::super::surface::tests::cube(false);
+        let mut p = corners.clone();
+        p.extend(corners.iter().map(|c| *c + glam::Vec3::X * x0));
+        let b: Vec<[u32; 3]> = a.iter().map(|t| t.map(|v| v + 8)).collect();
         let whole = Surface::new(&p, &[a.clone(), b.clone()].concat());
         let mut normals = Vec::new();
         whole.normals(&p, &mut normals);

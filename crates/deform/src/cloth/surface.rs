@@ -392,12 +392,13 @@ fn build(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A closed box `0..1` cubed as 12 triangles wound counter-clockwise from outside, or
     /// clockwise when `flip`.
-    fn cube(flip: bool) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    /// The unit cube's corners and triangles (wound outward, or inward with `flip`).
+    pub(crate) fn cube(flip: bool) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let p: Vec<Vec3> = (0..8)
             .map(|k| Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32))
             .collect();

@@ -39,18 +39,10 @@ fn component_name(t: DataType) -> &'static str {
 pub(super) const FLOAT: &[DataType] = &[DataType::F32];
 /// Float or normalized integers, as glTF allows for texture coordinates and weights.
 pub(super) const FLOAT_OR_UNORM: &[DataType] = &[DataType::F32, DataType::U8, DataType::U16];
-/// Float or normalized integers of either sign (rotation and morph-weight outputs).
+/// Float or integers of either sign: normalized for rotation and morph-weight outputs; for
+/// mesh attributes (positions, normals, texture coordinates, morph target deltas) under
+/// `KHR_mesh_quantization`, normalized or not.
 pub(super) const FLOAT_OR_NORM: &[DataType] = &[
-    DataType::F32,
-    DataType::I8,
-    DataType::U8,
-    DataType::I16,
-    DataType::U16,
-];
-
-/// Any component type: `KHR_mesh_quantization` lets mesh attributes (positions, normals,
-/// texture coordinates, morph target deltas) be 8- or 16-bit integers, normalized or not.
-const QUANTIZED: &[DataType] = &[
     DataType::F32,
     DataType::I8,
     DataType::U8,
@@ -258,7 +250,11 @@ impl<'a> Importer<'a> {
         acc: &::gltf::Accessor<'a>,
         at: &str,
     ) -> Result<Vec<Vec3>, ImportError> {
-        let types = if self.quantized() { QUANTIZED } else { FLOAT };
+        let types = if self.quantized() {
+            FLOAT_OR_NORM
+        } else {
+            FLOAT
+        };
         let count = self.check(acc, Dimensions::Vec3, types, at)?;
         if Self::zero_filled(acc) {
             return Ok(vec![Vec3::ZERO; count]);
@@ -292,7 +288,7 @@ impl<'a> Importer<'a> {
         at: &str,
     ) -> Result<Vec<Vec2>, ImportError> {
         let types = if self.quantized() {
-            QUANTIZED
+            FLOAT_OR_NORM
         } else {
             FLOAT_OR_UNORM
         };
