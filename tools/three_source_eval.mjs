@@ -8,7 +8,7 @@
 // tools/three_eval.mjs takes for a glb, so the two can be compared vertex by vertex.
 //
 //   node tools/three_source_eval.mjs FILE.(fbx|dae|zae) [--clip-index I]
-//        [--times T0,T1,...] [--offset S] [--normalize-skin-weights]
+//        [--times T0,T1,...] [--offset S] [--normalize-skin-weights] [--reapply-z-up]
 //        --npy OUT.npy [--rest-npy REST.npy]
 //
 // Positions are in the loader's own world frame: FBXLoader rotates a file whose
@@ -22,6 +22,12 @@
 // the positions of the scene as loaded, before any clip plays (the same vertices).
 // --normalize-skin-weights scales each vertex's kept weights to sum 1 with three's own
 // SkinnedMesh.normalizeSkinWeights (FBXLoader drops influences past 4 without it).
+// --reapply-z-up puts FBXLoader's Z-up correction back above the root after each frame a
+// clip plays. When a file's only top-level node is a Group, FBXLoader returns that node as
+// the scene and sets its rotation to the correction (-90 degrees about X), so a clip that
+// animates the node's rotation overwrites the correction: the played scene stands in the
+// file's own Z-up frame while the scene as loaded stands in three's Y-up. It is an error
+// to give the flag where that is not what happened.
 //
 // stdout: one JSON object:
 //   {"file", "loader", "up_axis", "clips": [{"name", "duration", "start", "key_times"}], "clip",
@@ -49,7 +55,7 @@ import { unzipSync, strFromU8 } from 'three/examples/jsm/libs/fflate.module.js';
 import { npy } from './npy.mjs';
 
 const USAGE = `usage: node tools/three_source_eval.mjs FILE.(fbx|dae|zae) [--clip-index I]
-       [--times T0,T1,...] [--offset S] [--normalize-skin-weights]
+       [--times T0,T1,...] [--offset S] [--normalize-skin-weights] [--reapply-z-up]
        --npy OUT.npy [--rest-npy REST.npy]`;
 
 function usage(msg) {
@@ -58,7 +64,7 @@ function usage(msg) {
 }
 
 function parseArgs(argv) {
-  const opts = { file: null, clipIndex: null, times: [0], offset: 0, npy: null, restNpy: null, normalize: false };
+  const opts = { file: null, clipIndex: null, times: [0], offset: 0, npy: null, restNpy: null, normalize: false, reapplyZUp: false };
   for (let i = 0; i < argv.length; i++) {
     const a = argv[i];
     const value = () => {
@@ -71,6 +77,7 @@ function parseArgs(argv) {
     else if (a === '--npy') opts.npy = value();
     else if (a === '--rest-npy') opts.restNpy = value();
     else if (a === '--normalize-skin-weights') opts.normalize = true;
+    else if (a === '--reapply-z-up') opts.reapplyZUp = true;
     else if (a === '-h' || a === '--help') {
       process.stdout.write(`${USAGE}\n`);
       process.exit(0);
@@ -222,6 +229,17 @@ async function main() {
     await writeFile(opts.restNpy, npy(rest, [1, offset, 3]));
   }
 
+  // The correction FBXLoader set on the root (see --reapply-z-up), checked to be so.
+  let zUp = null;
+  if (opts.reapplyZUp && clip) {
+    const correction = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(1, 0, 0), -Math.PI / 2);
+    const own = `${THREE.PropertyBinding.sanitizeNodeName(scene.name)}.quaternion`;
+    if (loader !== 'FBXLoader' || scene.quaternion.angleTo(correction) > 1e-9 || !clip.tracks.some((t) => t.name === own)) {
+      throw new Error('--reapply-z-up: the root holds no Z-up correction that the clip overwrites');
+    }
+    zUp = correction;
+  }
+
   const mixer = new THREE.AnimationMixer(scene);
   if (clip) {
     const action = mixer.clipAction(clip);
@@ -232,6 +250,7 @@ async function main() {
   const out = new Float32Array(opts.times.length * offset * 3);
   opts.times.forEach((t, f) => {
     if (clip) mixer.setTime(t + opts.offset);
+    if (zUp) scene.quaternion.premultiply(zUp);
     scene.updateMatrixWorld(true);
     writePositions(meshes, out, f * offset * 3);
   });

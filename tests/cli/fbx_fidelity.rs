@@ -183,6 +183,9 @@ fn check(file: &Path, dir: &Path, py: Option<&Path>) -> Option<Vec<Row>> {
     if has(|r| matches!(r, Remedy::NormalizeWeights)) {
         extra.push("--normalize-skin-weights");
     }
+    if has(|r| matches!(r, Remedy::ReapplyZUp)) {
+        extra.push("--reapply-z-up");
+    }
     let subset = has(|r| matches!(r, Remedy::LoaderSubset));
     let key_times = remedies.iter().find_map(|r| match r {
         Remedy::KeyTimes(until) => Some(until.unwrap_or(f64::MAX)),
