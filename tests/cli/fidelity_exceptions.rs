@@ -95,14 +95,16 @@ pub const EXCEPTIONS: &[Exception] = &[
 /// `.usda` against `.glb` differences over the 1e-5 bound, each file with its measured
 /// bound (rounded up, so any growth fails). Both files chain 64 boxes, each turning about
 /// the same axis at 0.5 rad/s relative to its parent, so the last box turns 32 rad/s in
-/// the world and every rounding of a local rotation adds up along the chain. UsdSkel
-/// evaluates UsdSkelAnimation's `quatf` rotations in float (`GfSlerp` on `GfQuatf`): on
-/// these `.usda` files it is 3.0e-5 (FBX) and 2.8e-5 (COLLADA) from an exact, double
-/// precision evaluation of the very same time samples (a 3x3 entry of a joint's transform;
-/// `tests/cli/usd_exact.py`), against 2.8e-7 on a CMU walk. No `.usda` can get UsdSkel
-/// closer to the glb than its own rounding: `fbx_fidelity`
-/// `usdskel_alone_is_past_the_bound_on_the_full_turn_chains` checks that it is past 1e-5
-/// there, and not on a mocap clip.
+/// the world. UsdSkel evaluates UsdSkelAnimation's `quatf` rotations in float: at the sample
+/// times it builds each local matrix as `GfMatrix3f(GfQuatf)` (it equals that model to
+/// 1.4e-15 there), and between them USD's slerp of `quatf`s leaves a quaternion up to
+/// 1.4e-7 off unit length, which UsdSkel composes without renormalizing. Down a chain of
+/// 64 those scales add up: the last box's skeleton-space rows are 3.4e-5 off unit length,
+/// and UsdSkel is 3.0e-5 (FBX) and 2.8e-5 (COLLADA) from an exact, double precision
+/// evaluation of the very same time samples (a 3x3 entry; `tests/cli/usd_exact.py`),
+/// against 2.8e-7 on a CMU walk. No `.usda` can get UsdSkel closer to the glb than its own
+/// rounding: `fbx_fidelity` `usdskel_alone_is_past_the_bound_on_the_full_turn_chains`
+/// checks that it is past 1e-5 there, and why, and that it is not on a mocap clip.
 pub const USD_OPEN: &[(&str, f64)] = &[
     ("anims_with_full_rotations_between_keys.fbx", 4e-5),
     ("anims_with_full_rotations_between_keys.DAE", 3e-5),

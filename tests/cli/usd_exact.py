@@ -12,8 +12,18 @@ their rest transform, each joint's skeleton-space transform its local one times 
 parent's (row vectors, as USD). It compares the rotation part with UsdSkel's
 `SkeletonQuery.ComputeJointSkelTransforms` at the same time code.
 
+It also reports where UsdSkel's own difference comes from:
+- at the sample times, where nothing is interpolated, UsdSkel equals the same evaluation
+  with each local rotation matrix built in float from the `quatf` (`GfMatrix3f(GfQuatf)`)
+  and composed in double: "float_matrix_at_samples" is the largest 3x3 difference there;
+- between samples, USD's slerp of `quatf`s is computed in float and its result is not
+  renormalized: "local_length_max" is how far a local quaternion UsdSkel evaluates is from
+  unit length, and "world_row_length_max" how far a row of a skeleton-space 3x3 is from
+  unit length (a scale the chain composes; it is 0 in an exact evaluation).
+
 stdout: JSON {"times": N, "joints": J, "rotation_max": largest absolute difference of a
-3x3 entry, "worst": {"time": tc, "joint": name}}.
+3x3 entry, "worst": {"time": tc, "joint": name}, "float_matrix_at_samples",
+"local_length_max", "world_row_length_max"}.
 """
 
 import json
@@ -31,6 +41,18 @@ def quat_matrix(q):
         [2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)],
         [2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)],
     ])
+
+
+def quat_matrix_float(q):
+    """quat_matrix computed in float32 from the quaternion as stored (GfMatrix3f(GfQuatf))."""
+    w, x, y, z = (np.float32(c) for c in q)
+    one, two = np.float32(1), np.float32(2)
+    m = np.array([
+        [one - two * (y * y + z * z), two * (x * y + w * z), two * (x * z - w * y)],
+        [two * (x * y - w * z), one - two * (x * x + z * z), two * (y * z + w * x)],
+        [two * (x * z + w * y), two * (y * z - w * x), one - two * (x * x + y * y)],
+    ], dtype=np.float32)
+    return m.astype(np.float64)
 
 
 def slerp(q0, q1, a):
@@ -85,28 +107,49 @@ def main() -> None:
     codes = set(tt) | set(rt) | set(st)
     if stage.HasAuthoredTimeCodeRange():
         codes |= set(np.arange(stage.GetStartTimeCode(), stage.GetEndTimeCode() + 0.5, 1.0).tolist())
-    worst, where_worst = 0.0, None
-    for tc in sorted(codes):
+    samples = set(rt)
+    anim_query = query.GetAnimQuery()
+
+    def compose(tc, rotation_matrix, mix):
         t = at(tt, tv, tc, lerp)
-        r = at(rt, rv, tc, slerp)
+        r = at(rt, rv, tc, mix)
         s = at(st, sv, tc, lerp)
         world = []
         for j, name in enumerate(joints):
             if name in where:
                 i = where[name]
                 local = np.diag([*s[i], 1.0])
-                local[:3, :3] = np.diag(s[i]) @ quat_matrix(r[i])
+                local[:3, :3] = np.diag(s[i]) @ rotation_matrix(r[i])
                 local[3, :3] = t[i]
             else:
                 local = rest[j]
             world.append(local if parents[j] < 0 else local @ world[parents[j]])
+        return world
+
+    worst, where_worst = 0.0, None
+    float_at_samples = local_length = row_length = 0.0
+    for tc in sorted(codes):
+        world = compose(tc, quat_matrix, slerp)
         usd = np.array(query.ComputeJointSkelTransforms(Usd.TimeCode(tc)), dtype=np.float64)
         for j in range(len(joints)):
             d = float(np.abs(usd[j][:3, :3] - world[j][:3, :3]).max())
             if d > worst:
                 worst, where_worst = d, {"time": tc, "joint": joints[j]}
+        rows = np.linalg.norm(usd[:, :3, :3], axis=2)
+        row_length = max(row_length, float(np.abs(rows - 1.0).max()))
+        _, rotations, _ = anim_query.ComputeJointLocalTransformComponents(Usd.TimeCode(tc))
+        if len(rotations):
+            lengths = np.linalg.norm(quats(rotations), axis=1)
+            local_length = max(local_length, float(np.abs(lengths - 1.0).max()))
+        if tc in samples:
+            floats = compose(tc, quat_matrix_float, slerp)
+            for j in range(len(joints)):
+                d = float(np.abs(usd[j][:3, :3] - floats[j][:3, :3]).max())
+                float_at_samples = max(float_at_samples, d)
     print(json.dumps({"times": len(codes), "joints": len(joints), "rotation_max": worst,
-                      "worst": where_worst}))
+                      "worst": where_worst, "float_matrix_at_samples": float_at_samples,
+                      "local_length_max": local_length,
+                      "world_row_length_max": row_length}))
 
 
 if __name__ == "__main__":
