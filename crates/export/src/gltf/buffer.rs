@@ -265,16 +265,58 @@ impl Builder {
         }))
     }
 
+    /// A compressed view of triangle indices `raw` (little-endian, `stride` 2 or 4 bytes
+    /// each) through the index codec; `None` when the export is not compressed or the
+    /// indices are not whole triangles.
+    fn compressed_indices(
+        &mut self,
+        raw: &[u8],
+        stride: usize,
+    ) -> Option<Index<json::buffer::View>> {
+        let compressed = self.compressed.as_mut()?;
+        let indices: Vec<u32> = match stride {
+            2 => raw
+                .chunks_exact(2)
+                .map(|c| u32::from(u16::from_le_bytes([c[0], c[1]])))
+                .collect(),
+            4 => raw
+                .chunks_exact(4)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect(),
+            _ => return None,
+        };
+        let index = self.root.buffer_views.len();
+        let (offset, len) = compressed.push_indices(&mut self.bin, index, &indices, stride)?;
+        Some(self.root.push(json::buffer::View {
+            buffer: Index::new(1),
+            byte_length: USize64::from(len),
+            byte_offset: (offset > 0).then(|| USize64::from(offset)),
+            byte_stride: None,
+            name: None,
+            target: Some(Checked::Valid(Target::ElementArrayBuffer)),
+            extensions: None,
+            extras: None,
+        }))
+    }
+
     /// A view of vertex data `raw` (elements of `stride` bytes): compressed (no filter,
     /// exact) when the export is and `target` is `ARRAY_BUFFER` with a stride the writer
-    /// compresses ([`meshopt::STRIDES`]), else as it is.
+    /// compresses ([`meshopt::STRIDES`]) or the data are matrices (no target, 64 bytes),
+    /// triangle indices through the index codec; else as it is.
     fn vertex_view(
         &mut self,
         target: Option<Target>,
         raw: &[u8],
         stride: usize,
     ) -> Index<json::buffer::View> {
-        if target == Some(Target::ArrayBuffer) && meshopt::STRIDES.contains(&stride) {
+        if target == Some(Target::ElementArrayBuffer) {
+            if let Some(view) = self.compressed_indices(raw, stride) {
+                return view;
+            }
+        }
+        // Attributes, and matrices (no target: inverse bind matrices).
+        let attribute = target == Some(Target::ArrayBuffer) || (target.is_none() && stride == 64);
+        if attribute && meshopt::STRIDES.contains(&stride) {
             if let Some(view) = self.compressed_view(raw, stride, Filter::None, target) {
                 return view;
             }

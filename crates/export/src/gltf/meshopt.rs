@@ -8,7 +8,8 @@
 //! Rotations go through the `QUATERNION` filter (three components of K bits and the index of
 //! the fourth, decoded to 16-bit normalized components), translations and scales through
 //! the `EXPONENTIAL` filter (a K-bit mantissa and an 8-bit exponent per component); key
-//! times and vertex attributes are encoded without a filter, exactly.
+//! times, vertex attributes and inverse bind matrices are encoded without a filter,
+//! exactly, and triangle indices with the index codec (`TRIANGLES` mode).
 
 /// Bits per quaternion component (the filter allows 4 to 16): 16, the precision of plain
 /// 16-bit normalized rotations.
@@ -16,8 +17,9 @@ pub(crate) const QUAT_BITS: i32 = 16;
 /// Mantissa bits of the exponential filter (1 to 24): 20, a relative error of 2^-20
 /// (a micrometre at a metre), far under the bounds reduction uses.
 pub(crate) const EXP_BITS: i32 = 20;
-/// The element sizes this writer compresses (the codec takes multiples of 4 up to 256).
-pub(crate) const STRIDES: [usize; 4] = [4, 8, 12, 16];
+/// The element sizes this writer compresses (the codec takes multiples of 4 up to 256):
+/// vertex attributes and animation keys, and 64 for matrices (inverse bind matrices).
+pub(crate) const STRIDES: [usize; 5] = [4, 8, 12, 16, 64];
 /// The vertex codec version `EXT_meshopt_compression` defines.
 const CODEC_VERSION: i32 = 0;
 
@@ -129,32 +131,29 @@ impl Filter {
 /// for sizes it computes itself; an empty result would only make the view unreadable, and
 /// the tests decode every view.
 fn encode(raw: &[u8], stride: usize) -> Vec<u8> {
-    // The codec wants elements of one size: feed it as [u8; stride] rows through u32
-    // words (every stride here is a multiple of 4).
-    let words: Vec<u32> = raw
-        .chunks_exact(4)
-        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect();
-    let encoded = match stride {
-        4 => meshopt::encode_vertex_buffer_level(&words, 2, Some(CODEC_VERSION)),
-        8 => {
-            let rows: Vec<[u32; 2]> = words.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
-            meshopt::encode_vertex_buffer_level(&rows, 2, Some(CODEC_VERSION))
-        }
-        12 => {
-            let rows: Vec<[u32; 3]> = words.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-            meshopt::encode_vertex_buffer_level(&rows, 2, Some(CODEC_VERSION))
-        }
+    // The codec wants elements of one size: feed it as [u32; N] rows (every stride here
+    // is a multiple of 4).
+    fn rows<const N: usize>(raw: &[u8]) -> Vec<u8> {
+        let rows: Vec<[u32; N]> = raw
+            .chunks_exact(4 * N)
+            .map(|row| {
+                std::array::from_fn(|i| {
+                    u32::from_le_bytes([row[4 * i], row[4 * i + 1], row[4 * i + 2], row[4 * i + 3]])
+                })
+            })
+            .collect();
+        meshopt::encode_vertex_buffer_level(&rows, 2, Some(CODEC_VERSION)).unwrap_or_default()
+    }
+    match stride {
+        4 => rows::<1>(raw),
+        8 => rows::<2>(raw),
+        12 => rows::<3>(raw),
+        16 => rows::<4>(raw),
         _ => {
-            debug_assert_eq!(stride, 16, "strides are STRIDES");
-            let rows: Vec<[u32; 4]> = words
-                .chunks_exact(4)
-                .map(|c| [c[0], c[1], c[2], c[3]])
-                .collect();
-            meshopt::encode_vertex_buffer_level(&rows, 2, Some(CODEC_VERSION))
+            debug_assert_eq!(stride, 64, "strides are STRIDES");
+            rows::<16>(raw)
         }
-    };
-    encoded.unwrap_or_default()
+    }
 }
 
 /// Filtered bytes of rotation keys (flat xyzw).
@@ -245,6 +244,43 @@ impl Compressed {
         group.raw.extend_from_slice(raw);
         group.accessors.push(accessor);
         offset
+    }
+
+    /// Encodes triangle-list `indices` with the index codec (`TRIANGLES` mode) into `bin`
+    /// and returns the fallback range `(byte_offset, byte_length)` of the view the caller
+    /// pushes as `view`, whose indices are `stride` (2 or 4) bytes each. `None` when the
+    /// list is not whole triangles or the codec fails (the caller writes it plainly).
+    pub(crate) fn push_indices(
+        &mut self,
+        bin: &mut Vec<u8>,
+        view: usize,
+        indices: &[u32],
+        stride: usize,
+    ) -> Option<(usize, usize)> {
+        if indices.is_empty() || indices.len() % 3 != 0 || !matches!(stride, 2 | 4) {
+            return None;
+        }
+        let vertex_count = indices.iter().max().map_or(0, |&m| m as usize + 1);
+        let encoded = meshopt::encode_index_buffer(indices, vertex_count).ok()?;
+        let pad = bin.len().wrapping_neg() % 4;
+        bin.resize(bin.len() + pad, 0);
+        let offset = bin.len();
+        bin.extend_from_slice(&encoded);
+        let mut extension = serde_json::json!({
+            "buffer": 0,
+            "byteLength": encoded.len(),
+            "byteStride": stride,
+            "count": indices.len(),
+            "mode": "TRIANGLES",
+        });
+        if offset > 0 {
+            extension["byteOffset"] = offset.into();
+        }
+        self.views.push(CompressedView { view, extension });
+        let len = indices.len() * stride;
+        let at = self.fallback_len;
+        self.fallback_len += len.next_multiple_of(4);
+        Some((at, len))
     }
 
     /// Encodes `raw` (filtered bytes, `count` elements of `stride`) into `bin` (4-byte

@@ -70,7 +70,7 @@ fn rotation_outputs_are_normalized_shorts_rounded_as_the_reducer_measures() {
     }
 }
 
-/// Decodes `count` elements of `stride` bytes (a multiple of 4, at most 16).
+/// Decodes `count` elements of `stride` bytes (4, 8, 12, 16 or 64).
 fn decode_bytes(encoded: &[u8], count: usize, stride: usize) -> Vec<u8> {
     fn rows<T: Clone + Default + AsRef<[u32]>>(encoded: &[u8], count: usize) -> Vec<u8> {
         let rows: Vec<T> = ::meshopt::decode_vertex_buffer(encoded, count).expect("decodes");
@@ -88,6 +88,14 @@ fn decode_bytes(encoded: &[u8], count: usize, stride: usize) -> Vec<u8> {
         8 => rows::<[u32; 2]>(encoded, count),
         12 => rows::<[u32; 3]>(encoded, count),
         16 => rows::<[u32; 4]>(encoded, count),
+        64 => {
+            let rows: Vec<[u32; 16]> =
+                ::meshopt::decode_vertex_buffer(encoded, count).expect("decodes");
+            rows.iter()
+                .flatten()
+                .flat_map(|w| w.to_le_bytes())
+                .collect()
+        }
         _ => panic!("stride {stride}"),
     }
 }
@@ -143,9 +151,45 @@ fn meshopt_views_decode_to_the_plain_files_data() {
         assert_eq!(view["buffer"], 1);
         let at = ext["byteOffset"].as_u64().unwrap_or(0) as usize;
         let encoded = &packed_bin[at..at + ext["byteLength"].as_u64().expect("len") as usize];
-        assert_eq!(encoded[0], 0xa0, "vertex codec version 0");
         let count = ext["count"].as_u64().expect("count") as usize;
         let stride = ext["byteStride"].as_u64().expect("stride") as usize;
+        if ext["mode"] == "TRIANGLES" {
+            // Triangle indices through the index codec, decoded to `stride`-byte indices.
+            filters.insert("TRIANGLES".to_owned());
+            assert!(ext.get("filter").is_none(), "accessor {a}");
+            let expected: Vec<u32> = accessor_bytes(&pj, plain_bin, a, stride)
+                .chunks_exact(stride)
+                .map(|c| match c {
+                    [a, b] => u32::from(u16::from_le_bytes([*a, *b])),
+                    _ => u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                })
+                .collect();
+            let decoded: Vec<u32> = match stride {
+                2 => ::meshopt::decode_index_buffer::<u16>(encoded, count)
+                    .expect("decodes")
+                    .into_iter()
+                    .map(u32::from)
+                    .collect(),
+                4 => ::meshopt::decode_index_buffer::<u32>(encoded, count).expect("decodes"),
+                _ => panic!("index stride {stride}"),
+            };
+            // The codec may rotate a triangle's corners (abc -> bca): the same triangle,
+            // the same winding.
+            assert_eq!(decoded.len(), expected.len(), "accessor {a}");
+            for (t, (d, e)) in decoded
+                .chunks_exact(3)
+                .zip(expected.chunks_exact(3))
+                .enumerate()
+            {
+                let rotations = [[e[0], e[1], e[2]], [e[1], e[2], e[0]], [e[2], e[0], e[1]]];
+                assert!(
+                    rotations.iter().any(|r| r[..] == d[..]),
+                    "accessor {a} triangle {t}: {d:?} vs {e:?}"
+                );
+            }
+            continue;
+        }
+        assert_eq!(encoded[0], 0xa0, "vertex codec version 0");
         assert_eq!(ext["mode"], "ATTRIBUTES");
         let filter = ext["filter"].as_str().unwrap_or("NONE");
         filters.insert(filter.to_owned());
@@ -203,8 +247,19 @@ fn meshopt_views_decode_to_the_plain_files_data() {
         }
     }
     assert!(
-        filters.contains("QUATERNION") && filters.contains("EXPONENTIAL"),
+        ["QUATERNION", "EXPONENTIAL", "TRIANGLES"]
+            .iter()
+            .all(|f| filters.contains(*f)),
         "{filters:?}"
+    );
+    // The inverse bind matrices are compressed too (64-byte elements).
+    let ibm = mj["skins"][0]["inverseBindMatrices"]
+        .as_u64()
+        .expect("skin") as usize;
+    let view = mj["accessors"][ibm]["bufferView"].as_u64().expect("view") as usize;
+    assert_eq!(
+        mj["bufferViews"][view]["extensions"][name]["byteStride"],
+        64
     );
 }
 
