@@ -25,7 +25,7 @@ use super::channel::{Channel, Kind};
 use super::codec::cubic_as_written;
 use super::codec::Codec;
 use super::curve::{hermite, quat_at, sample_quat, sample_vec3};
-use super::rate::{ladder, uniform_keys, MAX_STEP, TIME_ACCESSOR_JSON};
+use super::rate::{ladder, uniform_keys, CUBIC_SAMPLER_JSON, MAX_STEP, TIME_ACCESSOR_JSON};
 
 /// A fitted cubic track: the original keys it keeps and the track as handed to the writer.
 pub(super) struct CubicFit {
@@ -266,7 +266,7 @@ fn output_bytes(track: &Track, kind: Kind, codec: Option<&Codec>) -> usize {
 }
 
 /// The fewest-bytes cubic fit of `chan` within its tolerance whose bytes (its time
-/// accessor counted unless `uniform`) are under `budget`: adaptive keys, or every `k`-th key
+/// accessor counted unless `uniform`, and its sampler's interpolation) are under `budget`: adaptive keys, or every `k`-th key
 /// (sharing times with other channels of the same rate). `None` when none is smaller.
 pub(super) fn fit_cubic(chan: &Channel, budget: usize) -> Option<(CubicFit, bool)> {
     let n = chan.original.times.len();
@@ -292,7 +292,7 @@ pub(super) fn fit_cubic(chan: &Channel, budget: usize) -> Option<(CubicFit, bool
     // written.
     let candidate = |keys: Vec<usize>, tangents: &[(Vec4, Vec4)], uniform: bool, under: usize| {
         let track = samples.track(chan, &keys, tangents);
-        let value_bytes = output_bytes(&track, chan.kind, codec);
+        let value_bytes = output_bytes(&track, chan.kind, codec) + CUBIC_SAMPLER_JSON;
         let times = 4 * keys.len() + TIME_ACCESSOR_JSON;
         let bytes = value_bytes + if uniform { 0 } else { times };
         if bytes >= under {

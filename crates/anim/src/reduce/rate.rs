@@ -11,6 +11,10 @@ pub(super) const MAX_STEP: usize = 64;
 /// worth several keys, and a uniform rate's times are shared.
 pub(super) const TIME_ACCESSOR_JSON: usize = 110;
 
+/// What a CUBICSPLINE sampler costs besides its data: `,"interpolation":"CUBICSPLINE"` in
+/// its JSON (a LINEAR sampler leaves the default out).
+pub(super) const CUBIC_SAMPLER_JSON: usize = 29;
+
 /// The uniform steps tried: a ladder of about 1.5x (2, 3, 4, 6, 8, 12, ...), so that
 /// channels land on the same steps and share their times more often.
 pub(super) fn ladder(step: usize) -> bool {
