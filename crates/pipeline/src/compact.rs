@@ -352,6 +352,71 @@ pub(crate) fn constants_into_rest(asset: &mut Asset) -> Option<Skeleton> {
     Some(std::mem::replace(&mut asset.skeleton, skeleton))
 }
 
+/// The fraction of the bound under which a rest translation component is noise
+/// ([`zero_rest_noise`]): 1e-4 (0.1 µm of a 1 mm bound).
+pub(crate) const REST_NOISE: f32 = 1e-4;
+
+/// The most [`zero_rest_noise`] with `below` moves any point: each joint on the deepest
+/// chain moved by at most `√3 below` (unit scales; a scaled parent is left alone there).
+pub(crate) fn rest_noise_error(skeleton: &Skeleton, below: f32) -> f32 {
+    let parents: Vec<Option<JointIndex>> = skeleton.parents().collect();
+    let mut depth = vec![0usize; parents.len()];
+    for (j, parent) in parents.iter().enumerate() {
+        // Parents first: a parent's depth is known.
+        depth[j] = parent.map_or(1, |p| depth.get(p.0 as usize).copied().unwrap_or(0) + 1);
+    }
+    let deepest = depth.iter().copied().max().unwrap_or(0);
+    deepest as f32 * 3f32.sqrt() * below
+}
+
+/// Sets to 0 the rest translation components under `below` in magnitude (capture noise
+/// such as 5.1e-8, which the glTF JSON prints in 13 characters) of joints whose parent (if
+/// any) has a unit rest scale and whose translation every clip holds at the rest value (no
+/// track, or one the glTF writer drops: every key equal to the rest, as
+/// [`constants_into_rest`] leaves them), in the rest and in those tracks alike. Returns the
+/// skeleton as it was when something changed. The caller pays [`rest_noise_error`] out of
+/// the bound.
+pub(crate) fn zero_rest_noise(asset: &mut Asset, below: f32) -> Option<Skeleton> {
+    let parents: Vec<Option<JointIndex>> = asset.skeleton.parents().collect();
+    let mut joints = asset.skeleton.joints().to_vec();
+    let mut changed = false;
+    for (j, joint) in joints.iter_mut().enumerate() {
+        let at = TrackTarget::Translation(JointIndex(j as u32));
+        let rest = joint.rest_local.translation.to_array();
+        let unit_parent = parents[j].is_none_or(|p| {
+            asset.skeleton.joint(p).rest_local.scale == rigport_model::glam::Vec3::ONE
+        });
+        let held = asset
+            .clips
+            .iter()
+            .flat_map(|c| &c.tracks)
+            .filter(|t| t.target == at)
+            .all(|t| {
+                t.interpolation != Interpolation::CubicSpline
+                    && t.values.chunks_exact(3).all(|k| k == rest)
+            });
+        let zeroed = rest.map(|c| if c.abs() < below { 0.0 } else { c });
+        if !unit_parent || !held || zeroed == rest {
+            continue;
+        }
+        joint.rest_local.translation = rigport_model::glam::Vec3::from_array(zeroed);
+        for track in asset.clips.iter_mut().flat_map(|c| &mut c.tracks) {
+            if track.target == at {
+                for k in track.values.chunks_exact_mut(3) {
+                    k.copy_from_slice(&zeroed);
+                }
+            }
+        }
+        changed = true;
+    }
+    if !changed {
+        return None;
+    }
+    let mut skeleton = Skeleton::new(joints).ok()?;
+    skeleton.set_limits(asset.skeleton.limits().iter().cloned());
+    Some(std::mem::replace(&mut asset.skeleton, skeleton))
+}
+
 /// The one value every clip's (first) track for `target` holds at every key, if any.
 fn held_value(clips: &[Clip], target: TrackTarget) -> Option<Vec<f32>> {
     let mut value: Option<&[f32]> = None;
@@ -373,6 +438,7 @@ fn held_value(clips: &[Clip], target: TrackTarget) -> Option<Vec<f32>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rigport_model::Track;
 
     fn walk() -> Asset {
         let path = std::path::Path::new("../../fixtures/bvh/end_sites.bvh");
@@ -423,5 +489,84 @@ mod tests {
         let mut missing = asset.clone();
         missing.clips[1].tracks.remove(ti);
         assert_eq!(constants_into_rest(&mut missing), None);
+    }
+
+    /// Rest translation noise under the threshold becomes 0 in the rest and in the tracks
+    /// that hold it; a translation a clip changes, and components at or above the
+    /// threshold, stay; the bound is the deepest chain's count of joints times √3 times
+    /// the threshold.
+    #[test]
+    fn rest_translation_noise_becomes_zero_where_every_clip_holds_it() {
+        let mut asset = walk();
+        let below = 1e-4;
+        let parents: Vec<Option<JointIndex>> = asset.skeleton.parents().collect();
+        // A child of the root (unit scales in the fixture) with noise on x and a value on z.
+        let j = (0..asset.skeleton.len())
+            .find(|&j| parents[j].is_some())
+            .expect("a child joint");
+        let at = TrackTarget::Translation(JointIndex(j as u32));
+        let mut joints = asset.skeleton.joints().to_vec();
+        let noisy = [5.1e-8f32, 0.25, 3e-4];
+        joints[j].rest_local.translation = rigport_model::glam::Vec3::from_array(noisy);
+        asset.skeleton = Skeleton::new(joints).expect("same hierarchy");
+        asset.clips[0].tracks.retain(|t| t.target != at);
+        let held = Track {
+            target: at,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 1.0],
+            values: noisy.repeat(2),
+        };
+        asset.clips[0].tracks.push(held.clone());
+        let before = asset.skeleton.clone();
+        let mut zeroed = asset.clone();
+        assert_eq!(zero_rest_noise(&mut zeroed, below), Some(before));
+        let expected = [0.0, 0.25, 3e-4];
+        let rest = zeroed
+            .skeleton
+            .joint(JointIndex(j as u32))
+            .rest_local
+            .translation;
+        assert_eq!(rest.to_array(), expected);
+        let track = zeroed.clips[0]
+            .tracks
+            .iter()
+            .find(|t| t.target == at)
+            .expect("kept");
+        assert_eq!(track.values, expected.repeat(2));
+        // Once clean, nothing more changes.
+        assert_eq!(zero_rest_noise(&mut zeroed, below), None);
+        // A clip that moves the joint keeps its noise.
+        let mut moving = asset.clone();
+        let track = moving.clips[0]
+            .tracks
+            .iter_mut()
+            .find(|t| t.target == at)
+            .expect("kept");
+        track.values[3] = 0.5;
+        let kept = moving
+            .skeleton
+            .joint(JointIndex(j as u32))
+            .rest_local
+            .translation;
+        zero_rest_noise(&mut moving, below);
+        assert_eq!(
+            moving
+                .skeleton
+                .joint(JointIndex(j as u32))
+                .rest_local
+                .translation,
+            kept
+        );
+        // The bound: the deepest chain, √3 per joint.
+        let mut depth = vec![0usize; parents.len()];
+        for (k, p) in parents.iter().enumerate() {
+            depth[k] = p.map_or(1, |p| depth[p.0 as usize] + 1);
+        }
+        let deepest = *depth.iter().max().expect("joints") as f32;
+        let bound = rest_noise_error(&asset.skeleton, below);
+        assert!(
+            (bound - deepest * 3f32.sqrt() * below).abs() < 1e-9,
+            "{bound}"
+        );
     }
 }

@@ -220,15 +220,26 @@ pub fn write_output_report(
         // of LINEAR 16-bit rotations beats them on the corpus (07_05 walk 79,156 bytes
         // LINEAR, 79,720 with cubic tracks; 131_04 dance 113,432 against 139,444).
         let cubic = format.is_gltf() && output.options.compression == Compression::None;
+        // glTF prints rest translations in its JSON: noise under a ten-thousandth of the
+        // bound is written as 0, paid out of the bound as the mesh grid is.
+        let noise_below = compact::REST_NOISE * tolerance;
+        let noise_error = if format.is_gltf() {
+            compact::rest_noise_error(&asset.skeleton, noise_below)
+        } else {
+            0.0
+        };
         let (clips, reports, rotations_i16) = step(progress, "reducing keys", || {
-            compact::compact_clips(&asset, tolerance - grid_error, codec, cubic)
+            compact::compact_clips(&asset, tolerance - grid_error - noise_error, codec, cubic)
         })?;
         let original = std::mem::replace(&mut asset.clips, clips);
         // glTF drops a channel at its node's value; USD samples every joint anyway.
-        let skeleton = format
-            .is_gltf()
-            .then(|| compact::constants_into_rest(&mut asset))
-            .flatten();
+        let skeleton = if format.is_gltf() {
+            let moved = compact::constants_into_rest(&mut asset);
+            let zeroed = compact::zero_rest_noise(&mut asset, noise_below);
+            moved.or(zeroed)
+        } else {
+            None
+        };
         compacted = Some((
             (original, skeleton),
             CompactReport {
