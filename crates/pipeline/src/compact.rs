@@ -9,7 +9,7 @@
 //! joint that skins vertices farther than that (the farthest such vertex, in the joint's
 //! bind frame), so the bound covers the skinned mesh as ACL's metric does.
 
-use rigport_anim::reduce::metric::point_error;
+use rigport_anim::reduce::metric::point_error_bits;
 use rigport_anim::reduce::{Codec, ReduceOptions, reduce_clip};
 use rigport_model::quantize::PositionGrid;
 use rigport_model::{Asset, Clip, Compression, Interpolation, JointIndex, Skeleton, TrackTarget};
@@ -247,8 +247,21 @@ pub(crate) fn codec(compression: Compression) -> Codec {
         Compression::Meshopt => Codec {
             rotation: rigport_export::meshopt_rotation_as_written,
             vector: Some(rigport_export::meshopt_vector_as_written),
+            rotation_bits: Some(rigport_export::meshopt_rotation_as_written_bits),
         },
     }
+}
+
+/// What [`compact_clips`] made.
+pub(crate) struct Compacted {
+    /// The reduced clips, in the asset's order.
+    pub clips: Vec<Clip>,
+    /// What reducing each did.
+    pub reports: Vec<ClipReport>,
+    /// Whether key values are measured (and so must be written) through the codec.
+    pub coded: bool,
+    /// Per clip, per track: the rotation bits the writer must use (`ReduceStats`).
+    pub rotation_bits: Vec<Vec<u8>>,
 }
 
 /// The asset's clips reduced within `tolerance` (rig units), with their reports and
@@ -263,7 +276,7 @@ pub(crate) fn compact_clips(
     tolerance: f32,
     codec: Option<Codec>,
     cubic: bool,
-) -> Result<(Vec<Clip>, Vec<ClipReport>, bool), PipelineError> {
+) -> Result<Compacted, PipelineError> {
     let points = point_distances(asset);
     let acl_points = vec![(POINT_DISTANCE_M / meters_per_unit(asset)) as f32; points.len()];
     let cm_per_unit = meters_per_unit(asset) * 100.0;
@@ -278,6 +291,7 @@ pub(crate) fn compact_clips(
         };
         let mut clips = Vec::with_capacity(asset.clips.len());
         let mut reports = Vec::with_capacity(asset.clips.len());
+        let mut rotation_bits = Vec::with_capacity(asset.clips.len());
         for clip in &asset.clips {
             let failed = |e| PipelineError::step(format!("cannot reduce clip {:?}", clip.name), e);
             let (reduced, stats) = reduce_clip(clip, &asset.skeleton, &options).map_err(failed)?;
@@ -286,8 +300,15 @@ pub(crate) fn compact_clips(
                 codec = None;
                 continue 'again;
             }
-            let acl = point_error(clip, &reduced, &asset.skeleton, &acl_points, codec.as_ref())
-                .map_err(failed)?;
+            let acl = point_error_bits(
+                clip,
+                &reduced,
+                &asset.skeleton,
+                &acl_points,
+                codec.as_ref(),
+                &stats.rotation_bits,
+            )
+            .map_err(failed)?;
             reports.push(ClipReport {
                 clip: clip.name.clone(),
                 keys_before: stats.keys_before,
@@ -298,8 +319,14 @@ pub(crate) fn compact_clips(
                 acl_mean_error_cm: f64::from(acl.mean) * cm_per_unit,
             });
             clips.push(reduced);
+            rotation_bits.push(stats.rotation_bits);
         }
-        return Ok((clips, reports, codec.is_some()));
+        return Ok(Compacted {
+            clips,
+            reports,
+            coded: codec.is_some(),
+            rotation_bits,
+        });
     }
 }
 

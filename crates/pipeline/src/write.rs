@@ -195,6 +195,8 @@ pub fn write_output_report(
     let path = &output.path;
     let format = output.format()?;
     let mut compacted = None;
+    // Per clip, per track, the rotation bits the reducer measured (meshopt).
+    let mut rotation_bits = Vec::new();
     if output.options.compression != Compression::None && !format.is_gltf() {
         return Err(PipelineError::Invalid(format!(
             "{}: compression is a glTF extension ({}); USD stores what the reduction keeps as time samples",
@@ -228,10 +230,13 @@ pub fn write_output_report(
         } else {
             0.0
         };
-        let (clips, reports, rotations_i16) = step(progress, "reducing keys", || {
+        let compacted_clips = step(progress, "reducing keys", || {
             compact::compact_clips(&asset, tolerance - grid_error - noise_error, codec, cubic)
         })?;
-        let original = std::mem::replace(&mut asset.clips, clips);
+        let rotations_i16 = compacted_clips.coded;
+        rotation_bits = compacted_clips.rotation_bits;
+        let reports = compacted_clips.reports;
+        let original = std::mem::replace(&mut asset.clips, compacted_clips.clips);
         // glTF drops a channel at its node's value; USD samples every joint anyway.
         let skeleton = if format.is_gltf() {
             let moved = compact::constants_into_rest(&mut asset);
@@ -285,7 +290,13 @@ pub fn write_output_report(
         .as_ref()
         .is_some_and(|(_, r)| r.mesh_grid_error > 0.0);
     let mut prepared = step(progress, building, || {
-        prepare(asset, path, format, opts, (i16, quantize_mesh))
+        prepare(
+            asset,
+            path,
+            format,
+            opts,
+            (i16, quantize_mesh, &rotation_bits),
+        )
     })?;
     let mut report = None;
     let mut unreduced_asset = None;
@@ -301,7 +312,13 @@ pub fn write_output_report(
             compression: Compression::None,
             ..*opts
         };
-        let plain = prepare(&unreduced, path, format, &plain_options, (false, false))?;
+        let plain = prepare(
+            &unreduced,
+            path,
+            format,
+            &plain_options,
+            (false, false, &[]),
+        )?;
         compact_report.bytes_after = prepared.byte_len();
         compact_report.bytes_before = plain.byte_len();
         compact_report.reduced_written = compact_report.bytes_after <= compact_report.bytes_before;
@@ -508,7 +525,9 @@ impl Prepared {
 }
 
 /// Builds `asset` as `format` for `path` in memory (the influences as the writer limits
-/// them; see [`fit_influences`] for a fit first).
+/// them; see [`fit_influences`] for a fit first): glTF rotations as 16-bit integers when
+/// the reducer measured them so, at the reducer's bits per track with meshopt, and the
+/// skinned meshes quantized.
 ///
 /// # Errors
 /// The asset cannot be exported (the message names it).
@@ -517,7 +536,7 @@ pub(crate) fn prepare(
     path: &Path,
     format: OutputFormat,
     opts: &WriteOptions,
-    (rotations_i16, quantize_mesh): (bool, bool),
+    (rotations_i16, quantize_mesh, rotation_bits): (bool, bool, &[Vec<u8>]),
 ) -> Result<Prepared, PipelineError> {
     // A long USD text is staged beside the output as it is built: failing to write it is
     // an output error, like a failing write.
@@ -532,6 +551,7 @@ pub(crate) fn prepare(
                 compact: rotations_i16,
                 quantize_mesh,
                 compression: opts.compression,
+                rotation_bits: rotation_bits.to_vec(),
             };
             PreparedFile::Gltf(rigport_export::prepare_gltf(asset, path, &opts).map_err(failed)?)
         }

@@ -56,6 +56,38 @@ pub(super) struct Channel<'a> {
     pub(super) fitted: Option<Track>,
     /// Normalized rotation keys as written (rotation channels only), for the simplifier.
     pub(super) quats: Vec<Quat>,
+    /// The bits per component `as_written` holds (`Codec::rotation_bits`); `None`: the
+    /// codec's default.
+    pub(super) bits: Option<u8>,
+    /// `as_written` and `quats` at the codec's default, while `bits` holds others.
+    pub(super) default: Option<(Option<Track>, Vec<Quat>)>,
+}
+
+impl Channel<'_> {
+    /// Writes this rotation channel with the fewest bits within `share` of its tolerance
+    /// (see [`fewest_bits`]), or at the codec's default when none fits.
+    pub(super) fn choose_bits(&mut self, share: f32) {
+        match fewest_bits(self, share) {
+            Some((bits, written, quats)) => {
+                if self.default.is_none() {
+                    self.default = Some((self.as_written.take(), std::mem::take(&mut self.quats)));
+                }
+                self.bits = Some(bits);
+                self.as_written = Some(written);
+                self.quats = quats;
+            }
+            None => self.default_bits(),
+        }
+    }
+
+    /// Back to the codec's default precision.
+    pub(super) fn default_bits(&mut self) {
+        if let Some((written, quats)) = self.default.take() {
+            self.as_written = written;
+            self.quats = quats;
+        }
+        self.bits = None;
+    }
 }
 
 impl Channel<'_> {
@@ -175,10 +207,54 @@ pub(super) fn collect_channels<'a>(
             reduced: None,
             fitted: None,
             quats,
+            bits: None,
+            default: None,
         });
     }
     Ok(out)
 }
+
+/// The fewest bits from [`MIN_BITS`] to [`MAX_BITS`] whose rounding of every key of `chan`
+/// (a reducible LINEAR rotation track) stays within `share` of its tolerance (its angle,
+/// plus twice the written length's distance to 1, which a reader's composition turns into
+/// a scale), and the keys as written with them; `None` when the codec has one precision, or the default is needed.
+pub(super) fn fewest_bits(chan: &Channel, share: f32) -> Option<(u8, Track, Vec<Quat>)> {
+    let written = chan.codec?.rotation_bits?;
+    let track = chan.original;
+    // Reducible tracks only: a track the tightening cannot reach keeps the default.
+    if chan.kind != Kind::Rotation || !chan.reducible || !chan.eps.is_finite() {
+        return None;
+    }
+    let limit = share * chan.eps;
+    let originals: Vec<Quat> = track
+        .values
+        .chunks_exact(4)
+        .map(|c| quat_at(c, 0))
+        .collect();
+    (MIN_BITS..=MAX_BITS).find_map(|bits| {
+        let mut out = track.clone();
+        let mut quats = Vec::with_capacity(originals.len());
+        for (chunk, q) in out.values.chunks_exact_mut(4).zip(&originals) {
+            let w = written([chunk[0], chunk[1], chunk[2], chunk[3]], bits);
+            let r = quat_at(&w, 0);
+            // A reader composes the written quaternion as it is: a length off 1 scales the
+            // joint by its square, moving a point at unit distance by twice the difference.
+            let length = glam::Vec4::from_array(w).length();
+            if q.angle_between(r) + 2.0 * (length - 1.0).abs() > limit {
+                return None;
+            }
+            chunk.copy_from_slice(&w);
+            quats.push(r);
+        }
+        Some((bits, out, quats))
+    })
+}
+
+/// The bits per component [`fewest_bits`] tries, from `MIN_BITS` up (the filter takes 4 to
+/// 16; 16 is the default, and below 6 a key's rounding passes 0.03 rad).
+const MIN_BITS: u8 = 6;
+/// See [`MIN_BITS`].
+const MAX_BITS: u8 = 15;
 
 /// A LINEAR or STEP track's values as `codec` stores them (`None`: stored exactly).
 pub(super) fn as_written(track: &Track, kind: Kind, codec: &Codec) -> Option<Track> {

@@ -3,6 +3,9 @@
 use rigport_model::quantize::component_as_i16;
 use rigport_model::Track;
 
+/// A rotation key (xyzw) as read back when written with the given bits per component.
+pub type RotationAtBits = fn([f32; 4], u8) -> [f32; 4];
+
 /// How a writer stores key values, as functions from a value to what a reader gets back.
 #[derive(Clone, Copy, Debug)]
 pub struct Codec {
@@ -10,6 +13,11 @@ pub struct Codec {
     pub rotation: fn([f32; 4]) -> [f32; 4],
     /// A LINEAR or STEP translation or scale key as read back (`None`: exactly).
     pub vector: Option<fn([f32; 3]) -> [f32; 3]>,
+    /// A LINEAR or STEP rotation key as read back when written with the given bits per
+    /// component (4 to 15; `rotation` is the writer's default): the reducer then picks the
+    /// fewest bits per rotation track that its tolerance allows ([`super::ReduceStats`]
+    /// `rotation_bits`). `None`: one precision for every track.
+    pub rotation_bits: Option<RotationAtBits>,
 }
 
 impl Codec {
@@ -17,6 +25,7 @@ impl Codec {
     pub const I16: Codec = Codec {
         rotation: rigport_model::quantize::rotation_as_i16,
         vector: None,
+        rotation_bits: None,
     };
 }
 

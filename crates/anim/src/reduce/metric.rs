@@ -55,6 +55,22 @@ pub fn point_error(
     point_distance: &[f32],
     codec: Option<&Codec>,
 ) -> Result<PointError, ReduceError> {
+    point_error_bits(original, reduced, skeleton, point_distance, codec, &[])
+}
+
+/// [`point_error`] with the reduced clip's rotation tracks read at `rotation_bits` per
+/// track ([`super::ReduceStats::rotation_bits`]; 0 or past the end: the codec's default).
+///
+/// # Errors
+/// As [`point_error`].
+pub fn point_error_bits(
+    original: &Clip,
+    reduced: &Clip,
+    skeleton: &Skeleton,
+    point_distance: &[f32],
+    codec: Option<&Codec>,
+    rotation_bits: &[u8],
+) -> Result<PointError, ReduceError> {
     // Validates the reduced clip's tracks too.
     collect_channels(reduced, skeleton, None, false, false)?;
     let channels = collect_channels(original, skeleton, None, false, false)?;
@@ -72,9 +88,18 @@ pub fn point_error(
                 clip: reduced.name.clone(),
                 track: chan.track,
             })?;
+        let bits = rotation_bits.get(chan.track).copied().filter(|&b| b > 0);
         let coded = codec.and_then(|codec| {
             if track.interpolation == Interpolation::CubicSpline {
                 cubic_as_written(track, chan.kind == Kind::Rotation, codec)
+            } else if let (Some(bits), Some(written), Kind::Rotation) =
+                (bits, codec.rotation_bits, chan.kind)
+            {
+                let mut out = track.clone();
+                for c in out.values.chunks_exact_mut(4) {
+                    c.copy_from_slice(&written([c[0], c[1], c[2], c[3]], bits));
+                }
+                Some(out)
             } else {
                 as_written(track, chan.kind, codec)
             }

@@ -1066,3 +1066,81 @@ fn cubic_spins_and_steps_keep_their_direction() {
     assert!((total_a - expected).abs() < 1e-2, "{total_a} vs {expected}");
     assert!((total_b - total_a).abs() < 1e-2, "{total_b} vs {total_a}");
 }
+
+/// A test codec's rounding with `bits` per component: each component on a grid of
+/// `2^-(bits - 1)`, not normalized (a reader composes it as it is).
+fn grid(q: [f32; 4], bits: u8) -> [f32; 4] {
+    let step = 1.0 / f32::from(1u16 << (bits - 1));
+    q.map(|c| (c / step).round() * step)
+}
+
+/// 16-bit rotations by default, `grid` at the bits the reducer picks.
+const GRID: Codec = Codec {
+    rotation: rigport_model::quantize::rotation_as_i16,
+    vector: None,
+    rotation_bits: Some(grid),
+};
+
+/// With a codec that takes bits per track, each rotation track gets the fewest its
+/// tolerance allows: a leaf, whose rotation moves only its 3 cm points, fewer than the
+/// root, which moves the whole chain; the bound holds as the tracks are written, at those
+/// bits; a codec with one precision reports none.
+#[test]
+fn rotation_bits_are_picked_per_track_within_the_bound() {
+    let mut rng = Rng(0x00b1_75ee_d5ee);
+    let skeleton = random_skeleton(&mut rng, 12);
+    let clip = random_clip(&mut rng, &skeleton, 240);
+    let points = vec![0.03; skeleton.len()];
+    let options = ReduceOptions {
+        tolerance: 1e-3,
+        point_distance: points.clone(),
+        codec: Some(GRID),
+        uniform_rate: true,
+        cubic: false,
+    };
+    let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+    assert!(stats.coded && stats.max_error <= 1e-3, "{stats:?}");
+    assert_eq!(stats.rotation_bits.len(), reduced.tracks.len());
+    let bits_of = |joint: usize| {
+        let k = reduced
+            .tracks
+            .iter()
+            .position(|t| t.target == TrackTarget::Rotation(JointIndex(joint as u32)))
+            .expect("a rotation track per joint");
+        match stats.rotation_bits[k] {
+            0 => 16,
+            b => b,
+        }
+    };
+    let parents: Vec<Option<JointIndex>> = skeleton.parents().collect();
+    let leaf = (0..skeleton.len())
+        .rev()
+        .find(|&j| !parents.contains(&Some(JointIndex(j as u32))))
+        .expect("a leaf");
+    assert!(bits_of(leaf) < bits_of(0), "{:?}", stats.rotation_bits);
+    assert!(bits_of(leaf) < 16, "{:?}", stats.rotation_bits);
+    // Only rotation tracks have bits.
+    for (track, &bits) in reduced.tracks.iter().zip(&stats.rotation_bits) {
+        assert!(bits == 0 || matches!(track.target, TrackTarget::Rotation(_)));
+    }
+    let measured = metric::point_error_bits(
+        &clip,
+        &reduced,
+        &skeleton,
+        &points,
+        Some(&GRID),
+        &stats.rotation_bits,
+    )
+    .expect("measures");
+    assert_eq!(measured.max, stats.max_error);
+    // Read at the default precision instead, the clip is another one: the bits matter.
+    let default =
+        metric::point_error(&clip, &reduced, &skeleton, &points, Some(&GRID)).expect("measures");
+    assert_ne!(default.max, measured.max);
+    let one = ReduceOptions {
+        codec: Some(Codec::I16),
+        ..options
+    };
+    let (_, stats) = reduce_clip(&clip, &skeleton, &one).expect("reduces");
+    assert!(stats.rotation_bits.is_empty());
+}

@@ -18,23 +18,25 @@ use rigport_model::quantize::{component_to_i16, rotation_to_i16};
 use rigport_model::{Asset, Clip, Interpolation, Track, TrackTarget, Transform, Warning};
 
 use super::buffer::{Bounds, Builder};
-use super::{quat_dot, unit_quat};
+use super::{quat_dot, unit_quat, GltfOptions};
 use crate::labels::mesh_label;
 
 /// Writes one glTF animation per clip that has an exportable track.
 ///
 /// `mesh_nodes[m]` is the node of mesh `m` (the target of its morph-weight tracks). Key
 /// times are shared: tracks with bit-identical time arrays use one input accessor, across
-/// clips too.
+/// clips too. `opts.compact` writes rotations as 16-bit integers (with meshopt: at
+/// `opts.rotation_bits` per track).
 pub(crate) fn write_animations(
     b: &mut Builder,
     asset: &Asset,
     mesh_nodes: &[usize],
-    rotations_i16: bool,
+    opts: &GltfOptions,
     warnings: &mut Vec<Warning>,
 ) {
+    let rotations_i16 = opts.compact;
     let mut inputs: BTreeMap<Vec<u32>, Index<json::Accessor>> = BTreeMap::new();
-    for clip in &asset.clips {
+    for (ci, clip) in asset.clips.iter().enumerate() {
         // Per-track warnings, flushed in track order once the clip is planned and written.
         let mut track_warnings: Vec<(usize, Warning)> = Vec::new();
         let mut seen = BTreeSet::new();
@@ -146,7 +148,14 @@ pub(crate) fn write_animations(
                     Constancy::Constant => track.key_value(0).repeat(times.len()),
                     _ => track.values.clone(),
                 };
-                b.animation_rotations(&raw, i16_rotations)
+                let bits = opts
+                    .rotation_bits
+                    .get(ci)
+                    .and_then(|c| c.get(ti))
+                    .copied()
+                    .filter(|&k| k > 0)
+                    .unwrap_or(16);
+                b.animation_rotations(&raw, bits, i16_rotations)
             } else {
                 b.animation_floats(&values, type_, Bounds::None)
             };

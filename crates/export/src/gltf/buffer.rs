@@ -420,16 +420,17 @@ impl Builder {
     }
 
     /// Rotation outputs of LINEAR or STEP keys (flat xyzw, as in the track) as 16-bit
-    /// normalized components: compressed through the `QUATERNION` filter when the export
-    /// is, else each key rounded ([`rigport_model::quantize::rotation_to_i16`]) and signs
+    /// normalized components: compressed through the `QUATERNION` filter (with `bits` per
+    /// stored component) when the export is, else each key rounded ([`rigport_model::quantize::rotation_to_i16`]) and signs
     /// made continuous by `i16_keys`.
     pub(crate) fn animation_rotations(
         &mut self,
         values: &[f32],
+        bits: u8,
         i16_keys: impl FnOnce(&[f32]) -> Vec<i16>,
     ) -> Index<json::Accessor> {
         if self.compressed.is_some() {
-            let raw = meshopt::quaternions(values);
+            let raw = meshopt::quaternions(values, bits);
             let index = self.grouped(
                 &raw,
                 8,

@@ -219,7 +219,7 @@ pub(crate) fn build(
         );
     }
 
-    animation::write_animations(&mut b, asset, &mesh_nodes, opts.compact, &mut warnings);
+    animation::write_animations(&mut b, asset, &mesh_nodes, opts, &mut warnings);
 
     for (node, kids) in nodes.iter_mut().zip(children) {
         if !kids.is_empty() {

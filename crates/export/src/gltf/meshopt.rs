@@ -34,21 +34,46 @@ const CODEC_VERSION: i32 = 0;
 /// assert!(near(1.0) || near(-1.0), "{q:?}");
 /// ```
 pub fn rotation_as_written(q: [f32; 4]) -> [f32; 4] {
-    let mut encoded = [encode_rotation(q)];
+    rotation_as_written_bits(q, QUAT_BITS as u8)
+}
+
+/// [`rotation_as_written`] with `bits` (4 to 16, clamped) per stored component: the
+/// filter's precision, chosen per track by the key reducer. Fewer bits leave the high bits
+/// of the stored integers equal from key to key, which the vertex codec packs away.
+///
+/// ```
+/// use rigport_export::meshopt_rotation_as_written_bits as written;
+/// let q = [0.1f32, 0.6, -0.2, 0.76811457];
+/// let angle = |p: [f32; 4]| {
+///     let d: f32 = p.iter().zip(q).map(|(a, b)| a * b).sum();
+///     2.0 * d.abs().min(1.0).acos()
+/// };
+/// // Each bit fewer about doubles the error: 16 bits within 1e-4 rad, 10 within 5e-3.
+/// assert!(angle(written(q, 16)) < 1e-4 && angle(written(q, 10)) < 5e-3);
+/// assert!(angle(written(q, 10)) > angle(written(q, 16)));
+/// ```
+pub fn rotation_as_written_bits(q: [f32; 4], bits: u8) -> [f32; 4] {
+    let mut encoded = [encode_rotation(q, bits)];
     meshopt::decode_filter_quat(&mut encoded);
     rigport_model::quantize::rotation_from_i16(encoded[0])
 }
 
-/// The `QUATERNION` filter's encoding of `q`: of the encodings whose three stored
-/// components are within one step of the filter's own, the one that decodes to the 16-bit
-/// quaternion whose length is nearest 1 (nearest to `q` among equals). Readers compose the
-/// decoded quaternion without normalizing it (three.js), and a length off 1 scales the
-/// joint by its square (see `rigport_model::quantize::rotation_to_i16`).
-fn encode_rotation(q: [f32; 4]) -> [i16; 4] {
+/// The `QUATERNION` filter's encoding of `q` with `bits` per component: of the encodings
+/// whose three stored components are within one step of the filter's own, at 16 bits the
+/// one that decodes to the 16-bit quaternion whose length is nearest 1 (nearest to `q`
+/// among equals); with fewer bits, whose steps are coarser than the length's rounding, the
+/// one that moves a point at unit distance least: its angle to `q` plus twice its length's
+/// distance to 1 (what the key reducer measures). Readers compose the decoded quaternion
+/// without normalizing it (three.js), and a length off 1 scales the joint by its square
+/// (see `rigport_model::quantize::rotation_to_i16`).
+fn encode_rotation(q: [f32; 4], bits: u8) -> [i16; 4] {
+    let bits = i32::from(bits).clamp(4, QUAT_BITS);
     let u = unit(q);
-    let [first] = meshopt::encode_filter_quat(&[u], QUAT_BITS)[..] else {
+    let [first] = meshopt::encode_filter_quat(&[u], bits)[..] else {
         return [0, 0, 0, 0];
     };
+    // The stored components' range: ±(2^(bits-1) - 1).
+    let limit = (1i32 << (bits - 1)) - 1;
     let short_max = 32767.0f64;
     let mut best = first;
     let mut best_key = (f64::INFINITY, f64::INFINITY);
@@ -58,23 +83,28 @@ fn encode_rotation(q: [f32; 4]) -> [i16; 4] {
         for (i, ci) in c.iter_mut().take(3).enumerate() {
             let step = (k / 3i32.pow(i as u32)) % 3 - 1;
             let v = i32::from(*ci) + step;
-            if v.abs() > 32767 {
+            if v.abs() > limit {
                 valid = false;
             }
-            *ci = v.clamp(-32767, 32767) as i16;
+            *ci = v.clamp(-limit, limit) as i16;
         }
         if !valid {
             continue;
         }
         let mut decoded = [c];
         meshopt::decode_filter_quat(&mut decoded);
-        let d = decoded[0].map(f64::from);
-        let length = (d.iter().map(|x| x * x).sum::<f64>() - short_max * short_max).abs();
+        let d = decoded[0].map(|x| f64::from(x) / short_max);
+        let length = d.iter().map(|x| x * x).sum::<f64>().sqrt();
         // Distance to `q` up to sign (the filter may flip it).
         let dot: f64 = d.iter().zip(u).map(|(a, b)| a * f64::from(b)).sum();
-        let distance = short_max * short_max - dot.abs();
-        if (length, distance) < best_key {
-            best_key = (length, distance);
+        let key = if bits == QUAT_BITS {
+            ((length * length - 1.0).abs(), 1.0 - dot.abs())
+        } else {
+            let angle = 2.0 * (dot.abs() / length).min(1.0).acos();
+            (angle + 2.0 * (length - 1.0).abs(), 0.0)
+        };
+        if key < best_key {
+            best_key = key;
             best = c;
         }
     }
@@ -156,11 +186,11 @@ fn encode(raw: &[u8], stride: usize) -> Vec<u8> {
     }
 }
 
-/// Filtered bytes of rotation keys (flat xyzw).
-pub(crate) fn quaternions(values: &[f32]) -> Vec<u8> {
+/// Filtered bytes of rotation keys (flat xyzw) with `bits` per stored component.
+pub(crate) fn quaternions(values: &[f32], bits: u8) -> Vec<u8> {
     values
         .chunks_exact(4)
-        .map(|c| encode_rotation([c[0], c[1], c[2], c[3]]))
+        .map(|c| encode_rotation([c[0], c[1], c[2], c[3]], bits))
         .collect::<Vec<[i16; 4]>>()
         .iter()
         .flatten()

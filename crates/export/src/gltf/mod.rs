@@ -81,6 +81,11 @@ pub struct GltfOptions {
     /// [`crate::meshopt_vector_as_written`] say what a reader gets), else exact floats.
     /// Default none.
     pub compression: Compression,
+    /// With [`Compression::Meshopt`] and `compact`: per clip (in the asset's order), per
+    /// track, the `QUATERNION` filter's bits for that LINEAR or STEP rotation track (4 to
+    /// 16, as [`crate::meshopt_rotation_as_written_bits`] measured it for the key reducer);
+    /// 0, or a clip or track past the end: 16. Default empty (16 everywhere).
+    pub rotation_bits: Vec<Vec<u8>>,
 }
 
 impl Default for GltfOptions {
@@ -90,6 +95,7 @@ impl Default for GltfOptions {
             compact: false,
             quantize_mesh: false,
             compression: Compression::None,
+            rotation_bits: Vec::new(),
         }
     }
 }

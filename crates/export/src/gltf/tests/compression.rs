@@ -463,3 +463,57 @@ fn cubic_rotations_are_shorts_only_when_every_tangent_fits() {
     let ((component, _), _) = output_type(1.5);
     assert_eq!(component, Some(5126));
 }
+
+/// The bits per component of every key of the `QUATERNION` views of a meshopt export (the
+/// filter stores them in each key's fourth component: `2^(bits-1) - 1`, its two low bits
+/// the index of the largest component).
+fn quaternion_bits(glb: &[u8]) -> Vec<u32> {
+    let json = glb_json(glb);
+    let packed = bin(glb);
+    let mut bits = Vec::new();
+    for view in json["bufferViews"].as_array().expect("views") {
+        let ext = &view["extensions"]["EXT_meshopt_compression"];
+        if ext["filter"] != "QUATERNION" {
+            continue;
+        }
+        let at = ext["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let len = ext["byteLength"].as_u64().expect("length") as usize;
+        let count = ext["count"].as_u64().expect("count") as usize;
+        let rows: Vec<[i16; 4]> =
+            ::meshopt::decode_vertex_buffer(&packed[at..at + len], count).expect("decodes");
+        bits.extend(rows.iter().map(|r| (i32::from(r[3]) | 3).ilog2() + 2));
+    }
+    bits
+}
+
+/// `rotation_bits` sets the filter's precision per track, as the reducer measured it;
+/// without it every key has 16 bits.
+#[test]
+fn meshopt_rotations_are_written_at_the_bits_of_their_track() {
+    let asset = test_assets::rig();
+    let export = |rotation_bits: Vec<Vec<u8>>| {
+        let options = GltfOptions {
+            compact: true,
+            compression: Compression::Meshopt,
+            rotation_bits,
+            ..Default::default()
+        };
+        to_glb(&asset, &options).expect("export").glb
+    };
+    let default = quaternion_bits(&export(Vec::new()));
+    assert!(
+        !default.is_empty() && default.iter().all(|&b| b == 16),
+        "{default:?}"
+    );
+    let ten: Vec<Vec<u8>> = asset
+        .clips
+        .iter()
+        .map(|c| vec![10; c.tracks.len()])
+        .collect();
+    let packed = export(ten);
+    let bits = quaternion_bits(&packed);
+    assert_eq!(bits.len(), default.len());
+    assert!(bits.iter().all(|&b| b == 10), "{bits:?}");
+    // Fewer bits, fewer bytes.
+    assert!(packed.len() < export(Vec::new()).len());
+}
