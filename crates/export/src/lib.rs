@@ -48,7 +48,7 @@ mod test_assets;
 pub use error::{ExportError, Problem};
 pub use gltf::meshopt::{
     rotation_as_written as meshopt_rotation_as_written,
-    rotation_as_written_bits as meshopt_rotation_as_written_bits,
+    rotations_as_written_bits as meshopt_rotations_as_written_bits,
     vector_as_written as meshopt_vector_as_written,
 };
 pub use gltf::weights::gltf_influences;

@@ -247,7 +247,7 @@ pub(crate) fn codec(compression: Compression) -> Codec {
         Compression::Meshopt => Codec {
             rotation: rigport_export::meshopt_rotation_as_written,
             vector: Some(rigport_export::meshopt_vector_as_written),
-            rotation_bits: Some(rigport_export::meshopt_rotation_as_written_bits),
+            rotation_bits: Some(rigport_export::meshopt_rotations_as_written_bits),
         },
     }
 }

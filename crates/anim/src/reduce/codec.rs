@@ -3,8 +3,9 @@
 use rigport_model::quantize::component_as_i16;
 use rigport_model::Track;
 
-/// A rotation key (xyzw) as read back when written with the given bits per component.
-pub type RotationAtBits = fn([f32; 4], u8) -> [f32; 4];
+/// A track's rotation keys (xyzw) as read back when written with the given bits per
+/// component.
+pub type RotationAtBits = fn(&[[f32; 4]], u8) -> Vec<[f32; 4]>;
 
 /// How a writer stores key values, as functions from a value to what a reader gets back.
 #[derive(Clone, Copy, Debug)]

@@ -95,9 +95,14 @@ pub fn point_error_bits(
             } else if let (Some(bits), Some(written), Kind::Rotation) =
                 (bits, codec.rotation_bits, chan.kind)
             {
+                let keys: Vec<[f32; 4]> = track
+                    .values
+                    .chunks_exact(4)
+                    .map(|c| [c[0], c[1], c[2], c[3]])
+                    .collect();
                 let mut out = track.clone();
-                for c in out.values.chunks_exact_mut(4) {
-                    c.copy_from_slice(&written([c[0], c[1], c[2], c[3]], bits));
+                for (c, w) in out.values.chunks_exact_mut(4).zip(written(&keys, bits)) {
+                    c.copy_from_slice(&w);
                 }
                 Some(out)
             } else {

@@ -1069,9 +1069,11 @@ fn cubic_spins_and_steps_keep_their_direction() {
 
 /// A test codec's rounding with `bits` per component: each component on a grid of
 /// `2^-(bits - 1)`, not normalized (a reader composes it as it is).
-fn grid(q: [f32; 4], bits: u8) -> [f32; 4] {
+fn grid(keys: &[[f32; 4]], bits: u8) -> Vec<[f32; 4]> {
     let step = 1.0 / f32::from(1u16 << (bits - 1));
-    q.map(|c| (c / step).round() * step)
+    keys.iter()
+        .map(|q| q.map(|c| (c / step).round() * step))
+        .collect()
 }
 
 /// 16-bit rotations by default, `grid` at the bits the reducer picks.

@@ -34,15 +34,19 @@ const CODEC_VERSION: i32 = 0;
 /// assert!(near(1.0) || near(-1.0), "{q:?}");
 /// ```
 pub fn rotation_as_written(q: [f32; 4]) -> [f32; 4] {
-    rotation_as_written_bits(q, QUAT_BITS as u8)
+    let mut encoded = [encode_rotation(q)];
+    meshopt::decode_filter_quat(&mut encoded);
+    rigport_model::quantize::rotation_from_i16(encoded[0])
 }
 
-/// [`rotation_as_written`] with `bits` (4 to 16, clamped) per stored component: the
-/// filter's precision, chosen per track by the key reducer. Fewer bits leave the high bits
-/// of the stored integers equal from key to key, which the vertex codec packs away.
+/// Rotation keys (xyzw, any length) as a reader gets them back through the `QUATERNION`
+/// filter with `bits` (4 to 16, clamped) per stored component, the precision the key
+/// reducer picks per track. Fewer bits leave the high bits of the stored integers equal
+/// from key to key, which the vertex codec packs away. Below 16 bits the filter's own
+/// rounding is written (one encoding and one decoding for the whole track).
 ///
 /// ```
-/// use rigport_export::meshopt_rotation_as_written_bits as written;
+/// use rigport_export::meshopt_rotations_as_written_bits as written;
 /// let q = [0.1f32, 0.6, -0.2, 0.76811457];
 /// // The rotation angle between `p` and `q` (either sign), in f64.
 /// let angle = |p: [f32; 4]| {
@@ -55,31 +59,39 @@ pub fn rotation_as_written(q: [f32; 4]) -> [f32; 4] {
 ///     4.0 * lo.atan2(hi)
 /// };
 /// // Each bit fewer about doubles the error: 16 bits within 1e-4 rad, 10 within 5e-3.
-/// assert!(angle(written(q, 16)) < 1e-4 && angle(written(q, 10)) < 5e-3);
-/// assert!(angle(written(q, 10)) > angle(written(q, 16)));
+/// let (fine, coarse) = (written(&[q], 16)[0], written(&[q], 10)[0]);
+/// assert!(angle(fine) < 1e-4 && angle(coarse) < 5e-3 && angle(coarse) > angle(fine));
 /// ```
-pub fn rotation_as_written_bits(q: [f32; 4], bits: u8) -> [f32; 4] {
-    let mut encoded = [encode_rotation(q, bits)];
+pub fn rotations_as_written_bits(keys: &[[f32; 4]], bits: u8) -> Vec<[f32; 4]> {
+    let mut encoded = encode_rotations(keys, bits);
     meshopt::decode_filter_quat(&mut encoded);
-    rigport_model::quantize::rotation_from_i16(encoded[0])
+    encoded
+        .into_iter()
+        .map(rigport_model::quantize::rotation_from_i16)
+        .collect()
 }
 
-/// The `QUATERNION` filter's encoding of `q` with `bits` per component: of the encodings
-/// whose three stored components are within one step of the filter's own, at 16 bits the
-/// one that decodes to the 16-bit quaternion whose length is nearest 1 (nearest to `q`
-/// among equals); with fewer bits, whose steps are coarser than the length's rounding, the
-/// one that moves a point at unit distance least: its angle to `q` plus twice its length's
-/// distance to 1 (what the key reducer measures). Readers compose the decoded quaternion
-/// without normalizing it (three.js), and a length off 1 scales the joint by its square
-/// (see `rigport_model::quantize::rotation_to_i16`).
-fn encode_rotation(q: [f32; 4], bits: u8) -> [i16; 4] {
+/// The `QUATERNION` filter's encodings of `keys` with `bits` per component: at 16 bits each
+/// key's [`encode_rotation`], below it the filter's own rounding.
+fn encode_rotations(keys: &[[f32; 4]], bits: u8) -> Vec<[i16; 4]> {
     let bits = i32::from(bits).clamp(4, QUAT_BITS);
+    if bits == QUAT_BITS {
+        return keys.iter().map(|&q| encode_rotation(q)).collect();
+    }
+    let units: Vec<[f32; 4]> = keys.iter().map(|&q| unit(q)).collect();
+    meshopt::encode_filter_quat(&units, bits)
+}
+
+/// The `QUATERNION` filter's encoding of `q` at 16 bits: of the encodings whose three
+/// stored components are within one step of the filter's own, the one that decodes to the
+/// 16-bit quaternion whose length is nearest 1 (nearest to `q` among equals). Readers
+/// compose the decoded quaternion without normalizing it (three.js), and a length off 1
+/// scales the joint by its square (see `rigport_model::quantize::rotation_to_i16`).
+fn encode_rotation(q: [f32; 4]) -> [i16; 4] {
     let u = unit(q);
-    let [first] = meshopt::encode_filter_quat(&[u], bits)[..] else {
+    let [first] = meshopt::encode_filter_quat(&[u], QUAT_BITS)[..] else {
         return [0, 0, 0, 0];
     };
-    // The stored components' range: ±(2^(bits-1) - 1).
-    let limit = (1i32 << (bits - 1)) - 1;
     let short_max = 32767.0f64;
     let mut best = first;
     let mut best_key = (f64::INFINITY, f64::INFINITY);
@@ -89,28 +101,23 @@ fn encode_rotation(q: [f32; 4], bits: u8) -> [i16; 4] {
         for (i, ci) in c.iter_mut().take(3).enumerate() {
             let step = (k / 3i32.pow(i as u32)) % 3 - 1;
             let v = i32::from(*ci) + step;
-            if v.abs() > limit {
+            if v.abs() > 32767 {
                 valid = false;
             }
-            *ci = v.clamp(-limit, limit) as i16;
+            *ci = v.clamp(-32767, 32767) as i16;
         }
         if !valid {
             continue;
         }
         let mut decoded = [c];
         meshopt::decode_filter_quat(&mut decoded);
-        let d = decoded[0].map(|x| f64::from(x) / short_max);
-        let length = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let d = decoded[0].map(f64::from);
+        let length = (d.iter().map(|x| x * x).sum::<f64>() - short_max * short_max).abs();
         // Distance to `q` up to sign (the filter may flip it).
         let dot: f64 = d.iter().zip(u).map(|(a, b)| a * f64::from(b)).sum();
-        let key = if bits == QUAT_BITS {
-            ((length * length - 1.0).abs(), 1.0 - dot.abs())
-        } else {
-            let angle = 2.0 * (dot.abs() / length).min(1.0).acos();
-            (angle + 2.0 * (length - 1.0).abs(), 0.0)
-        };
-        if key < best_key {
-            best_key = key;
+        let distance = short_max * short_max - dot.abs();
+        if (length, distance) < best_key {
+            best_key = (length, distance);
             best = c;
         }
     }
@@ -194,10 +201,11 @@ fn encode(raw: &[u8], stride: usize) -> Vec<u8> {
 
 /// Filtered bytes of rotation keys (flat xyzw) with `bits` per stored component.
 pub(crate) fn quaternions(values: &[f32], bits: u8) -> Vec<u8> {
-    values
+    let keys: Vec<[f32; 4]> = values
         .chunks_exact(4)
-        .map(|c| encode_rotation([c[0], c[1], c[2], c[3]], bits))
-        .collect::<Vec<[i16; 4]>>()
+        .map(|c| [c[0], c[1], c[2], c[3]])
+        .collect();
+    encode_rotations(&keys, bits)
         .iter()
         .flatten()
         .flat_map(|c| c.to_le_bytes())

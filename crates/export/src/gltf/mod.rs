@@ -83,7 +83,7 @@ pub struct GltfOptions {
     pub compression: Compression,
     /// With [`Compression::Meshopt`] and `compact`: per clip (in the asset's order), per
     /// track, the `QUATERNION` filter's bits for that LINEAR or STEP rotation track (4 to
-    /// 16, as [`crate::meshopt_rotation_as_written_bits`] measured it for the key reducer);
+    /// 16, as [`crate::meshopt_rotations_as_written_bits`] measured it for the key reducer);
     /// 0, or a clip or track past the end: 16. Default empty (16 everywhere).
     pub rotation_bits: Vec<Vec<u8>>,
 }
