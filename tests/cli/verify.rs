@@ -531,3 +531,30 @@ fn blender_round_trip_agrees_at_key_times() {
     let last = json["clips"][0]["times"].as_u64().unwrap() - 1;
     assert_eq!(worst["frame"].as_u64(), Some(last), "{json:#}");
 }
+
+/// The text report lists joints that only the candidate has, also when their indices run
+/// past the reference's joints: a 64-box FBX against its glb, whose boxes' mesh nodes
+/// become 64 more joints, printed them by the reference's index and panicked.
+#[test]
+fn text_report_names_candidate_joints_past_the_reference_count() {
+    let Some(fbx) =
+        corpus("7_fbx/assimp_test_models__assimp/anims_with_full_rotations_between_keys.fbx")
+    else {
+        return;
+    };
+    let dir = scratch();
+    let glb = dir.path().join("boxes.glb");
+    convert(&[&fbx], &glb, &[]);
+    let out = rigport(&["verify", fbx.to_str().unwrap(), glb.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("joints only in the candidate: \"Box001Mesh\""),
+        "{text}"
+    );
+}

@@ -97,12 +97,8 @@ pub(crate) fn summary(f: &Findings<'_>) -> String {
         "joints",
         &f.joints.only_reference,
         &f.joints.only_candidate,
-        |k| {
-            (
-                r.skeleton.joints()[k].name.clone(),
-                c.skeleton.joints().get(k).map(|j| j.name.clone()),
-            )
-        },
+        |k| r.skeleton.joints().get(k).map(|j| j.name.clone()),
+        |k| c.skeleton.joints().get(k).map(|j| j.name.clone()),
     );
     for (pair, &(_, cm, named)) in f.mesh_pairs.iter().zip(&f.meshes.pairs) {
         let _ = writeln!(
@@ -122,12 +118,8 @@ pub(crate) fn summary(f: &Findings<'_>) -> String {
         "meshes",
         &f.meshes.only_reference,
         &f.meshes.only_candidate,
-        |k| {
-            (
-                r.meshes[k].name.clone(),
-                c.meshes.get(k).map(|m| m.name.clone()),
-            )
-        },
+        |k| r.meshes.get(k).map(|m| m.name.clone()),
+        |k| c.meshes.get(k).map(|m| m.name.clone()),
     );
     for (m, ro, co) in &f.morphs_only {
         let _ = writeln!(
@@ -141,12 +133,8 @@ pub(crate) fn summary(f: &Findings<'_>) -> String {
         "clips",
         &f.clips.only_reference,
         &f.clips.only_candidate,
-        |k| {
-            (
-                r.clips[k].name.clone(),
-                c.clips.get(k).map(|x| x.name.clone()),
-            )
-        },
+        |k| r.clips.get(k).map(|x| x.name.clone()),
+        |k| c.clips.get(k).map(|x| x.name.clone()),
     );
     if let Some(p) = &f.placement {
         let _ = writeln!(
@@ -179,7 +167,8 @@ fn only(
     what: &str,
     reference: &[usize],
     candidate: &[usize],
-    names: impl Fn(usize) -> (String, Option<String>),
+    reference_name: impl Fn(usize) -> Option<String>,
+    candidate_name: impl Fn(usize) -> Option<String>,
 ) {
     let list = |ks: &[usize], pick: &dyn Fn(usize) -> Option<String>| {
         ks.iter()
@@ -192,14 +181,14 @@ fn only(
         let _ = writeln!(
             s,
             "{what} only in the reference: {}",
-            list(reference, &|k| Some(names(k).0))
+            list(reference, &reference_name)
         );
     }
     if !candidate.is_empty() {
         let _ = writeln!(
             s,
             "{what} only in the candidate: {}",
-            list(candidate, &|k| names(k).1)
+            list(candidate, &candidate_name)
         );
     }
 }
