@@ -458,6 +458,26 @@ impl SampleJob<'_> {
     /// # Errors
     /// As [`SampleJob::validate`], which it calls first.
     pub fn run(&mut self) -> Result<(), SampleError> {
+        self.run_with(sample_rotation)
+    }
+
+    /// [`SampleJob::run`] with rotations as a viewer composes them: the keys as stored,
+    /// not normalized ([`rigport_model::interp::Keys::sample_rotation_as_stored`]), for
+    /// `rigport eval`, which shows what three.js and UsdSkel show. Every other job works on
+    /// unit rotations ([`SampleJob::run`]).
+    ///
+    /// # Errors
+    /// As [`SampleJob::validate`], which it calls first.
+    pub fn run_as_stored(&mut self) -> Result<(), SampleError> {
+        self.run_with(|track, time| {
+            Quat::from_array(Keys::of(track).sample_rotation_as_stored(time))
+        })
+    }
+
+    fn run_with(
+        &mut self,
+        sample_rotation: impl Fn(&Track, f32) -> Quat,
+    ) -> Result<(), SampleError> {
         self.validate()?;
         let time = self.time.clamp(self.clip.start, self.clip.end);
         let tracks = &self.clip.clip.tracks;

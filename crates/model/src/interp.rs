@@ -236,6 +236,87 @@ impl<'a> Keys<'a, f32> {
     }
 }
 
+impl Keys<'_, f32> {
+    /// A rotation track (xyzw keys) at `time` as a viewer composes it: the keys as stored,
+    /// not normalized. 16-bit normalized keys (and meshopt's quaternion filter) are up to
+    /// about 3e-5 off unit length, and three.js builds the joint's matrix from them as
+    /// they are, scaled by the squared length, except where its slerp normalizes. Before
+    /// the first key, from the last, and for STEP: the stored key; LINEAR elsewhere, on a
+    /// key too: three.js's `Quaternion.slerpFlat` of the stored keys ([`slerp_flat`]), from
+    /// a key to the next; CUBICSPLINE: normalized, as three.js's glTF loader normalizes its
+    /// cubic rotations.
+    ///
+    /// ```
+    /// use rigport_model::interp::Keys;
+    /// use rigport_model::Interpolation;
+    /// // Keys 90 degrees apart, the first 2e-5 too long: three.js slerps them as stored.
+    /// let (a, b) = ([0.0f32, 0.0, 0.0, 1.00002], [0.0, 0.70711, 0.0, 0.70711]);
+    /// let values = [a, b].concat();
+    /// let keys = Keys { interpolation: Interpolation::Linear, times: &[0.0, 1.0], values: &values, components: 4 };
+    /// assert_eq!(keys.sample_rotation_as_stored(0.0), a);
+    /// let mid = keys.sample_rotation_as_stored(0.5);
+    /// let length = mid.iter().map(|c| c * c).sum::<f32>().sqrt();
+    /// assert!((length - 1.0).abs() > 1e-6, "{length}");
+    /// // Keys close together: it lerps and normalizes, on the first key too.
+    /// let near = [a, [0.0, 0.01, 0.0, 0.99995]].concat();
+    /// let keys = Keys { values: &near, ..keys };
+    /// let first = keys.sample_rotation_as_stored(0.0);
+    /// assert!((first.iter().map(|c| c * c).sum::<f32>().sqrt() - 1.0).abs() < 1e-6);
+    /// ```
+    pub fn sample_rotation_as_stored(&self, time: f32) -> [f32; 4] {
+        let wide = |q: [f32; 4]| q.map(f64::from);
+        let last = self.times.len().saturating_sub(1);
+        match (locate(self.times, time), self.interpolation) {
+            // three.js's interpolant holds the stored key before the first and from the last.
+            (Span::Key(k), _) if k == last || time < self.times[0] => self.quat_key(k, VALUE),
+            // On a key it interpolates from that key to the next at 0.
+            (Span::Key(k), Interpolation::Linear) => {
+                let (a, b) = (self.quat_key(k, VALUE), self.quat_key(k + 1, VALUE));
+                slerp_flat(wide(a), wide(b), 0.0).map(|c| c as f32)
+            }
+            (Span::Key(k), _) | (Span::Between { k, .. }, Interpolation::Step) => {
+                self.quat_key(k, VALUE)
+            }
+            (Span::Between { k, u, .. }, Interpolation::Linear) => {
+                let (a, b) = (self.quat_key(k, VALUE), self.quat_key(k + 1, VALUE));
+                slerp_flat(wide(a), wide(b), f64::from(u)).map(|c| c as f32)
+            }
+            (span @ Span::Between { .. }, Interpolation::CubicSpline) => {
+                unit(std::array::from_fn(|i| self.sample_component(span, i)))
+            }
+        }
+    }
+}
+
+/// three.js's `Quaternion.slerpFlat` (r187), which its animation mixer applies to stored
+/// keys, step for step, for [`Keys::sample_rotation_as_stored`]: `a` when the keys are
+/// equal; else the shorter way, a slerp on `acos` of the (not necessarily unit) keys' dot
+/// product, unnormalized, when that is under 0.9995, and a lerp, normalized, above it (so
+/// at `t = 0` too).
+pub fn slerp_flat(a: [f64; 4], b: [f64; 4], t: f64) -> [f64; 4] {
+    if a == b {
+        return a;
+    }
+    let mut dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+    let b = if dot < 0.0 {
+        dot = -dot;
+        b.map(|c| -c)
+    } else {
+        b
+    };
+    let s = 1.0 - t;
+    if dot < 0.9995 {
+        let theta = dot.acos();
+        let sin = theta.sin();
+        let (ws, wt) = ((s * theta).sin() / sin, (t * theta).sin() / sin);
+        std::array::from_fn(|i| a[i] * ws + b[i] * wt)
+    } else {
+        let out: [f64; 4] = std::array::from_fn(|i| a[i] * s + b[i] * t);
+        let f = 1.0 / out.iter().map(|c| c * c).sum::<f64>().sqrt();
+        out.map(|c| c * f)
+    }
+}
+
 impl<T: Real> Keys<'_, T> {
     /// Component `c` of element `element` (a cubic-spline slot; ignored otherwise) of key
     /// `k`, 0 if out of range (only for unchecked tracks).

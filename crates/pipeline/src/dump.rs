@@ -282,13 +282,15 @@ fn evaluate(
             let mut pose = rest.clone();
             let mut weights = rig.rest_weights().clone();
             for &t in &times {
+                // Rotations as stored, as the viewers compose them (16-bit keys are not
+                // quite unit length).
                 SampleJob {
                     clip: &compiled,
                     time: t,
                     rest: &rest.local,
                     output: &mut pose.local,
                 }
-                .run()?;
+                .run_as_stored()?;
                 weights.sample(&compiled, t)?;
                 rig.evaluate_frame(&pose, &weights, method, &mut posed)?;
                 dump.push(t, &posed.joint_model, &posed.positions)

@@ -10,6 +10,10 @@ use crate::ImportError;
 use super::accessor::{FLOAT, FLOAT_OR_NORM};
 use super::importer::{Importer, UNIT_QUAT_TOLERANCE};
 
+/// How far from 1 a rotation key's length may be and still be kept as stored: 1e-4, past
+/// the rounding of 16-bit normalized components (about 2e-5 at most).
+const QUANTIZED_LENGTH: f32 = 1e-4;
+
 impl<'a> Importer<'a> {
     pub(super) fn clips(
         &mut self,
@@ -160,7 +164,8 @@ impl<'a> Importer<'a> {
                     _ => TrackTarget::Rotation(joint),
                 };
                 let values = if property == Property::Rotation {
-                    self.unit_rotations(values, interpolation, &out_at)?
+                    let quantized = output.data_type() != gltf::accessor::DataType::F32;
+                    self.unit_rotations(values, interpolation, quantized, &out_at)?
                 } else {
                     values
                 };
@@ -196,10 +201,16 @@ impl<'a> Importer<'a> {
 
     /// Normalizes LINEAR/STEP rotation keys (warning when one is off by more than the
     /// validator's tolerance); cubic-spline keys are kept with their tangents, only reported.
+    /// Integer keys (`quantized`: normalized `SHORT` or `BYTE`, meshopt's quaternion filter)
+    /// within [`QUANTIZED_LENGTH`] of unit length are kept as stored: they cannot be
+    /// exactly unit, and three.js composes them as they are, scaled by the squared length,
+    /// which `rigport eval` shows too (`SampleJob::run_as_stored`); every other command
+    /// samples them normalized.
     fn unit_rotations(
         &mut self,
         mut values: Vec<f32>,
         interpolation: Interpolation,
+        quantized: bool,
         at: &str,
     ) -> Result<Vec<f32>, ImportError> {
         let cubic = interpolation == Interpolation::CubicSpline;
@@ -220,7 +231,8 @@ impl<'a> Importer<'a> {
                 off += 1;
                 worst = worst.max((len - 1.0).abs());
             }
-            if !cubic {
+            let as_stored = quantized && (len - 1.0).abs() <= QUANTIZED_LENGTH;
+            if !cubic && !as_stored {
                 q.iter_mut().for_each(|c| *c /= len);
             }
         }

@@ -1,0 +1,12 @@
+import { readFile } from 'node:fs/promises';
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+const b = await readFile(process.argv[2]);
+const gltf = await new Promise((res, rej) => new GLTFLoader().parse(b.buffer.slice(b.byteOffset, b.byteOffset + b.byteLength), '', res, rej));
+const scene = gltf.scene; const clip = gltf.animations[0];
+const mixer = new THREE.AnimationMixer(scene); const a = mixer.clipAction(clip); a.setLoop(THREE.LoopOnce, 1); a.clampWhenFinished = true; a.play();
+const t = Number(process.argv[3]);
+mixer.setTime(t); scene.updateMatrixWorld(true);
+const out = {};
+scene.traverse((o) => { if (o.isBone || o.type === 'Object3D' || o.isObject3D) { if (o.name) out[o.name] = { q: o.quaternion.toArray(), p: o.position.toArray(), w: o.matrixWorld.toArray() }; } });
+console.log(JSON.stringify(out));
