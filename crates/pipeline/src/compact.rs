@@ -374,9 +374,7 @@ pub(crate) fn constants_into_rest(asset: &mut Asset) -> Option<Skeleton> {
     if !moved {
         return None;
     }
-    let mut skeleton = Skeleton::new(joints).ok()?;
-    skeleton.set_limits(asset.skeleton.limits().iter().cloned());
-    Some(std::mem::replace(&mut asset.skeleton, skeleton))
+    replace_joints(asset, joints)
 }
 
 /// The fraction of the bound under which a rest translation component is noise
@@ -439,6 +437,12 @@ pub(crate) fn zero_rest_noise(asset: &mut Asset, below: f32) -> Option<Skeleton>
     if !changed {
         return None;
     }
+    replace_joints(asset, joints)
+}
+
+/// Gives `asset` a skeleton of `joints` (the same hierarchy, other rest transforms), its
+/// joint limits kept; returns the skeleton it had.
+fn replace_joints(asset: &mut Asset, joints: Vec<rigport_model::Joint>) -> Option<Skeleton> {
     let mut skeleton = Skeleton::new(joints).ok()?;
     skeleton.set_limits(asset.skeleton.limits().iter().cloned());
     Some(std::mem::replace(&mut asset.skeleton, skeleton))

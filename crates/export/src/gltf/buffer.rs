@@ -252,8 +252,18 @@ impl Builder {
     ) -> Option<Index<json::buffer::View>> {
         let compressed = self.compressed.as_mut()?;
         let index = self.root.buffer_views.len();
-        let (offset, len) = compressed.push(&mut self.bin, index, raw, stride, filter);
-        Some(self.root.push(json::buffer::View {
+        let range = compressed.push(&mut self.bin, index, raw, stride, filter);
+        Some(self.fallback_view(range, target))
+    }
+
+    /// A view of the fallback buffer (buffer 1) over `(byte_offset, byte_length)`: its
+    /// data comes from the view's `EXT_meshopt_compression` object.
+    fn fallback_view(
+        &mut self,
+        (offset, len): (usize, usize),
+        target: Option<Target>,
+    ) -> Index<json::buffer::View> {
+        self.root.push(json::buffer::View {
             buffer: Index::new(1),
             byte_length: USize64::from(len),
             byte_offset: (offset > 0).then(|| USize64::from(offset)),
@@ -262,7 +272,7 @@ impl Builder {
             target: target.map(Checked::Valid),
             extensions: None,
             extras: None,
-        }))
+        })
     }
 
     /// A compressed view of triangle indices `raw` (little-endian, `stride` 2 or 4 bytes
@@ -286,17 +296,8 @@ impl Builder {
             _ => return None,
         };
         let index = self.root.buffer_views.len();
-        let (offset, len) = compressed.push_indices(&mut self.bin, index, &indices, stride)?;
-        Some(self.root.push(json::buffer::View {
-            buffer: Index::new(1),
-            byte_length: USize64::from(len),
-            byte_offset: (offset > 0).then(|| USize64::from(offset)),
-            byte_stride: None,
-            name: None,
-            target: Some(Checked::Valid(Target::ElementArrayBuffer)),
-            extensions: None,
-            extras: None,
-        }))
+        let range = compressed.push_indices(&mut self.bin, index, &indices, stride)?;
+        Some(self.fallback_view(range, Some(Target::ElementArrayBuffer)))
     }
 
     /// A view of vertex data `raw` (elements of `stride` bytes): compressed (no filter,

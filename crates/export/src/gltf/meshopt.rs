@@ -148,6 +148,32 @@ fn unit(q: [f32; 4]) -> [f32; 4] {
     }
 }
 
+/// Appends `encoded` to `bin` (4-byte aligned) and returns the extension object of view
+/// `view`: `count` elements of `stride` bytes, decoded in `mode`.
+fn append(
+    bin: &mut Vec<u8>,
+    view: usize,
+    encoded: &[u8],
+    (stride, count): (usize, usize),
+    mode: &str,
+) -> CompressedView {
+    let pad = bin.len().wrapping_neg() % 4;
+    bin.resize(bin.len() + pad, 0);
+    let offset = bin.len();
+    bin.extend_from_slice(encoded);
+    let mut extension = serde_json::json!({
+        "buffer": 0,
+        "byteLength": encoded.len(),
+        "byteStride": stride,
+        "count": count,
+        "mode": mode,
+    });
+    if offset > 0 {
+        extension["byteOffset"] = offset.into();
+    }
+    CompressedView { view, extension }
+}
+
 /// A view's filter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Filter {
@@ -306,25 +332,17 @@ impl Compressed {
         }
         let vertex_count = indices.iter().max().map_or(0, |&m| m as usize + 1);
         let encoded = meshopt::encode_index_buffer(indices, vertex_count).ok()?;
-        let pad = bin.len().wrapping_neg() % 4;
-        bin.resize(bin.len() + pad, 0);
-        let offset = bin.len();
-        bin.extend_from_slice(&encoded);
-        let mut extension = serde_json::json!({
-            "buffer": 0,
-            "byteLength": encoded.len(),
-            "byteStride": stride,
-            "count": indices.len(),
-            "mode": "TRIANGLES",
-        });
-        if offset > 0 {
-            extension["byteOffset"] = offset.into();
-        }
-        self.views.push(CompressedView { view, extension });
-        let len = indices.len() * stride;
+        let extension = append(bin, view, &encoded, (stride, indices.len()), "TRIANGLES");
+        self.views.push(extension);
+        Some(self.reserve(indices.len() * stride))
+    }
+
+    /// Reserves `len` decoded bytes in the fallback buffer (4-byte aligned) and returns
+    /// their range `(byte_offset, byte_length)`.
+    fn reserve(&mut self, len: usize) -> (usize, usize) {
         let at = self.fallback_len;
         self.fallback_len += len.next_multiple_of(4);
-        Some((at, len))
+        (at, len)
     }
 
     /// Encodes `raw` (filtered bytes, `count` elements of `stride`) into `bin` (4-byte
@@ -340,26 +358,11 @@ impl Compressed {
     ) -> (usize, usize) {
         let count = raw.len() / stride.max(1);
         let encoded = encode(raw, stride);
-        let pad = bin.len().wrapping_neg() % 4;
-        bin.resize(bin.len() + pad, 0);
-        let offset = bin.len();
-        bin.extend_from_slice(&encoded);
-        let mut extension = serde_json::json!({
-            "buffer": 0,
-            "byteLength": encoded.len(),
-            "byteStride": stride,
-            "count": count,
-            "mode": "ATTRIBUTES",
-        });
-        if offset > 0 {
-            extension["byteOffset"] = offset.into();
-        }
+        let mut extension = append(bin, view, &encoded, (stride, count), "ATTRIBUTES");
         if filter != Filter::None {
-            extension["filter"] = filter.name().into();
+            extension.extension["filter"] = filter.name().into();
         }
-        self.views.push(CompressedView { view, extension });
-        let at = self.fallback_len;
-        self.fallback_len += raw.len().next_multiple_of(4);
-        (at, raw.len())
+        self.views.push(extension);
+        self.reserve(raw.len())
     }
 }
