@@ -205,12 +205,18 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
         assert!(size(&meshopt) <= size(&plain), "{label}: {report_mo}");
         // The mesh (vertex data through the codec, exactly) loads as the file of the same
         // rest pose does: the core reduced file when both were written reduced (both with
-        // the properties every clip holds moved into the rest pose, and the same quantized
-        // vertices), else the plain one, within the quantization grid's bound.
+        // the properties every clip holds moved into the rest pose; the same quantized
+        // vertices when both chose the same grid), else the plain one, within the
+        // quantization grids' bounds.
         let both = report["reduced_written"] == true && report_mo["reduced_written"] == true;
-        let grid = report_mo["mesh_grid_error"].as_f64().expect("grid error")
-            * report["meters_per_unit"].as_f64().expect("unit");
-        let moved = if both { 1e-6 } else { grid + 1e-6 };
+        let unit = report["meters_per_unit"].as_f64().expect("unit");
+        let grid_mo = report_mo["mesh_grid_error"].as_f64().expect("grid error") * unit;
+        let grid_core = report["mesh_grid_error"].as_f64().expect("grid error") * unit;
+        let moved = match both {
+            true if grid_mo == grid_core => 1e-6,
+            true => grid_mo + grid_core + 1e-6,
+            false => grid_mo + 1e-6,
+        };
         let same_rest = if both { &reduced } else { &plain };
         let ((_, rest_plain), (_, rest_mo)) = (
             crate::three::three_eval(same_rest, &[]).expect("three.js"),
@@ -262,6 +268,23 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
         // gltfpack's own error, measured the same way (for the record).
         let packed_error =
             packed.and_then(|_| three_error(&plain, &at("gltfpack"))["max"].as_f64());
+        // The 30 fps captures (Bandai) meet gltfpack's sizes at the 1 mm bound, core and
+        // meshopt; the 120 fps ones hold motion above 15 Hz that gltfpack's 30 Hz
+        // resampling drops (README, "Compact clips"), and are only printed.
+        if label.starts_with("dataset-1_") {
+            if let (Some(packed), Some(packed_cc)) = (packed, packed_cc) {
+                assert!(
+                    size(&reduced) <= packed,
+                    "{label}: {} > gltfpack {packed}",
+                    size(&reduced)
+                );
+                assert!(
+                    size(&meshopt) <= packed_cc,
+                    "{label}: meshopt {} > gltfpack -cc {packed_cc}",
+                    size(&meshopt)
+                );
+            }
+        }
         let keys = &report["clips"][0];
         let show = |s: Option<u64>| s.map_or("-".into(), |s| s.to_string());
         table.push(format!(

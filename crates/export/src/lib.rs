@@ -50,6 +50,7 @@ pub use gltf::meshopt::{
     rotation_as_written as meshopt_rotation_as_written,
     rotations_as_written_bits as meshopt_rotations_as_written_bits,
     vector_as_written as meshopt_vector_as_written,
+    vector_as_written_16 as meshopt_vector_as_written_16,
 };
 pub use gltf::weights::gltf_influences;
 pub use gltf::{

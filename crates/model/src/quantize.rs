@@ -102,8 +102,8 @@ pub fn component_as_i16(c: f32) -> f32 {
 }
 
 /// A uniform grid for a mesh's positions as 16-bit integers (`KHR_mesh_quantization`):
-/// a position is stored as `q = round((p - center) / step)`, each component in
-/// `[-32767, 32767]`, and read back as `center + step * q` (a writer folds that map into
+/// a position is stored as `q = round((p - origin) / step)`, each component in
+/// `[-32767, 32767]`, and read back as `origin + step * q` (a writer folds that map into
 /// the skin's inverse bind matrices). One step for every axis keeps the map a uniform
 /// scale, so normals skinned with it keep their directions.
 ///
@@ -121,23 +121,28 @@ pub fn component_as_i16(c: f32) -> f32 {
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PositionGrid {
-    /// The middle of the positions' bounding box, in the mesh's space.
-    pub center: glam::Vec3,
+    /// The point stored as `(0, 0, 0)`, in the mesh's space: the middle of the positions'
+    /// bounding box ([`PositionGrid::new`]) or its lowest corner ([`PositionGrid::within`]).
+    pub origin: glam::Vec3,
     /// The distance between grid points on every axis, in the mesh's length unit.
     pub step: f32,
 }
 
+/// The bounding box of `positions` (lowest and highest corner); `None` without positions
+/// or with a non-finite one.
+fn bounds(positions: &[glam::Vec3]) -> Option<(glam::Vec3, glam::Vec3)> {
+    let first = *positions.first()?;
+    let (lo, hi) = positions
+        .iter()
+        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+}
+
 impl PositionGrid {
     /// The grid spanning `positions`' bounding box with 65,534 steps along its longest
-    /// side; `None` without positions or with a non-finite one.
+    /// side, centred on it; `None` without positions or with a non-finite one.
     pub fn new(positions: &[glam::Vec3]) -> Option<Self> {
-        let first = *positions.first()?;
-        let (lo, hi) = positions
-            .iter()
-            .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-        if !(lo.is_finite() && hi.is_finite()) {
-            return None;
-        }
+        let (lo, hi) = bounds(positions)?;
         let extent = (hi - lo).max_element();
         // A single point (or a degenerate box): any step holds it exactly.
         let step = if extent > 0.0 {
@@ -146,28 +151,69 @@ impl PositionGrid {
             1.0
         };
         Some(Self {
-            center: (lo + hi) * 0.5,
+            origin: (lo + hi) * 0.5,
             step,
         })
     }
 
+    /// The coarsest grid over `positions`' box whose [`PositionGrid::max_error`] is at most
+    /// `error`, never finer than [`PositionGrid::new`]'s (which it is for an `error` that
+    /// grid cannot meet, 0 included): fewer distinct integers leave less for a vertex codec
+    /// to store (`EXT_meshopt_compression`). A coarser grid starts at the box's lowest
+    /// corner when the box then fits in `0..=32767` steps, so that no stored integer
+    /// changes sign from vertex to vertex (a sign flip changes every byte). `None` as for
+    /// [`PositionGrid::new`].
+    ///
+    /// ```
+    /// use rigport_model::glam::Vec3;
+    /// use rigport_model::quantize::PositionGrid;
+    ///
+    /// let points = [Vec3::new(-1.0, 0.0, 0.25), Vec3::new(1.0, 0.5, 0.0)];
+    /// let fine = PositionGrid::new(&points).expect("finite");
+    /// let coarse = PositionGrid::within(&points, 1e-3).expect("finite");
+    /// assert!(coarse.step > 10.0 * fine.step && coarse.max_error() <= 1e-3);
+    /// // From the box's lowest corner: no negative integers.
+    /// assert_eq!(coarse.encode(points[0]), [0, 0, (0.25 / coarse.step).round() as i16]);
+    /// assert!(coarse.decode(coarse.encode(points[1])).distance(points[1]) <= 1e-3);
+    /// assert_eq!(PositionGrid::within(&points, 0.0), Some(fine));
+    /// ```
+    pub fn within(positions: &[glam::Vec3], error: f32) -> Option<Self> {
+        let fine = Self::new(positions)?;
+        let (lo, hi) = bounds(positions)?;
+        // max_error is linear in the step: a + b * step.
+        let root3 = 3f32.sqrt();
+        let size = lo.abs().max_element().max(fine.origin.abs().max_element());
+        let a = 2.0 * root3 * f32::EPSILON * size;
+        let b = 0.5 * root3 + 2.0 * root3 * f32::EPSILON * SHORT_MAX as f32;
+        // A hair under the solution, which f32 arithmetic may round up past `error`.
+        let step = (error - a) / b * (1.0 - 1e-5);
+        let from_corner = (hi - lo).max_element() / step <= SHORT_MAX as f32 - 1.0;
+        let coarse = Self {
+            origin: if from_corner { lo } else { fine.origin },
+            step,
+        };
+        Some(coarse)
+            .filter(|c| c.step > fine.step && c.max_error() <= error)
+            .or(Some(fine))
+    }
+
     /// The grid point nearest `p`, clamped to the 16-bit range.
     pub fn encode(&self, p: glam::Vec3) -> [i16; 3] {
-        ((p - self.center) / self.step)
+        ((p - self.origin) / self.step)
             .to_array()
             .map(|c| c.round().clamp(-SHORT_MAX as f32, SHORT_MAX as f32) as i16)
     }
 
     /// The position a reader gets for `q`.
     pub fn decode(&self, q: [i16; 3]) -> glam::Vec3 {
-        self.center + glam::Vec3::from_array(q.map(f32::from)) * self.step
+        self.origin + glam::Vec3::from_array(q.map(f32::from)) * self.step
     }
 
     /// A bound on the distance between a position in the box and what a reader decodes:
     /// half a step on each axis (`step * √3 / 2`), plus two `f32` roundings of the
     /// decoded coordinates' size (a reader's matrix arithmetic).
     pub fn max_error(&self) -> f32 {
-        let size = self.center.abs().max_element() + SHORT_MAX as f32 * self.step;
+        let size = self.origin.abs().max_element() + SHORT_MAX as f32 * self.step;
         self.step * 0.5 * 3f32.sqrt() + 2.0 * 3f32.sqrt() * f32::EPSILON * size
     }
 }

@@ -192,19 +192,24 @@ fn point_distances(asset: &Asset) -> Vec<f32> {
 /// matrix (a joint's model matrix times its inverse bind matrix) with a scale, from a rest
 /// scale, a scale track or an inverse bind matrix, would scale the rounding too; `None`
 /// too without a skinned mesh. The writer quantizes skinned meshes without morph targets;
-/// the bound covers every skinned mesh.
+/// the bound covers every skinned mesh. Each mesh's grid is the coarsest whose rounding is
+/// at most `position_error` ([`PositionGrid::within`], what the writer's
+/// `GltfOptions::position_error` asks for; 0: the finest grid).
 ///
 /// ```
 /// use rigport_pipeline::compact::mesh_grid_error;
 /// let mut asset = rigport_import::bvh::import("../../fixtures/bvh/end_sites.bvh".as_ref())?.asset;
-/// assert_eq!(mesh_grid_error(&asset), None, "no skinned mesh");
+/// assert_eq!(mesh_grid_error(&asset, 0.0), None, "no skinned mesh");
 /// assert!(rigport_import::bone_mesh::add_bone_mesh(&mut asset));
 /// // Half a step (the mesh's longest side / 65,534) on each axis.
-/// let error = mesh_grid_error(&asset).expect("rigid");
+/// let error = mesh_grid_error(&asset, 0.0).expect("rigid");
 /// assert!(error > 0.0 && error < 1e-4 * asset.skeleton.len() as f32, "{error}");
+/// // A coarser grid, as `--compress meshopt` writes it, within what it is allowed.
+/// let coarse = mesh_grid_error(&asset, 0.01).expect("rigid");
+/// assert!(coarse > 10.0 * error && coarse <= 0.01 * (1.0 + 4e-4), "{coarse}");
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub fn mesh_grid_error(asset: &Asset) -> Option<f32> {
+pub fn mesh_grid_error(asset: &Asset, position_error: f32) -> Option<f32> {
     const UNIT: f32 = 1e-4;
     let unit = |v: rigport_model::glam::Vec3| {
         (v - rigport_model::glam::Vec3::ONE).abs().max_element() <= UNIT
@@ -232,23 +237,92 @@ pub fn mesh_grid_error(asset: &Asset) -> Option<f32> {
         .skins
         .iter()
         .filter_map(|s| asset.meshes.get(s.mesh.get()));
-    let grids = skinned.filter_map(|m| PositionGrid::new(&m.positions));
+    let grids = skinned.filter_map(|m| PositionGrid::within(&m.positions, position_error));
     // The rigid skinning matrices may still scale by UNIT; pay for it.
+    // The writer's grid is made in metres, after the frame's rotation: its error is at
+    // most the allowance when this one's is.
     grids
-        .map(|g| g.max_error() * (1.0 + 4.0 * UNIT))
+        .map(|g| g.max_error().max(position_error) * (1.0 + 4.0 * UNIT))
         .reduce(f32::max)
 }
 
+/// What `GltfOptions::position_error` is for a bound of `tolerance` (rig units): 0 (the
+/// finest grid) for plain glTF, whose 16-bit positions take their bytes whatever their
+/// values; with meshopt, a coarser grid whose rounding takes [`MESHOPT_GRID_SHARE`] of
+/// the bound (less the rigid skinning matrices' scale that [`mesh_grid_error`] pays for).
+pub(crate) fn position_error(tolerance: f32, compression: Compression) -> f32 {
+    match compression {
+        Compression::None => 0.0,
+        Compression::Meshopt => {
+            std::env::var("DBG_SHARE")
+                .ok()
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(MESHOPT_GRID_SHARE)
+                * tolerance
+                / (1.0 + 5e-4)
+        }
+    }
+}
+
+/// The share of the bound a meshopt file's position grid may take: fewer distinct integers
+/// are fewer bytes through meshoptimizer's vertex codec (gltfpack writes 14 bits along
+/// the longest side; this is about 14 bits on a 1.8 m figure at the 1 mm default).
+pub(crate) const MESHOPT_GRID_SHARE: f32 = 0.1;
+
+/// With meshopt, what a kept key's own time weighs against a 16-bit rotation's 8 bytes
+/// (`Codec::key_time_bytes`): the vertex codec packs a full-rate track's small steps into
+/// a few bits a key, while removed keys leave jumps, and their times (float seconds) barely
+/// pack. On the Bandai kick: 41,840 bytes at 4, 40,836 at 8, 39,156 at 32 (gltfpack -cc
+/// 39,372); the 131_04 dance 98,768 at 4, 90,028 at 32.
+const MESHOPT_KEY_TIME_BYTES: usize = 32;
+
 /// How a glTF writer with `compression` stores key values: 16-bit rotations, or
-/// meshoptimizer's quaternion and exponential filters.
-pub(crate) fn codec(compression: Compression) -> Codec {
+/// meshoptimizer's quaternion and exponential filters (with 16 mantissa bits when
+/// `vector_bits` is 16, else 20).
+pub(crate) fn codec(compression: Compression, vector_bits: u8) -> Codec {
     match compression {
         Compression::None => Codec::I16,
         Compression::Meshopt => Codec {
             rotation: rigport_export::meshopt_rotation_as_written,
-            vector: Some(rigport_export::meshopt_vector_as_written),
+            vector: Some(match vector_bits {
+                16 => rigport_export::meshopt_vector_as_written_16,
+                _ => rigport_export::meshopt_vector_as_written,
+            }),
             rotation_bits: Some(rigport_export::meshopt_rotations_as_written_bits),
+            key_time_bytes: MESHOPT_KEY_TIME_BYTES,
         },
+    }
+}
+
+/// The `EXPONENTIAL` filter's mantissa bits for `asset`'s translation and scale keys under
+/// a bound of `tolerance`: 16 (as gltfpack writes them) when that rounds every key by at
+/// most a tenth of the bound (a relative 2^-15 of the largest value), else 20.
+///
+/// ```
+/// use rigport_pipeline::compact::vector_bits;
+/// // The root's translation keys reach 20 units: 16 bits round them by up to 6.1e-4.
+/// let asset = rigport_import::bvh::import("../../fixtures/bvh/mixed_orders.bvh".as_ref())?.asset;
+/// assert_eq!(vector_bits(&asset, 0.01), 16);
+/// assert_eq!(vector_bits(&asset, 0.001), 20);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn vector_bits(asset: &Asset, tolerance: f32) -> u8 {
+    let largest = asset
+        .clips
+        .iter()
+        .flat_map(|c| &c.tracks)
+        .filter(|t| {
+            matches!(
+                t.target,
+                TrackTarget::Translation(_) | TrackTarget::Scale(_)
+            )
+        })
+        .flat_map(|t| &t.values)
+        .fold(0.0_f32, |m, v| m.max(v.abs()));
+    if largest / (1 << 15) as f32 <= 0.1 * tolerance {
+        16
+    } else {
+        20
     }
 }
 

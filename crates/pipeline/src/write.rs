@@ -194,9 +194,6 @@ pub fn write_output_report(
 ) -> Result<(String, Option<CompactReport>), PipelineError> {
     let path = &output.path;
     let format = output.format()?;
-    let mut compacted = None;
-    // Per clip, per track, the rotation bits the reducer measured (meshopt).
-    let mut rotation_bits = Vec::new();
     if output.options.compression != Compression::None && !format.is_gltf() {
         return Err(PipelineError::Invalid(format!(
             "{}: compression is a glTF extension ({}); USD stores what the reduction keeps as time samples",
@@ -204,59 +201,11 @@ pub fn write_output_report(
             output.options.compression.extension().unwrap_or("none")
         )));
     }
+    let mut compacted = None;
     if output.reduces() {
         let tolerance = compact::tolerance_in_rig_units(&asset, output.reduce_tolerance);
-        // Quantized vertices (glTF) when their rounding takes at most a tenth of the bound;
-        // the clips get the rest of it.
-        let grid_error = format
-            .is_gltf()
-            .then(|| compact::mesh_grid_error(&asset))
-            .flatten()
-            .filter(|&e| e <= 0.1 * tolerance)
-            .unwrap_or(0.0);
-        // 16-bit rotations and meshopt filters are glTF encodings; USD writes floats.
-        let codec = format
-            .is_gltf()
-            .then(|| compact::codec(output.options.compression));
-        // CUBICSPLINE fits are glTF's (USD time samples are linear); meshopt's delta coding
-        // of LINEAR 16-bit rotations beats them on the corpus (07_05 walk 79,156 bytes
-        // LINEAR, 79,720 with cubic tracks; 131_04 dance 113,432 against 139,444).
-        let cubic = format.is_gltf() && output.options.compression == Compression::None;
-        // glTF prints rest translations in its JSON: noise under a ten-thousandth of the
-        // bound is written as 0, paid out of the bound as the mesh grid is.
-        let noise_below = compact::REST_NOISE * tolerance;
-        let noise_error = if format.is_gltf() {
-            compact::rest_noise_error(&asset.skeleton, noise_below)
-        } else {
-            0.0
-        };
-        let compacted_clips = step(progress, "reducing keys", || {
-            compact::compact_clips(&asset, tolerance - grid_error - noise_error, codec, cubic)
-        })?;
-        let rotations_i16 = compacted_clips.coded;
-        rotation_bits = compacted_clips.rotation_bits;
-        let reports = compacted_clips.reports;
-        let original = std::mem::replace(&mut asset.clips, compacted_clips.clips);
-        // glTF drops a channel at its node's value; USD samples every joint anyway.
-        let skeleton = if format.is_gltf() {
-            let moved = compact::constants_into_rest(&mut asset);
-            let zeroed = compact::zero_rest_noise(&mut asset, noise_below);
-            moved.or(zeroed)
-        } else {
-            None
-        };
-        compacted = Some((
-            (original, skeleton),
-            CompactReport {
-                tolerance,
-                meters_per_unit: asset.meters_per_unit.unwrap_or(1.0),
-                rotations_i16,
-                mesh_grid_error: grid_error,
-                compression: format!("{:?}", output.options.compression).to_lowercase(),
-                clips: reports,
-                ..CompactReport::default()
-            },
-        ));
+        let position_error = compact::position_error(tolerance, output.options.compression);
+        compacted = Some(reduce_clips(&mut asset, output, position_error, progress)?);
     }
     let opts = &output.options;
     check_memory(&asset, path, format, budget)?;
@@ -285,40 +234,42 @@ pub fn write_output_report(
     } else {
         "building USD"
     };
-    let i16 = compacted.as_ref().is_some_and(|(_, r)| r.rotations_i16);
-    let quantize_mesh = compacted
-        .as_ref()
-        .is_some_and(|(_, r)| r.mesh_grid_error > 0.0);
-    let mut prepared = step(progress, building, || {
-        prepare(
-            asset,
-            path,
-            format,
-            opts,
-            (i16, quantize_mesh, &rotation_bits),
-        )
-    })?;
+    let build = |asset: &Asset, reduction: Option<&Reduction>| {
+        step(progress, building, || {
+            prepare(asset, path, format, opts, reduction)
+        })
+    };
+    let mut prepared = build(asset, compacted.as_ref())?;
     let mut report = None;
-    let mut unreduced_asset = None;
-    if let Some(((original, skeleton), mut compact_report)) = compacted {
+    // The asset whose file is written, when not `asset`.
+    let mut written_asset = None;
+    if let Some(mut reduction) = compacted {
         // A reduced clip never makes the file bigger: build the plain one to compare.
         let mut unreduced = asset.clone();
-        unreduced.clips = original;
-        if let Some(skeleton) = skeleton {
+        unreduced.clips = std::mem::take(&mut reduction.original);
+        if let Some(skeleton) = reduction.skeleton.take() {
             unreduced.skeleton = skeleton;
         }
+        // A coarser position grid (meshopt) packs the mesh smaller but leaves the clips
+        // less of the bound: the finest grid is tried too, and the smaller file kept (on
+        // the corpus the Bandai dash and walk keep the coarse grid, the kick the fine one).
+        if reduction.position_error > 0.0 && reduction.report.mesh_grid_error > 0.0 {
+            let mut fine = unreduced.clone();
+            let other = reduce_clips(&mut fine, output, 0.0, progress)?;
+            let candidate = build(&fine, Some(&other))?;
+            if candidate.byte_len() < prepared.byte_len() {
+                prepared = candidate;
+                reduction = other;
+                written_asset = Some(fine);
+            }
+        }
+        let mut compact_report = reduction.report;
         // The file the command writes without reduction or compression.
         let plain_options = WriteOptions {
             compression: Compression::None,
             ..*opts
         };
-        let plain = prepare(
-            &unreduced,
-            path,
-            format,
-            &plain_options,
-            (false, false, &[]),
-        )?;
+        let plain = prepare(&unreduced, path, format, &plain_options, None)?;
         compact_report.bytes_after = prepared.byte_len();
         compact_report.bytes_before = plain.byte_len();
         compact_report.reduced_written = compact_report.bytes_after <= compact_report.bytes_before;
@@ -331,15 +282,101 @@ pub fn write_output_report(
                 ),
             });
             prepared = plain;
-            unreduced_asset = Some(unreduced);
+            written_asset = Some(unreduced);
         }
         report = Some(compact_report);
     }
-    let asset = unreduced_asset.as_ref().unwrap_or(asset);
+    let asset = written_asset.as_ref().unwrap_or(asset);
     warnings.extend(prepared.warnings().iter().cloned());
     progress.warnings(&warnings)?;
     prepared.write()?;
     Ok((written_line(path, asset), report))
+}
+
+/// What reducing an asset's clips for an output did ([`reduce_clips`]).
+struct Reduction {
+    /// The clips before reduction.
+    original: Vec<rigport_model::Clip>,
+    /// The skeleton before constant tracks and rest noise went into it, when they did.
+    skeleton: Option<rigport_model::Skeleton>,
+    /// Per clip, per track, the rotation bits the reducer measured (meshopt).
+    rotation_bits: Vec<Vec<u8>>,
+    /// The `EXPONENTIAL` filter's mantissa bits the reducer measured (meshopt).
+    vector_bits: u8,
+    /// The most the mesh's position grid may move a vertex (glTF), as the clips paid for.
+    position_error: f32,
+    report: CompactReport,
+}
+
+/// Reduces `asset`'s clips for `output` in place (and, for glTF, moves constant tracks and
+/// rest noise into the skeleton), paying out of the bound for a mesh grid whose rounding
+/// is at most `position_error` (when that is at most a tenth of the bound).
+///
+/// # Errors
+/// A clip that does not fit the skeleton, or a bad tolerance.
+fn reduce_clips(
+    asset: &mut Asset,
+    output: &Output,
+    position_error: f32,
+    progress: &dyn Progress,
+) -> Result<Reduction, PipelineError> {
+    let format = output.format()?;
+    let tolerance = compact::tolerance_in_rig_units(asset, output.reduce_tolerance);
+    // Quantized vertices (glTF) when their rounding takes at most a tenth of the bound;
+    // the clips get the rest of it.
+    let grid_error = format
+        .is_gltf()
+        .then(|| compact::mesh_grid_error(asset, position_error))
+        .flatten()
+        .filter(|&e| e <= 0.1 * tolerance)
+        .unwrap_or(0.0);
+    // 16-bit rotations and meshopt filters are glTF encodings; USD writes floats.
+    let vector_bits = compact::vector_bits(asset, tolerance);
+    let codec = format
+        .is_gltf()
+        .then(|| compact::codec(output.options.compression, vector_bits));
+    // CUBICSPLINE fits are glTF's (USD time samples are linear); meshopt's delta coding
+    // of LINEAR 16-bit rotations beats them on the corpus (07_05 walk 79,156 bytes
+    // LINEAR, 79,720 with cubic tracks; 131_04 dance 113,432 against 139,444).
+    let cubic = format.is_gltf() && output.options.compression == Compression::None;
+    // glTF prints rest translations in its JSON: noise under a ten-thousandth of the
+    // bound is written as 0, paid out of the bound as the mesh grid is.
+    let noise_below = compact::REST_NOISE * tolerance;
+    let noise_error = if format.is_gltf() {
+        compact::rest_noise_error(&asset.skeleton, noise_below)
+    } else {
+        0.0
+    };
+    let compacted_clips = step(progress, "reducing keys", || {
+        compact::compact_clips(asset, tolerance - grid_error - noise_error, codec, cubic)
+    })?;
+    let rotations_i16 = compacted_clips.coded;
+    let reports = compacted_clips.reports;
+    let original = std::mem::replace(&mut asset.clips, compacted_clips.clips);
+    // glTF drops a channel at its node's value; USD samples every joint anyway.
+    let skeleton = if format.is_gltf() {
+        let moved = compact::constants_into_rest(asset);
+        let zeroed = compact::zero_rest_noise(asset, noise_below);
+        moved.or(zeroed)
+    } else {
+        None
+    };
+    Ok(Reduction {
+        original,
+        skeleton,
+        rotation_bits: compacted_clips.rotation_bits,
+        vector_bits,
+        position_error,
+        report: CompactReport {
+            tolerance,
+            meters_per_unit: asset.meters_per_unit.unwrap_or(1.0),
+            rotations_i16,
+            mesh_grid_error: grid_error,
+            compression: format!("{:?}", output.options.compression).to_lowercase(),
+            clips: reports,
+            ..CompactReport::default()
+        },
+    })
 }
 
 /// "wrote PATH: J joints, M meshes (V vertices), S skins, C clips (each clip's name,
@@ -525,18 +562,19 @@ impl Prepared {
 }
 
 /// Builds `asset` as `format` for `path` in memory (the influences as the writer limits
-/// them; see [`fit_influences`] for a fit first): glTF rotations as 16-bit integers when
-/// the reducer measured them so, at the reducer's bits per track with meshopt, and the
-/// skinned meshes quantized.
+/// them; see [`fit_influences`] for a fit first), with glTF values stored as the
+/// `reduction` measured them: rotations as 16-bit integers, meshopt's bits per rotation
+/// track and for translations, and the skinned meshes quantized on a grid whose rounding
+/// it paid for (`None`: as they are, floats).
 ///
 /// # Errors
 /// The asset cannot be exported (the message names it).
-pub(crate) fn prepare(
+fn prepare(
     asset: &Asset,
     path: &Path,
     format: OutputFormat,
     opts: &WriteOptions,
-    (rotations_i16, quantize_mesh, rotation_bits): (bool, bool, &[Vec<u8>]),
+    reduction: Option<&Reduction>,
 ) -> Result<Prepared, PipelineError> {
     // A long USD text is staged beside the output as it is built: failing to write it is
     // an output error, like a failing write.
@@ -548,10 +586,12 @@ pub(crate) fn prepare(
         OutputFormat::Glb | OutputFormat::Gltf => {
             let opts = GltfOptions {
                 max_influences: opts.max_influences.unwrap_or(4),
-                compact: rotations_i16,
-                quantize_mesh,
+                compact: reduction.is_some_and(|r| r.report.rotations_i16),
+                quantize_mesh: reduction.is_some_and(|r| r.report.mesh_grid_error > 0.0),
+                position_error: reduction.map_or(0.0, |r| r.position_error),
                 compression: opts.compression,
-                rotation_bits: rotation_bits.to_vec(),
+                rotation_bits: reduction.map_or_else(Vec::new, |r| r.rotation_bits.clone()),
+                vector_bits: reduction.map_or(0, |r| r.vector_bits),
             };
             PreparedFile::Gltf(rigport_export::prepare_gltf(asset, path, &opts).map_err(failed)?)
         }

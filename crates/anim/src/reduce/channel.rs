@@ -45,6 +45,8 @@ pub(super) struct Channel<'a> {
     pub(super) codec: Option<Codec>,
     /// Bytes of one key's value as written (the simplifier's cost model).
     pub(super) value_bytes: usize,
+    /// What a key's own time weighs against `value_bytes` ([`Codec::key_time_bytes`]).
+    pub(super) time_bytes: usize,
     /// Local tolerance: length unit (translation), radians (rotation), scale units (scale).
     pub(super) eps: f32,
     /// The kept keys (indices into the original), `None` while every key is.
@@ -202,6 +204,7 @@ pub(super) fn collect_channels<'a>(
             cubic,
             codec: codec.copied(),
             value_bytes: if rounded { 8 } else { 4 * comps },
+            time_bytes: codec.map_or(4, |c| c.key_time_bytes),
             eps: 0.0,
             kept: None,
             reduced: None,

@@ -19,6 +19,12 @@ pub struct Codec {
     /// fewest bits per rotation track that its tolerance allows ([`super::ReduceStats`]
     /// `rotation_bits`). `None`: one precision for every track.
     pub rotation_bits: Option<RotationAtBits>,
+    /// What a kept key's time of its own weighs, in bytes, against a key's value as written
+    /// (8 for a 16-bit rotation), when the reducer weighs key removal (times of its own)
+    /// against a uniform rate (times shared): 4 for a float as it is; more when a
+    /// compressor packs a uniform track's small steps from key to key into far fewer bytes
+    /// than the jumps between removed keys and their off-grid times.
+    pub key_time_bytes: usize,
 }
 
 impl Codec {
@@ -27,6 +33,7 @@ impl Codec {
         rotation: rigport_model::quantize::rotation_as_i16,
         vector: None,
         rotation_bits: None,
+        key_time_bytes: 4,
     };
 }
 

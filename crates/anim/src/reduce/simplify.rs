@@ -2,7 +2,8 @@
 //! smaller of two representations (each within the tolerance at every original key):
 //!
 //! - **key removal** (Douglas–Peucker, then a greedy pass): the fewest keys, at times of
-//!   their own (a glTF sampler then needs its own time accessor: 4 bytes per key);
+//!   their own (a glTF sampler then needs its own time accessor: 4 bytes per key, weighed
+//!   as the codec says: [`super::Codec::key_time_bytes`]);
 //! - **a uniform rate**: every `k`-th key (and the last), the largest `k` within the
 //!   tolerance (1: every key); every channel with the same key times and the same `k` shares one time
 //!   accessor (glTF 2.0 §3.11 lets samplers share inputs), so a key costs only its value.
@@ -42,7 +43,7 @@ fn linear(chan: &Channel) -> (Vec<usize>, usize) {
     }
     let curve = Curve::new(chan);
     let removed = remove_keys(&curve, n);
-    let budget = removed.len() * (value + 4) + TIME_ACCESSOR_JSON;
+    let budget = removed.len() * (value + chan.time_bytes) + TIME_ACCESSOR_JSON;
     if !chan.decimate {
         return (removed, budget);
     }

@@ -1081,6 +1081,7 @@ const GRID: Codec = Codec {
     rotation: rigport_model::quantize::rotation_as_i16,
     vector: None,
     rotation_bits: Some(grid),
+    key_time_bytes: 4,
 };
 
 /// With a codec that takes bits per track, each rotation track gets the fewest its

@@ -24,6 +24,8 @@ pub(crate) struct Builder {
     /// Compressed three-component animation outputs go through the `EXPONENTIAL` filter
     /// (set when the key reducer measured it; else they are stored exactly).
     pub filter_vectors: bool,
+    /// The `EXPONENTIAL` filter's mantissa bits.
+    pub vector_bits: i32,
     /// Uncompressed animation data goes into one buffer view (accessors at offsets in it)
     /// instead of a view per accessor: less JSON (set for compact exports).
     pub group_animation: bool,
@@ -50,6 +52,7 @@ impl Builder {
             bin: Vec::new(),
             compressed: None,
             filter_vectors: false,
+            vector_bits: meshopt::EXP_BITS,
             group_animation: false,
             plain_group: meshopt::Group {
                 stride: 4,
@@ -242,7 +245,7 @@ impl Builder {
 
     /// A compressed view of `raw` (filtered bytes, elements of `stride` bytes) in the
     /// fallback buffer (buffer 1), its encoded bytes appended to `bin`; `None` when the
-    /// export is not compressed.
+    /// export is not compressed, or `raw` is unfiltered and would not get smaller.
     fn compressed_view(
         &mut self,
         raw: &[u8],
@@ -252,7 +255,7 @@ impl Builder {
     ) -> Option<Index<json::buffer::View>> {
         let compressed = self.compressed.as_mut()?;
         let index = self.root.buffer_views.len();
-        let range = compressed.push(&mut self.bin, index, raw, stride, filter);
+        let range = compressed.push(&mut self.bin, index, raw, stride, filter)?;
         Some(self.fallback_view(range, target))
     }
 
@@ -328,7 +331,7 @@ impl Builder {
     /// An animation sampler's float accessor (key times, translations, scales, weights):
     /// as [`Builder::floats`] (no target), or compressed when the export is; three-component
     /// outputs then go through the `EXPONENTIAL` filter (what
-    /// [`super::meshopt::vector_as_written`] returns is what a reader gets), the rest as
+    /// [`super::meshopt::vector_as_written`] or its 16-bit form returns is what a reader gets), the rest as
     /// they are.
     pub(crate) fn animation_floats(
         &mut self,
@@ -338,7 +341,10 @@ impl Builder {
     ) -> Index<json::Accessor> {
         let width = type_.multiplicity();
         let (raw, filter) = if width == 3 && self.filter_vectors && matches!(bounds, Bounds::None) {
-            (meshopt::exponential(data), Filter::Exponential)
+            (
+                meshopt::exponential(data, self.vector_bits),
+                Filter::Exponential,
+            )
         } else {
             (meshopt::floats(data), Filter::None)
         };
@@ -408,10 +414,9 @@ impl Builder {
             return;
         };
         for group in groups {
-            let Some(view) = self.compressed_view(&group.raw, group.stride, group.filter, None)
-            else {
-                continue;
-            };
+            let view = self
+                .compressed_view(&group.raw, group.stride, group.filter, None)
+                .unwrap_or_else(|| self.view(None, |bin| bin.extend_from_slice(&group.raw)));
             for accessor in group.accessors {
                 if let Some(a) = self.root.accessors.get_mut(accessor) {
                     a.buffer_view = Some(view);
@@ -504,15 +509,27 @@ impl Builder {
         self.padded_vertex(&raw, 8, data.len(), ComponentType::I16, normalized, bounds)
     }
 
-    /// A vertex attribute of three `BYTE` normalized components per element (quantized
-    /// normals, `KHR_mesh_quantization`), each element padded to 4 bytes.
-    pub(crate) fn padded_vec3_i8_normalized(&mut self, data: &[[i8; 3]]) -> Index<json::Accessor> {
-        let raw: Vec<u8> = data
-            .iter()
-            .flat_map(|e| [e[0], e[1], e[2], 0])
-            .map(|c| c.to_le_bytes()[0])
-            .collect();
-        self.padded_vertex(&raw, 4, data.len(), ComponentType::I8, true, None)
+    /// Unit `normals` as a vertex attribute of three `BYTE` normalized components per
+    /// element (`KHR_mesh_quantization`), each element padded to 4 bytes: each component
+    /// rounded to the nearest `k / 127`, or through meshopt's `OCTAHEDRAL` filter when the
+    /// export is compressed.
+    pub(crate) fn normals_i8(&mut self, normals: &[[f32; 3]]) -> Index<json::Accessor> {
+        let view = match self.compressed.is_some() {
+            true => {
+                let raw = meshopt::octahedral(normals);
+                self.compressed_view(&raw, 4, Filter::Octahedral, Some(Target::ArrayBuffer))
+            }
+            false => None,
+        };
+        let view = view.unwrap_or_else(|| {
+            let raw: Vec<u8> = normals
+                .iter()
+                .flat_map(|n| [n[0], n[1], n[2], 0.0])
+                .map(|c| ((c * 127.0).round().clamp(-127.0, 127.0) as i8).to_le_bytes()[0])
+                .collect();
+            self.vertex_view(Some(Target::ArrayBuffer), &raw, 4)
+        });
+        self.vec3_at_stride(view, 4, normals.len(), ComponentType::I8, true, None)
     }
 
     /// A `VEC3` vertex attribute over `raw` (`count` elements of `stride` bytes, padded),
@@ -527,6 +544,19 @@ impl Builder {
         bounds: Option<(json::Value, json::Value)>,
     ) -> Index<json::Accessor> {
         let view = self.vertex_view(Some(Target::ArrayBuffer), raw, stride);
+        self.vec3_at_stride(view, stride, count, component, normalized, bounds)
+    }
+
+    /// A `VEC3` vertex attribute in `view`, whose `byteStride` it states.
+    fn vec3_at_stride(
+        &mut self,
+        view: Index<json::buffer::View>,
+        stride: usize,
+        count: usize,
+        component: ComponentType,
+        normalized: bool,
+        bounds: Option<(json::Value, json::Value)>,
+    ) -> Index<json::Accessor> {
         if let Some(v) = self.root.buffer_views.get_mut(view.value()) {
             v.byte_stride = Some(json::buffer::Stride(stride));
         }

@@ -83,6 +83,8 @@ pub(crate) fn build(
             });
         }
     }
+    // The grid's allowance is in the source's unit; the positions are quantized in metres.
+    let position_error = opts.position_error * super::frame::length_scale(asset) as f32;
     let converted = super::frame::to_gltf_frame(asset, &mut warnings)?;
     let asset = converted.as_ref().unwrap_or(asset);
 
@@ -95,6 +97,9 @@ pub(crate) fn build(
     if opts.compression == rigport_model::Compression::Meshopt {
         b.compressed = Some(super::meshopt::Compressed::default());
         b.filter_vectors = opts.compact;
+        if opts.vector_bits == 16 {
+            b.vector_bits = super::meshopt::EXP_BITS_SHORT;
+        }
     }
     let skeleton = &asset.skeleton;
     let joint_count = skeleton.len();
@@ -162,7 +167,7 @@ pub(crate) fn build(
                 && skin_of_mesh.contains_key(&mi)
                 && mesh.morph_targets.is_empty();
             quantized
-                .then(|| PositionGrid::new(&mesh.positions))
+                .then(|| PositionGrid::within(&mesh.positions, position_error))
                 .flatten()
         })
         .collect();
@@ -370,14 +375,8 @@ fn write_mesh(
     };
     let normals = if grid.is_some() {
         // 8-bit normalized (KHR_mesh_quantization), as gltfpack writes them: shading only.
-        let q: Vec<[i8; 3]> = normals
-            .iter()
-            .map(|n| {
-                n.to_array()
-                    .map(|c| (c * 127.0).round().clamp(-127.0, 127.0) as i8)
-            })
-            .collect();
-        b.padded_vec3_i8_normalized(&q)
+        let unit: Vec<[f32; 3]> = normals.iter().map(|n| n.to_array()).collect();
+        b.normals_i8(&unit)
     } else {
         b.floats(&flat3(&normals), Type::Vec3, array, Bounds::None)
     };
@@ -570,11 +569,11 @@ fn write_skin(
 ) {
     let mut projective = 0;
     let mut ibm = Vec::with_capacity(16 * skin.inv_bind.len());
-    // Quantized positions decode as `center + step * q`: that map goes first.
+    // Quantized positions decode as `origin + step * q`: that map goes first.
     // (Without a grid the matrices are written as they are: multiplying by the identity
     // would turn their -0.0 into 0.0 and change the bytes of every plain file.)
     let decode = grid.map(|g| {
-        glam::Mat4::from_translation(g.center) * glam::Mat4::from_scale(glam::Vec3::splat(g.step))
+        glam::Mat4::from_translation(g.origin) * glam::Mat4::from_scale(glam::Vec3::splat(g.step))
     });
     for m in &skin.inv_bind {
         let m = &decode.map_or(*m, |d| *m * d);

@@ -76,6 +76,16 @@ fn similarity(m: &DMat4) -> (Similarity, bool) {
     )
 }
 
+/// The uniform scale [`to_gltf_frame`] applies to the asset's lengths (1 when it applies
+/// none): a length in the source's unit times this is metres in the file.
+pub(crate) fn length_scale(asset: &Asset) -> f64 {
+    let c = asset.frame.model_to_gltf(asset.meters_per_unit);
+    if c == DMat4::IDENTITY {
+        return 1.0;
+    }
+    similarity(&c).0.scale
+}
+
 /// The asset in glTF's frame, or `None` when the correction is the identity (a Y-up,
 /// metre or unit-less source placed at the origin): the common case keeps its bytes.
 ///

@@ -17,6 +17,9 @@ pub(crate) const QUAT_BITS: i32 = 16;
 /// Mantissa bits of the exponential filter (1 to 24): 20, a relative error of 2^-20
 /// (a micrometre at a metre), far under the bounds reduction uses.
 pub(crate) const EXP_BITS: i32 = 20;
+/// Fewer mantissa bits, for keys whose rounding at 16 bits is still small against the
+/// bound (a relative 2^-16: 15 micrometres at a metre), as gltfpack writes translations.
+pub(crate) const EXP_BITS_SHORT: i32 = 16;
 /// The element sizes this writer compresses (the codec takes multiples of 4 up to 256):
 /// vertex attributes and animation keys, and 64 for matrices (inverse bind matrices).
 pub(crate) const STRIDES: [usize; 5] = [4, 8, 12, 16, 64];
@@ -132,7 +135,23 @@ fn encode_rotation(q: [f32; 4]) -> [i16; 4] {
 /// assert!((v[2] - 3.1).abs() < 3.1 / (1 << 19) as f32);
 /// ```
 pub fn vector_as_written(v: [f32; 3]) -> [f32; 3] {
-    let mut encoded = meshopt::encode_filter_exp(&[v], EXP_BITS, meshopt::EncodeExpMode::Separate);
+    vector_at_bits(v, EXP_BITS)
+}
+
+/// [`vector_as_written`] at 16 mantissa bits (`GltfOptions::vector_bits` 16).
+///
+/// ```
+/// let v = rigport_export::meshopt_vector_as_written_16([1.0, -0.25, 3.1]);
+/// assert_eq!(v[..2], [1.0, -0.25]);
+/// assert!((v[2] - 3.1).abs() < 3.1 / (1 << 15) as f32 && v[2] != 3.1);
+/// ```
+pub fn vector_as_written_16(v: [f32; 3]) -> [f32; 3] {
+    vector_at_bits(v, EXP_BITS_SHORT)
+}
+
+/// `v` as a reader gets it back through the `EXPONENTIAL` filter at `bits`.
+fn vector_at_bits(v: [f32; 3], bits: i32) -> [f32; 3] {
+    let mut encoded = meshopt::encode_filter_exp(&[v], bits, meshopt::EncodeExpMode::Separate);
     meshopt::decode_filter_exp(&mut encoded);
     let [c] = encoded[..] else { return v };
     c.map(f32::from_bits)
@@ -183,6 +202,8 @@ pub(crate) enum Filter {
     Quaternion,
     /// `EXPONENTIAL`: floats, 4 bytes per component.
     Exponential,
+    /// `OCTAHEDRAL`: unit vectors as 8-bit normalized components, 4-byte stride (normals).
+    Octahedral,
 }
 
 impl Filter {
@@ -191,6 +212,7 @@ impl Filter {
             Filter::None => "NONE",
             Filter::Quaternion => "QUATERNION",
             Filter::Exponential => "EXPONENTIAL",
+            Filter::Octahedral => "OCTAHEDRAL",
         }
     }
 }
@@ -238,13 +260,26 @@ pub(crate) fn quaternions(values: &[f32], bits: u8) -> Vec<u8> {
         .collect()
 }
 
-/// Filtered bytes of three-component float keys (flat).
-pub(crate) fn exponential(values: &[f32]) -> Vec<u8> {
+/// Filtered bytes of three-component float keys (flat) with `bits` of mantissa.
+pub(crate) fn exponential(values: &[f32], bits: i32) -> Vec<u8> {
     let vectors: Vec<[f32; 3]> = values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    meshopt::encode_filter_exp(&vectors, EXP_BITS, meshopt::EncodeExpMode::Separate)
+    meshopt::encode_filter_exp(&vectors, bits, meshopt::EncodeExpMode::Separate)
         .iter()
         .flatten()
         .flat_map(|c| c.to_le_bytes())
+        .collect()
+}
+
+/// Filtered bytes of unit vectors (normals) through the `OCTAHEDRAL` filter at 8 bits:
+/// 4 bytes each, decoded to 8-bit normalized `x, y, z` (and a fourth byte), as gltfpack
+/// writes normals. A point on the octahedron rounds more evenly over directions than each
+/// component on its own, and its two stored bytes pack smaller from vertex to vertex.
+pub(crate) fn octahedral(normals: &[[f32; 3]]) -> Vec<u8> {
+    let vectors: Vec<[f32; 4]> = normals.iter().map(|n| [n[0], n[1], n[2], 0.0]).collect();
+    meshopt::encode_filter_oct::<i8>(&vectors, 8)
+        .iter()
+        .flatten()
+        .map(|c| c.to_le_bytes()[0])
         .collect()
 }
 
@@ -347,7 +382,8 @@ impl Compressed {
 
     /// Encodes `raw` (filtered bytes, `count` elements of `stride`) into `bin` (4-byte
     /// aligned) and returns the fallback range `(byte_offset, byte_length)` of the view the
-    /// caller pushes as `view`.
+    /// caller pushes as `view`; `None` (nothing written) for unfiltered bytes the codec
+    /// does not make smaller (short runs of key times), which the caller writes as they are.
     pub(crate) fn push(
         &mut self,
         bin: &mut Vec<u8>,
@@ -355,14 +391,17 @@ impl Compressed {
         raw: &[u8],
         stride: usize,
         filter: Filter,
-    ) -> (usize, usize) {
+    ) -> Option<(usize, usize)> {
         let count = raw.len() / stride.max(1);
         let encoded = encode(raw, stride);
+        if filter == Filter::None && encoded.len() >= raw.len() {
+            return None;
+        }
         let mut extension = append(bin, view, &encoded, (stride, count), "ATTRIBUTES");
         if filter != Filter::None {
             extension.extension["filter"] = filter.name().into();
         }
         self.views.push(extension);
-        self.reserve(raw.len())
+        Some(self.reserve(raw.len()))
     }
 }

@@ -55,7 +55,7 @@ use crate::ExportError;
 use rigport_atomic::TempFile;
 
 /// Options for the glTF exporters.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct GltfOptions {
     /// Most joint influences kept per vertex, `1..=8`. Up to 4 fit in `JOINTS_0` /
     /// `WEIGHTS_0`; 5 to 8 add `JOINTS_1` / `WEIGHTS_1` (written only when some vertex
@@ -74,6 +74,11 @@ pub struct GltfOptions {
     /// matrices; a vertex moves by at most the grid's `max_error` times the skinning
     /// matrices' scale), normals as 8-bit normalized components. Default `false`.
     pub quantize_mesh: bool,
+    /// With `quantize_mesh`: the most the grid may move a vertex, in the asset's unit (the
+    /// coarsest [`rigport_model::quantize::PositionGrid::within`] it; 0: the finest grid,
+    /// 65,534 steps along the longest side). A coarser grid leaves less for
+    /// `EXT_meshopt_compression` to store. Default 0.
+    pub position_error: f32,
     /// Compression beyond core glTF: with [`Compression::Meshopt`], animation data is
     /// written through `EXT_meshopt_compression` (declared required): with
     /// `compact`, rotations through its `QUATERNION` filter and translations and
@@ -86,6 +91,10 @@ pub struct GltfOptions {
     /// 16, as [`crate::meshopt_rotations_as_written_bits`] measured it for the key reducer);
     /// 0, or a clip or track past the end: 16. Default empty (16 everywhere).
     pub rotation_bits: Vec<Vec<u8>>,
+    /// With [`Compression::Meshopt`] and `compact`: the `EXPONENTIAL` filter's mantissa
+    /// bits for translation and scale keys, 16 ([`crate::meshopt_vector_as_written_16`])
+    /// or, for any other value, 20 ([`crate::meshopt_vector_as_written`]). Default 0.
+    pub vector_bits: u8,
 }
 
 impl Default for GltfOptions {
@@ -94,8 +103,10 @@ impl Default for GltfOptions {
             max_influences: 4,
             compact: false,
             quantize_mesh: false,
+            position_error: 0.0,
             compression: Compression::None,
             rotation_bits: Vec::new(),
+            vector_bits: 0,
         }
     }
 }

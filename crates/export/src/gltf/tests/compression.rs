@@ -252,15 +252,57 @@ fn meshopt_views_decode_to_the_plain_files_data() {
             .all(|f| filters.contains(*f)),
         "{filters:?}"
     );
-    // The inverse bind matrices are compressed too (64-byte elements).
+    // The inverse bind matrices go through the codec too (64-byte elements) when it makes
+    // them smaller; else (the test rig's few) they are stored as they are.
     let ibm = mj["skins"][0]["inverseBindMatrices"]
         .as_u64()
         .expect("skin") as usize;
     let view = mj["accessors"][ibm]["bufferView"].as_u64().expect("view") as usize;
-    assert_eq!(
-        mj["bufferViews"][view]["extensions"][name]["byteStride"],
-        64
-    );
+    let ext = &mj["bufferViews"][view]["extensions"][name];
+    if ext.is_null() {
+        let raw = view_bytes(&mj, packed_bin, view);
+        let rows: Vec<[u32; 16]> = raw
+            .chunks_exact(64)
+            .map(|m| {
+                std::array::from_fn(|i| {
+                    u32::from_le_bytes(m[4 * i..4 * i + 4].try_into().expect("4"))
+                })
+            })
+            .collect();
+        // Vertex codec version 0, the one EXT_meshopt_compression reads.
+        let encoded = ::meshopt::encode_vertex_buffer_level(&rows, 2, Some(0)).expect("encodes");
+        assert!(
+            encoded.len() >= raw.len(),
+            "{} < {}",
+            encoded.len(),
+            raw.len()
+        );
+    } else {
+        assert_eq!(ext["byteStride"], 64);
+    }
+}
+
+/// A view the codec would not make smaller (few key times, few matrices) is written as it
+/// is, not through the extension; the file's other views are compressed.
+#[test]
+fn views_the_codec_would_grow_are_written_plainly() {
+    let packed = export(true, Compression::Meshopt);
+    let json = glb_json(&packed);
+    let name = "EXT_meshopt_compression";
+    let views = json["bufferViews"].as_array().expect("views");
+    let (compressed, plain): (Vec<_>, Vec<_>) =
+        views.iter().partition(|v| !v["extensions"][name].is_null());
+    assert!(!compressed.is_empty() && !plain.is_empty(), "{views:?}");
+    for v in &compressed {
+        let ext = &v["extensions"][name];
+        // Unfiltered views only where the codec shrank them.
+        if ext.get("filter").is_none() && ext["mode"] == "ATTRIBUTES" {
+            assert!(ext["byteLength"].as_u64() < v["byteLength"].as_u64(), "{v}");
+        }
+    }
+    for v in &plain {
+        assert_eq!(v["buffer"], 0, "{v}");
+    }
 }
 
 /// Weights that are exactly `k / 255` (here: every vertex on one joint, as a bone mesh) are
@@ -516,4 +558,66 @@ fn meshopt_rotations_are_written_at_the_bits_of_their_track() {
     assert!(bits.iter().all(|&b| b == 10), "{bits:?}");
     // Fewer bits, fewer bytes.
     assert!(packed.len() < export(Vec::new()).len());
+}
+
+/// With meshopt, a quantized mesh's normals go through the `OCTAHEDRAL` filter (8 bits, as
+/// gltfpack writes them) and decode to unit vectors within a few degrees of the mesh's;
+/// without it they are 8-bit components, each rounded.
+#[test]
+fn meshopt_normals_are_octahedral_and_decode_near_the_mesh_normals() {
+    let mut asset = test_assets::rig();
+    // The writer quantizes skinned meshes without morph targets.
+    asset.meshes[0].morph_targets.clear();
+    asset.meshes[0].morph_weights.clear();
+    for clip in &mut asset.clips {
+        clip.tracks
+            .retain(|t| !matches!(t.target, TrackTarget::MorphWeights(m) if m.get() == 0));
+    }
+    let glb = to_glb(
+        &asset,
+        &GltfOptions {
+            compact: true,
+            quantize_mesh: true,
+            compression: Compression::Meshopt,
+            ..Default::default()
+        },
+    )
+    .expect("export")
+    .glb;
+    assert_khronos_valid(&glb);
+    let json = glb_json(&glb);
+    let accessor = json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"]
+        .as_u64()
+        .expect("normals") as usize;
+    let acc = &json["accessors"][accessor];
+    assert_eq!(
+        (acc["componentType"].as_u64(), acc["normalized"].as_bool()),
+        (Some(5120), Some(true))
+    );
+    let view = acc["bufferView"].as_u64().expect("view") as usize;
+    let ext = &json["bufferViews"][view]["extensions"]["EXT_meshopt_compression"];
+    assert_eq!(
+        (ext["filter"].as_str(), ext["byteStride"].as_u64()),
+        (Some("OCTAHEDRAL"), Some(4))
+    );
+    let bin = bin(&glb);
+    let at = ext["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let encoded = &bin[at..at + ext["byteLength"].as_u64().expect("len") as usize];
+    let count = ext["count"].as_u64().expect("count") as usize;
+    let mut rows: Vec<[i8; 4]> = ::meshopt::decode_vertex_buffer(encoded, count).expect("decodes");
+    ::meshopt::decode_filter_oct(&mut rows);
+    let mesh = &asset.meshes[0];
+    let normals = mesh
+        .normals
+        .clone()
+        .unwrap_or_else(|| mesh.compute_normals());
+    assert_eq!(rows.len(), normals.len());
+    for (row, n) in rows.iter().zip(&normals) {
+        let read = glam::Vec3::new(row[0] as f32, row[1] as f32, row[2] as f32) / 127.0;
+        // 8-bit octahedral: within about 1.5 degrees (cos 0.9995).
+        assert!(
+            read.normalize().dot(n.normalize()) > 0.9995,
+            "{read} vs {n}"
+        );
+    }
 }
