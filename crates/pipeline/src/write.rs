@@ -202,10 +202,29 @@ pub fn write_output_report(
         )));
     }
     let mut compacted = None;
+    // With a coarser mesh grid (meshopt), the clips reduced for the finest grid too, at the
+    // same time on another thread: the smaller file is kept.
+    let mut fine_grid = None;
     if output.reduces() {
         let tolerance = compact::tolerance_in_rig_units(&asset, output.reduce_tolerance);
         let position_error = compact::position_error(tolerance, output.options.compression);
-        compacted = Some(reduce_clips(&mut asset, output, position_error, progress)?);
+        let coarser = format.is_gltf()
+            && position_error > 0.0
+            && compact::mesh_grid_error(&asset, position_error)
+                .is_some_and(|e| e <= 0.1 * tolerance)
+            && compact::mesh_grid_error(&asset, position_error)
+                > compact::mesh_grid_error(&asset, 0.0);
+        if coarser {
+            let mut fine = asset.clone();
+            let (coarse, other) = rayon::join(
+                || reduce_clips(&mut asset, output, position_error, progress),
+                || reduce_clips(&mut fine, output, 0.0, &crate::progress::Silent),
+            );
+            compacted = Some(coarse?);
+            fine_grid = Some((fine, other?));
+        } else {
+            compacted = Some(reduce_clips(&mut asset, output, position_error, progress)?);
+        }
     }
     let opts = &output.options;
     check_memory(&asset, path, format, budget)?;
@@ -251,16 +270,18 @@ pub fn write_output_report(
             unreduced.skeleton = skeleton;
         }
         // A coarser position grid (meshopt) packs the mesh smaller but leaves the clips
-        // less of the bound: the finest grid is tried too, and the smaller file kept (on
-        // the corpus the Bandai dash and walk keep the coarse grid, the kick the fine one).
-        if reduction.position_error > 0.0 && reduction.report.mesh_grid_error > 0.0 {
-            let mut fine = unreduced.clone();
-            let other = reduce_clips(&mut fine, output, 0.0, progress)?;
-            let candidate = build(&fine, Some(&other))?;
+        // less of the bound: the smaller file is kept (on the corpus the Bandai dash and
+        // walk keep the coarse grid, the kick the fine one). The candidate takes the
+        // written asset's meshes and skins (influences fitted) and its own clips and rest.
+        if let Some((fine, other)) = fine_grid {
+            let mut candidate_asset = asset.clone();
+            candidate_asset.clips = fine.clips;
+            candidate_asset.skeleton = fine.skeleton;
+            let candidate = build(&candidate_asset, Some(&other))?;
             if candidate.byte_len() < prepared.byte_len() {
                 prepared = candidate;
                 reduction = other;
-                written_asset = Some(fine);
+                written_asset = Some(candidate_asset);
             }
         }
         let mut compact_report = reduction.report;
