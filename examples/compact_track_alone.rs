@@ -1,0 +1,89 @@
+//! What each rotation track costs on its own at a bound: issue 34's floor for a clip.
+//!
+//! `cargo run --release --example compact_track_alone -- PLAIN.glb [TOLERANCE]`
+//! (`PLAIN.glb`: an unreduced glb in metres, such as `rigport convert 07-walk.asf --motion
+//! 07_05-walk.amc -o plain.glb`; `TOLERANCE` in metres, default 0.001).
+//!
+//! For each LINEAR rotation track of the first clip, the reducer runs at the bound with
+//! every *other* track exact: turned STEP, which the reducer keeps as it is and which plays
+//! the source value at every source frame. The error is measured as the issue's acceptance
+//! measures it: joints and virtual points 3 cm from each joint (not the mesh's vertices,
+//! which `rigport convert` also holds), 16-bit rotations, a uniform rate and CUBICSPLINE
+//! fits tried as `convert --reduce-tolerance` tries them. So each track gets the whole bound
+//! for itself, which no file can give every track at once.
+//!
+//! It prints, per track, the keys and bytes kept (a key's value: 8 bytes LINEAR, 24 or 48
+//! cubic; plus 4 bytes of time per key unless its keys are at a uniform rate, whose times
+//! are shared), and the sums: the bytes, and the keys times 4 (every kept value as four
+//! bytes, the smallest rotation core glTF stores, with no time at all). Either sum is a
+//! floor on the animation bytes of a file within the bound only as far as errors of
+//! different tracks cannot cancel; it is an estimate, not a proof.
+
+use std::path::PathBuf;
+
+use rigport_anim::reduce::{reduce_clip, Codec, ReduceOptions};
+use rigport_model::{Interpolation, TrackTarget};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let path = PathBuf::from(
+        args.next()
+            .ok_or("usage: compact_track_alone PLAIN.glb [TOL]")?,
+    );
+    let tolerance: f32 = args.next().map_or(Ok(0.001), |t| t.parse())?;
+    let asset = rigport_import::gltf::import(&path)?.asset;
+    let clip = asset.clips.first().ok_or("no clip")?;
+    let frames = clip.tracks.iter().map(|t| t.times.len()).max().unwrap_or(0);
+    let options = ReduceOptions {
+        tolerance,
+        point_distance: vec![0.03; asset.skeleton.len()],
+        codec: Some(Codec::I16),
+        uniform_rate: true,
+        cubic: true,
+    };
+    println!("{} ({frames} frames), {tolerance} m", path.display());
+    println!("| joint | keys kept | bytes |");
+    println!("|---|---:|---:|");
+    let (mut keys, mut bytes, mut tracks) = (0, 0, 0);
+    for (ti, track) in clip.tracks.iter().enumerate() {
+        let TrackTarget::Rotation(joint) = track.target else {
+            continue;
+        };
+        if track.interpolation != Interpolation::Linear || track.times.len() <= 2 {
+            continue;
+        }
+        let mut alone = clip.clone();
+        for (k, other) in alone.tracks.iter_mut().enumerate() {
+            if k != ti {
+                other.interpolation = Interpolation::Step;
+            }
+        }
+        let (reduced, _) = reduce_clip(&alone, &asset.skeleton, &options)?;
+        let kept = &reduced.tracks[ti];
+        let n = kept.times.len();
+        let value = match kept.interpolation {
+            Interpolation::CubicSpline if kept.values.iter().all(|v| v.abs() <= 1.0) => 24,
+            Interpolation::CubicSpline => 48,
+            _ => 8,
+        };
+        // Keys at a uniform rate share their times with other tracks.
+        let step = kept.times.get(1).map_or(0.0, |t| t - kept.times[0]);
+        let uniform = kept
+            .times
+            .windows(2)
+            .rev()
+            .skip(1)
+            .all(|w| ((w[1] - w[0]) - step).abs() <= 1e-4);
+        let b = n * value + if uniform { 0 } else { 4 * n };
+        let name = &asset.skeleton.joints()[joint.get()].name;
+        println!("| {name} | {n} | {b} |");
+        keys += n;
+        bytes += b;
+        tracks += 1;
+    }
+    println!(
+        "{tracks} tracks: {keys} keys, {bytes} bytes; keys x 4 = {} bytes",
+        4 * keys
+    );
+    Ok(())
+}
