@@ -373,14 +373,7 @@ fn exact_weights_are_normalized_bytes_in_compact_exports() {
 /// smaller and valid.
 #[test]
 fn quantized_skinned_mesh_decodes_within_the_grid_bound() {
-    let mut asset = test_assets::rig();
-    // The writer quantizes skinned meshes without morph targets.
-    asset.meshes[0].morph_targets.clear();
-    asset.meshes[0].morph_weights.clear();
-    for clip in &mut asset.clips {
-        clip.tracks
-            .retain(|t| !matches!(t.target, TrackTarget::MorphWeights(m) if m.get() == 0));
-    }
+    let asset = rig_without_morphs();
     let export = |quantize_mesh| {
         let options = GltfOptions {
             compact: true,
@@ -565,14 +558,7 @@ fn meshopt_rotations_are_written_at_the_bits_of_their_track() {
 /// without it they are 8-bit components, each rounded.
 #[test]
 fn meshopt_normals_are_octahedral_and_decode_near_the_mesh_normals() {
-    let mut asset = test_assets::rig();
-    // The writer quantizes skinned meshes without morph targets.
-    asset.meshes[0].morph_targets.clear();
-    asset.meshes[0].morph_weights.clear();
-    for clip in &mut asset.clips {
-        clip.tracks
-            .retain(|t| !matches!(t.target, TrackTarget::MorphWeights(m) if m.get() == 0));
-    }
+    let asset = rig_without_morphs();
     let glb = to_glb(
         &asset,
         &GltfOptions {
@@ -620,4 +606,17 @@ fn meshopt_normals_are_octahedral_and_decode_near_the_mesh_normals() {
             "{read} vs {n}"
         );
     }
+}
+
+/// The test rig without its morph targets (and their weight tracks): the writer quantizes
+/// skinned meshes without morph targets.
+fn rig_without_morphs() -> rigport_model::Asset {
+    let mut asset = test_assets::rig();
+    asset.meshes[0].morph_targets.clear();
+    asset.meshes[0].morph_weights.clear();
+    for clip in &mut asset.clips {
+        clip.tracks
+            .retain(|t| !matches!(t.target, TrackTarget::MorphWeights(m) if m.get() == 0));
+    }
+    asset
 }
