@@ -620,3 +620,60 @@ fn rig_without_morphs() -> rigport_model::Asset {
     }
     asset
 }
+
+/// A compact export writes whole numbers as integers (`0`, not `0.0`), the same numbers
+/// the plain export writes: every node's transform reads back equal.
+#[test]
+fn compact_json_writes_whole_numbers_as_integers() {
+    let (plain, compact) = (
+        export(false, Compression::None),
+        export(true, Compression::None),
+    );
+    let text = |glb: &[u8]| {
+        let len = u32::from_le_bytes(glb[12..16].try_into().expect("4 bytes")) as usize;
+        String::from_utf8(glb[20..20 + len].to_vec()).expect("utf-8")
+    };
+    // Number tokens outside strings that are whole floats (`12.0`, `-0.0`).
+    let whole_floats = |t: &str| -> usize {
+        let (mut count, mut in_string, mut escaped, mut token) = (0, false, false, String::new());
+        for c in t.chars() {
+            if in_string {
+                (escaped, in_string) = (c == '\\' && !escaped, !(c == '"' && !escaped));
+                continue;
+            }
+            if c.is_ascii_digit() || matches!(c, '-' | '.' | 'e' | 'E' | '+') {
+                token.push(c);
+                continue;
+            }
+            let digits = token.trim_start_matches('-');
+            if let Some(whole) = digits.strip_suffix(".0") {
+                count +=
+                    usize::from(!whole.is_empty() && whole.bytes().all(|b| b.is_ascii_digit()));
+            }
+            token.clear();
+            in_string = c == '"';
+        }
+        count
+    };
+    assert!(
+        whole_floats(&text(&plain)) > 0,
+        "the plain export has whole floats"
+    );
+    assert_eq!(whole_floats(&text(&compact)), 0);
+    let (pj, cj) = (glb_json(&plain), glb_json(&compact));
+    let numbers = |v: &Value| -> Vec<f64> {
+        v.as_array()
+            .map(|a| a.iter().filter_map(Value::as_f64).collect())
+            .unwrap_or_default()
+    };
+    let nodes = pj["nodes"].as_array().expect("nodes");
+    for (n, node) in nodes.iter().enumerate() {
+        for key in ["translation", "rotation", "scale"] {
+            assert_eq!(
+                numbers(&node[key]),
+                numbers(&cj["nodes"][n][key]),
+                "node {n} {key}"
+            );
+        }
+    }
+}
