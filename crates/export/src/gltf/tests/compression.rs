@@ -638,7 +638,7 @@ fn compact_json_writes_whole_numbers_as_integers() {
         let (mut count, mut in_string, mut escaped, mut token) = (0, false, false, String::new());
         for c in t.chars() {
             if in_string {
-                (escaped, in_string) = (c == '\\' && !escaped, !(c == '"' && !escaped));
+                (escaped, in_string) = (c == '\\' && !escaped, c != '"' || escaped);
                 continue;
             }
             if c.is_ascii_digit() || matches!(c, '-' | '.' | 'e' | 'E' | '+') {
