@@ -253,14 +253,7 @@ pub fn mesh_grid_error(asset: &Asset, position_error: f32) -> Option<f32> {
 pub(crate) fn position_error(tolerance: f32, compression: Compression) -> f32 {
     match compression {
         Compression::None => 0.0,
-        Compression::Meshopt => {
-            std::env::var("DBG_SHARE")
-                .ok()
-                .and_then(|s| s.parse().ok())
-                .unwrap_or(MESHOPT_GRID_SHARE)
-                * tolerance
-                / (1.0 + 5e-4)
-        }
+        Compression::Meshopt => MESHOPT_GRID_SHARE * tolerance / (1.0 + 5e-4),
     }
 }
 
