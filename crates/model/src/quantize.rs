@@ -143,6 +143,11 @@ impl PositionGrid {
     /// side, centred on it; `None` without positions or with a non-finite one.
     pub fn new(positions: &[glam::Vec3]) -> Option<Self> {
         let (lo, hi) = bounds(positions)?;
+        Some(Self::spanning(lo, hi))
+    }
+
+    /// [`PositionGrid::new`] over the box from `lo` to `hi`.
+    fn spanning(lo: glam::Vec3, hi: glam::Vec3) -> Self {
         let extent = (hi - lo).max_element();
         // A single point (or a degenerate box): any step holds it exactly.
         let step = if extent > 0.0 {
@@ -150,10 +155,10 @@ impl PositionGrid {
         } else {
             1.0
         };
-        Some(Self {
+        Self {
             origin: (lo + hi) * 0.5,
             step,
-        })
+        }
     }
 
     /// The coarsest grid over `positions`' box whose [`PositionGrid::max_error`] is at most
@@ -178,8 +183,8 @@ impl PositionGrid {
     /// assert_eq!(PositionGrid::within(&points, 0.0), Some(fine));
     /// ```
     pub fn within(positions: &[glam::Vec3], error: f32) -> Option<Self> {
-        let fine = Self::new(positions)?;
         let (lo, hi) = bounds(positions)?;
+        let fine = Self::spanning(lo, hi);
         // max_error is linear in the step: a + b * step.
         let root3 = 3f32.sqrt();
         let size = lo.abs().max_element().max(fine.origin.abs().max_element());

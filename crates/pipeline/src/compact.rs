@@ -246,6 +246,13 @@ pub fn mesh_grid_error(asset: &Asset, position_error: f32) -> Option<f32> {
         .reduce(f32::max)
 }
 
+/// The mesh grid error a reduction within `tolerance` pays for ([`mesh_grid_error`] at
+/// `position_error`): the writer quantizes the skinned meshes only when that rounding
+/// takes at most a tenth of the bound, and the clips get the rest of it; `None` otherwise.
+pub(crate) fn paid_grid_error(asset: &Asset, position_error: f32, tolerance: f32) -> Option<f32> {
+    mesh_grid_error(asset, position_error).filter(|&e| e <= 0.1 * tolerance)
+}
+
 /// What `GltfOptions::position_error` is for a bound of `tolerance` (rig units): 0 (the
 /// finest grid) for plain glTF, whose 16-bit positions take their bytes whatever their
 /// values; with meshopt, a coarser grid whose rounding takes [`MESHOPT_GRID_SHARE`] of

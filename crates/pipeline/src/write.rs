@@ -208,12 +208,10 @@ pub fn write_output_report(
     if output.reduces() {
         let tolerance = compact::tolerance_in_rig_units(&asset, output.reduce_tolerance);
         let position_error = compact::position_error(tolerance, output.options.compression);
-        let coarser = format.is_gltf()
-            && position_error > 0.0
-            && compact::mesh_grid_error(&asset, position_error)
-                .is_some_and(|e| e <= 0.1 * tolerance)
-            && compact::mesh_grid_error(&asset, position_error)
-                > compact::mesh_grid_error(&asset, 0.0);
+        // (A positive error means meshopt, which only glTF takes.)
+        let coarser = position_error > 0.0
+            && compact::paid_grid_error(&asset, position_error, tolerance)
+                .is_some_and(|e| Some(e) > compact::mesh_grid_error(&asset, 0.0));
         if coarser {
             let mut fine = asset.clone();
             let (coarse, other) = rayon::join(
@@ -343,13 +341,11 @@ fn reduce_clips(
 ) -> Result<Reduction, PipelineError> {
     let format = output.format()?;
     let tolerance = compact::tolerance_in_rig_units(asset, output.reduce_tolerance);
-    // Quantized vertices (glTF) when their rounding takes at most a tenth of the bound;
-    // the clips get the rest of it.
+    // Quantized vertices (glTF) when their rounding takes at most a tenth of the bound.
     let grid_error = format
         .is_gltf()
-        .then(|| compact::mesh_grid_error(asset, position_error))
+        .then(|| compact::paid_grid_error(asset, position_error, tolerance))
         .flatten()
-        .filter(|&e| e <= 0.1 * tolerance)
         .unwrap_or(0.0);
     // 16-bit rotations and meshopt filters are glTF encodings; USD writes floats.
     let vector_bits = compact::vector_bits(asset, tolerance);
