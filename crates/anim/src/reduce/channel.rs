@@ -4,7 +4,7 @@
 use glam::Quat;
 use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget};
 
-use super::codec::{cubic_as_written, Codec};
+use super::codec::{cubic_as_written, rotations_at_bits, Codec};
 use super::curve::quat_at;
 use super::error::{ReduceError, TrackProblem};
 
@@ -229,32 +229,23 @@ pub(super) fn fewest_bits(chan: &Channel, share: f32) -> Option<(u8, Track, Vec<
         return None;
     }
     let limit = share * chan.eps;
-    let keys: Vec<[f32; 4]> = track
-        .values
-        .chunks_exact(4)
-        .map(|c| [c[0], c[1], c[2], c[3]])
-        .collect();
     let originals: Vec<Quat> = track
         .values
         .chunks_exact(4)
         .map(|c| quat_at(c, 0))
         .collect();
     (MIN_BITS..=MAX_BITS).find_map(|bits| {
-        let written_keys = written(&keys, bits);
+        let out = rotations_at_bits(track, written, bits);
         let mut quats = Vec::with_capacity(originals.len());
-        for (w, q) in written_keys.iter().zip(&originals) {
+        for (w, q) in out.values.chunks_exact(4).zip(&originals) {
             let r = quat_at(w, 0);
             // A reader composes the written quaternion as it is: a length off 1 scales the
             // joint by its square, moving a point at unit distance by twice the difference.
-            let length = glam::Vec4::from_array(*w).length();
+            let length = glam::Vec4::from_slice(w).length();
             if q.angle_between(r) + 2.0 * (length - 1.0).abs() > limit {
                 return None;
             }
             quats.push(r);
-        }
-        let mut out = track.clone();
-        for (chunk, w) in out.values.chunks_exact_mut(4).zip(&written_keys) {
-            chunk.copy_from_slice(w);
         }
         Some((bits, out, quats))
     })

@@ -37,6 +37,21 @@ impl Codec {
     };
 }
 
+/// A LINEAR or STEP rotation track (xyzw keys) as `written` reads it back at `bits` per
+/// component.
+pub(super) fn rotations_at_bits(track: &Track, written: RotationAtBits, bits: u8) -> Track {
+    let keys: Vec<[f32; 4]> = track
+        .values
+        .chunks_exact(4)
+        .map(|c| [c[0], c[1], c[2], c[3]])
+        .collect();
+    let mut out = track.clone();
+    for (chunk, w) in out.values.chunks_exact_mut(4).zip(written(&keys, bits)) {
+        chunk.copy_from_slice(&w);
+    }
+    out
+}
+
 /// A cubic track's values as `codec` stores them (`None`: exactly): rotations (`rotation`) as 16-bit
 /// normalized components when every value and tangent fits in `[-1, 1]` (else floats),
 /// translations and scales through the codec's vector rounding.

@@ -6,7 +6,7 @@
 use rigport_model::{Clip, Interpolation, Skeleton};
 
 use super::channel::{as_written, collect_channels, Kind};
-use super::codec::cubic_as_written;
+use super::codec::{cubic_as_written, rotations_at_bits};
 use super::{Codec, ReduceError, ReduceOptions, Reducer, Tuning};
 
 /// The largest and the mean model-space error.
@@ -95,16 +95,7 @@ pub fn point_error_bits(
             } else if let (Some(bits), Some(written), Kind::Rotation) =
                 (bits, codec.rotation_bits, chan.kind)
             {
-                let keys: Vec<[f32; 4]> = track
-                    .values
-                    .chunks_exact(4)
-                    .map(|c| [c[0], c[1], c[2], c[3]])
-                    .collect();
-                let mut out = track.clone();
-                for (c, w) in out.values.chunks_exact_mut(4).zip(written(&keys, bits)) {
-                    c.copy_from_slice(&w);
-                }
-                Some(out)
+                Some(rotations_at_bits(track, written, bits))
             } else {
                 as_written(track, chan.kind, codec)
             }
