@@ -5,7 +5,7 @@ use glam::Quat;
 use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget};
 
 use super::codec::{cubic_as_written, rotations_at_bits, Codec};
-use super::curve::quat_at;
+use super::curve::{quat_at, rotation_angle};
 use super::error::{ReduceError, TrackProblem};
 
 /// Which joint property a track animates.
@@ -242,7 +242,7 @@ pub(super) fn fewest_bits(chan: &Channel, share: f32) -> Option<(u8, Track, Vec<
             // A reader composes the written quaternion as it is: a length off 1 scales the
             // joint by its square, moving a point at unit distance by twice the difference.
             let length = glam::Vec4::from_slice(w).length();
-            if q.angle_between(r) + 2.0 * (length - 1.0).abs() > limit {
+            if rotation_angle(*q, r) + 2.0 * (length - 1.0).abs() > limit {
                 return None;
             }
             quats.push(r);

@@ -86,6 +86,16 @@ pub(super) fn vec3_at(values: &[f32], at: usize) -> Vec3 {
     values.get(at..at + 3).map_or(Vec3::ZERO, Vec3::from_slice)
 }
 
+/// The angle between two unit rotations, through their chord `|a - b| = 2 sin(θ/4)` (the
+/// nearer of `b` and `-b`): precise to f32 rounding at small angles, where `Quat::angle_between`
+/// (an `acos` of the dot product) cannot tell angles under about 1e-3 rad apart, the
+/// precision a rotation's bits are chosen at.
+pub(super) fn rotation_angle(a: Quat, b: Quat) -> f32 {
+    let (a, b) = (Vec4::from(a), Vec4::from(b));
+    let chord = (a - b).length().min((a + b).length());
+    4.0 * (0.5 * chord).min(1.0).asin()
+}
+
 /// The normalized quaternion at `at` of `values` (NaN for a zero quaternion).
 pub(super) fn quat_at(values: &[f32], at: usize) -> Quat {
     let v = values.get(at..at + 4).map_or(Vec4::ZERO, Vec4::from_slice);
@@ -154,4 +164,25 @@ pub(super) fn hermite(u: f32) -> [f32; 4] {
         -2.0 * u3 + 3.0 * u2,
         u3 - u2,
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Small angles come out to their own precision (an `acos` of the dot product reads
+    /// every angle under about 7e-4 rad as 0 or 7e-4), either sign of either quaternion.
+    #[test]
+    fn rotation_angle_resolves_small_angles() {
+        let a = Quat::from_euler(glam::EulerRot::XYZ, 0.4, -1.1, 2.0);
+        let axis = Vec3::new(0.3, -0.5, 0.8).normalize();
+        for angle in [1e-6f32, 1e-5, 1e-4, 3e-4, 1e-3, 0.1, 1.0, 3.0] {
+            let b = a * Quat::from_axis_angle(axis, angle);
+            for b in [b, -b] {
+                let got = rotation_angle(a, b);
+                assert!((got - angle).abs() <= 1e-3 * angle + 2e-7, "{angle}: {got}");
+            }
+        }
+        assert_eq!(rotation_angle(a, a), 0.0);
+    }
 }
