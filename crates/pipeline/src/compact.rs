@@ -272,9 +272,10 @@ pub(crate) const MESHOPT_GRID_SHARE: f32 = 0.1;
 /// With meshopt, what a kept key's own time weighs against a 16-bit rotation's 8 bytes
 /// (`Codec::key_time_bytes`): the vertex codec packs a full-rate track's small steps into
 /// a few bits a key, while removed keys leave jumps, and their times (float seconds) barely
-/// pack. On the Bandai kick: 41,840 bytes at 4, 40,836 at 8, 39,156 at 32 (gltfpack -cc
-/// 39,372); the 131_04 dance 98,768 at 4, 90,028 at 32.
-const MESHOPT_KEY_TIME_BYTES: usize = 32;
+/// pack. On the Bandai kick: 37,176 bytes at 4, 36,568 at 32 and more (gltfpack -cc
+/// 39,372); on 57 Bandai clips, 0.9654 of gltfpack -cc's total size at 32, 0.9643 at 64,
+/// 0.9638 at 128 (the worst file the same).
+const MESHOPT_KEY_TIME_BYTES: usize = 64;
 
 /// How a glTF writer with `compression` stores key values: 16-bit rotations, or
 /// meshoptimizer's quaternion and exponential filters (with 16 mantissa bits when
