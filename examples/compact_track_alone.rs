@@ -15,14 +15,46 @@
 //! It prints, per track, the keys and bytes kept (a key's value: 8 bytes LINEAR, 24 or 48
 //! cubic; plus 4 bytes of time per key unless its keys are at a uniform rate, whose times
 //! are shared), and the sums: the bytes, and the keys times 4 (every kept value as four
-//! bytes, the smallest rotation core glTF stores, with no time at all). Either sum is a
-//! floor on the animation bytes of a file within the bound only as far as errors of
-//! different tracks cannot cancel; it is an estimate, not a proof.
+//! bytes, the smallest rotation core glTF stores, with no time at all). It also runs each
+//! track with LINEAR keys as 8-bit normalized components (4 bytes a key, each component
+//! rounded to the nearest 1/127 and read back normalized, so the length error a reader
+//! would compose as a scale is not counted), as the reducer picks bits per track: where it
+//! takes them, a track may cost its 8-bit keys' bytes; where it keeps 16 bits, its keys need
+//! them. The last sum takes each track's smaller cost. Each sum is a floor on the
+//! animation bytes of a file within the bound only as far as errors of different tracks
+//! cannot cancel; it is an estimate, not a proof.
 
 use std::path::PathBuf;
 
 use rigport_anim::reduce::{reduce_clip, Codec, ReduceOptions};
-use rigport_model::{Interpolation, TrackTarget};
+use rigport_model::{Interpolation, Track, TrackTarget};
+
+/// Rotation keys as 8-bit normalized components read back (nearest rounding), whatever
+/// the bits asked (the reducer asks for fewer than 16 only for the track it reduces).
+fn rotations_as_i8(keys: &[[f32; 4]], _bits: u8) -> Vec<[f32; 4]> {
+    keys.iter()
+        .map(|q| q.map(|c| (c.clamp(-1.0, 1.0) * 127.0).round() / 127.0))
+        .collect()
+}
+
+/// Bytes of a reduced track: its values, and its times unless they are at a uniform rate.
+fn track_bytes(kept: &Track, linear_value: usize) -> usize {
+    let n = kept.times.len();
+    let value = match kept.interpolation {
+        Interpolation::CubicSpline if kept.values.iter().all(|v| v.abs() <= 1.0) => 24,
+        Interpolation::CubicSpline => 48,
+        _ => linear_value,
+    };
+    // Keys at a uniform rate share their times with other tracks.
+    let step = kept.times.get(1).map_or(0.0, |t| t - kept.times[0]);
+    let uniform = kept
+        .times
+        .windows(2)
+        .rev()
+        .skip(1)
+        .all(|w| ((w[1] - w[0]) - step).abs() <= 1e-4);
+    n * value + if uniform { 0 } else { 4 * n }
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -42,9 +74,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         cubic: true,
     };
     println!("{} ({frames} frames), {tolerance} m", path.display());
-    println!("| joint | keys kept | bytes |");
-    println!("|---|---:|---:|");
-    let (mut keys, mut bytes, mut tracks) = (0, 0, 0);
+    let bytes8 = ReduceOptions {
+        codec: Some(Codec {
+            rotation_bits: Some(rotations_as_i8),
+            ..Codec::I16
+        }),
+        cubic: false,
+        ..options.clone()
+    };
+    println!("| joint | keys kept | bytes | 8-bit keys | 8-bit bytes |");
+    println!("|---|---:|---:|---:|---:|");
+    let (mut keys, mut bytes, mut tracks, mut least) = (0, 0, 0, 0);
     for (ti, track) in clip.tracks.iter().enumerate() {
         let TrackTarget::Rotation(joint) = track.target else {
             continue;
@@ -61,28 +101,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (reduced, _) = reduce_clip(&alone, &asset.skeleton, &options)?;
         let kept = &reduced.tracks[ti];
         let n = kept.times.len();
-        let value = match kept.interpolation {
-            Interpolation::CubicSpline if kept.values.iter().all(|v| v.abs() <= 1.0) => 24,
-            Interpolation::CubicSpline => 48,
-            _ => 8,
-        };
-        // Keys at a uniform rate share their times with other tracks.
-        let step = kept.times.get(1).map_or(0.0, |t| t - kept.times[0]);
-        let uniform = kept
-            .times
-            .windows(2)
-            .rev()
-            .skip(1)
-            .all(|w| ((w[1] - w[0]) - step).abs() <= 1e-4);
-        let b = n * value + if uniform { 0 } else { 4 * n };
+        let b = track_bytes(kept, 8);
+        // 8-bit keys: when the reducer picks fewer bits than 16 for the track (the other,
+        // STEP, tracks stay at 16), within the bound as verified.
+        let (reduced8, stats8) = reduce_clip(&alone, &asset.skeleton, &bytes8)?;
+        let eight = (stats8.rotation_bits.get(ti).copied().unwrap_or(0) > 0).then(|| {
+            (
+                reduced8.tracks[ti].times.len(),
+                track_bytes(&reduced8.tracks[ti], 4),
+            )
+        });
         let name = &asset.skeleton.joints()[joint.get()].name;
-        println!("| {name} | {n} | {b} |");
+        let (n8, b8) = eight.map_or(("-".to_string(), "-".to_string()), |(n8, b8)| {
+            (n8.to_string(), b8.to_string())
+        });
+        println!("| {name} | {n} | {b} | {n8} | {b8} |");
         keys += n;
         bytes += b;
+        least += eight.map_or(b, |(_, b8)| b.min(b8));
         tracks += 1;
     }
     println!(
-        "{tracks} tracks: {keys} keys, {bytes} bytes; keys x 4 = {} bytes",
+        "{tracks} tracks: {keys} keys, {bytes} bytes; keys x 4 = {} bytes; each track's \
+         smaller of 16 and 8 bits: {least} bytes",
         4 * keys
     );
     Ok(())
