@@ -1,13 +1,15 @@
-//! Rotations as 16-bit normalized integers, as glTF stores animation outputs.
+//! Rotations as 16- or 8-bit normalized integers, as glTF stores animation outputs.
 //!
 //! glTF 2.0 §3.11 ("Animations", accessor types of `rotation` sampler outputs) allows
-//! `SHORT` normalized components for rotations in core glTF, no extension needed; a reader
-//! decodes a component `c` as `max(c / 32767, -1)` (§3.11, "Animation Samplers", and
-//! §3.6.2.4 on normalized integers). The encoder and the key reducer call the same
+//! `SHORT` and `BYTE` normalized components for rotations in core glTF, no extension
+//! needed; a reader decodes a component `c` as `max(c / 32767, -1)` or `max(c / 127, -1)`
+//! (§3.11, "Animation Samplers", and §3.6.2.4 on normalized integers). The encoder and the key reducer call the same
 //! functions, so the error a reducer measures is the error of the bytes written.
 
 /// The largest magnitude of a `SHORT` normalized component.
 const SHORT_MAX: f64 = 32767.0;
+/// The largest magnitude of a `BYTE` normalized component.
+const BYTE_MAX: f64 = 127.0;
 
 /// `q` (xyzw, any non-zero length) normalized in `f64` and rounded to 16-bit normalized
 /// components whose length is nearest 1 (see the body). Odd: `rotation_to_i16(-q) == -rotation_to_i16(q)` component by
@@ -24,6 +26,70 @@ const SHORT_MAX: f64 = 32767.0;
 /// assert!((back[1] - 0.6).abs() < 1.0 / 32767.0);
 /// ```
 pub fn rotation_to_i16(q: [f32; 4]) -> [i16; 4] {
+    // Within ±32767: the casts are exact.
+    nearest_length(q, SHORT_MAX, |c, r| {
+        let length = (c.iter().map(|x| x * x).sum::<f64>() - SHORT_MAX * SHORT_MAX).abs();
+        let distance: f64 = c.iter().zip(r).map(|(a, b)| (a - b).powi(2)).sum();
+        Some((length, distance))
+    })
+    .map(|c| c as i16)
+}
+
+/// [`rotation_to_i16`] with 8-bit normalized components (`BYTE`, 4 bytes a key): a step of
+/// 1/127. Of the candidates within one step of each component, the one that moves a point
+/// at unit distance least (its angle, plus twice its length's distance to 1, which a
+/// reader composes as a scale), among those within 0.75% of unit length (glTF-Validator
+/// reports a rotation output more than 0.77% off).
+///
+/// ```
+/// use rigport_model::quantize::{rotation_from_i8, rotation_to_i8};
+///
+/// let q = [0.0, 0.6, 0.0, 0.8];
+/// // (0, 77, 0, 101) is within 0.003% of unit length but 0.016 rad off; this is 0.16%
+/// // long and 0.006 rad off.
+/// assert_eq!(rotation_to_i8(q), [0, 76, 0, 102]);
+/// assert_eq!(rotation_to_i8([-0.0, -0.6, -0.0, -0.8]), [0, -76, 0, -102]);
+/// let back = rotation_from_i8(rotation_to_i8(q));
+/// let length = back.iter().map(|c| c * c).sum::<f32>().sqrt();
+/// assert!((length - 1.0).abs() < 0.002 && (back[1] - 0.6).abs() < 1.0 / 127.0);
+/// ```
+pub fn rotation_to_i8(q: [f32; 4]) -> [i8; 4] {
+    // Within ±127: the casts are exact.
+    nearest_length(q, BYTE_MAX, |c, r| {
+        let length = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let off = (length / BYTE_MAX - 1.0).abs();
+        // The angle between unit quaternions is about twice their chord.
+        let chord = c
+            .iter()
+            .zip(r)
+            .map(|(a, b)| (a / length - b / BYTE_MAX).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        (off <= 0.0075).then_some((2.0 * chord + 2.0 * off, 0.0))
+    })
+    .map(|c| c as i8)
+}
+
+/// The rotation a reader decodes from 8-bit normalized components: `max(c / 127, -1)`
+/// each (not renormalized).
+pub fn rotation_from_i8(c: [i8; 4]) -> [f32; 4] {
+    c.map(|c| (f64::from(c) / BYTE_MAX).max(-1.0) as f32)
+}
+
+/// [`rotation_from_i8`] of [`rotation_to_i8`]: the rotation a reader sees for `q`.
+pub fn rotation_as_i8(q: [f32; 4]) -> [f32; 4] {
+    rotation_from_i8(rotation_to_i8(q))
+}
+
+/// `q` normalized in `f64` and scaled to integers within `±max` (whole numbers as `f64`):
+/// of the candidates within one step of each rounded component, the one with the least
+/// `key(candidate, target)` (both as magnitudes; `None`: not a candidate), or the rounded
+/// components when none is.
+fn nearest_length(
+    q: [f32; 4],
+    max: f64,
+    key: impl Fn(&[f64; 4], &[f64; 4]) -> Option<(f64, f64)>,
+) -> [f64; 4] {
     let len = q
         .iter()
         .map(|&c| f64::from(c) * f64::from(c))
@@ -34,14 +100,16 @@ pub fn rotation_to_i16(q: [f32; 4]) -> [i16; 4] {
     } else {
         1.0
     };
-    // |c / len| <= 1, so the rounded values are within i16 (the casts saturate anyway).
-    let r = q.map(|c| f64::from(c) / len * SHORT_MAX);
+    // |c / len| <= 1, so the rounded values are within ±max.
+    let r = q.map(|c| f64::from(c) / len * max);
     // Readers compose the decoded quaternion as it is (three.js, as glTF's own sample
     // viewer: a matrix from x, y, z, w without normalizing), and a length off 1 scales
     // the joint by its square. So of the integers within one step of each rounded
-    // component (exact zeros kept), the one whose length is nearest 32767 is written, the
-    // nearest to `q` among equals. In magnitudes, signs restored: odd as promised.
-    let base = r.map(|x| x.abs().round());
+    // component (exact zeros kept), `key` picks the one written (16 bits: the length
+    // nearest 32767, the nearest to `q` among equals). In magnitudes, signs restored: odd
+    // as promised.
+    let target = r.map(f64::abs);
+    let base = target.map(f64::round);
     let mut best = base;
     let mut best_key = (f64::INFINITY, f64::INFINITY);
     for k in 0..81u32 {
@@ -49,7 +117,7 @@ pub fn rotation_to_i16(q: [f32; 4]) -> [i16; 4] {
         let mut valid = true;
         for (i, ci) in c.iter_mut().enumerate() {
             let step = f64::from((k / 3u32.pow(i as u32)) % 3) - 1.0;
-            if step != 0.0 && (r[i] == 0.0 || *ci + step < 0.0 || *ci + step > SHORT_MAX) {
+            if step != 0.0 && (r[i] == 0.0 || *ci + step < 0.0 || *ci + step > max) {
                 valid = false;
             }
             *ci += step;
@@ -57,14 +125,12 @@ pub fn rotation_to_i16(q: [f32; 4]) -> [i16; 4] {
         if !valid {
             continue;
         }
-        let length = (c.iter().map(|x| x * x).sum::<f64>() - SHORT_MAX * SHORT_MAX).abs();
-        let distance: f64 = c.iter().zip(&r).map(|(a, b)| (a - b.abs()).powi(2)).sum();
-        if (length, distance) < best_key {
-            best_key = (length, distance);
+        if let Some(k) = key(&c, &target).filter(|&k| k < best_key) {
+            best_key = k;
             best = c;
         }
     }
-    std::array::from_fn(|i| (best[i].copysign(r[i])) as i16)
+    std::array::from_fn(|i| best[i].copysign(r[i]))
 }
 
 /// The rotation a reader decodes from 16-bit normalized components: `max(c / 32767, -1)`
@@ -220,5 +286,50 @@ impl PositionGrid {
     pub fn max_error(&self) -> f32 {
         let size = self.origin.abs().max_element() + SHORT_MAX as f32 * self.step;
         self.step * 0.5 * 3f32.sqrt() + 2.0 * 3f32.sqrt() * f32::EPSILON * size
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Over many rotations, 8-bit keys stay within glTF-Validator's unit length (0.77%),
+    /// and move a point at unit distance by under 0.02 (angle plus twice the length
+    /// error); the encoding is odd.
+    #[test]
+    fn byte_rotations_keep_near_unit_length() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let (mut worst_length, mut worst_move) = (0.0f64, 0.0f64);
+        for _ in 0..20_000 {
+            let q = [next(), next(), next(), next()];
+            let n = q.iter().map(|c| c * c).sum::<f32>().sqrt();
+            if n < 0.1 {
+                continue;
+            }
+            let q = q.map(|c| c / n);
+            let back = rotation_as_i8(q);
+            let length = back
+                .iter()
+                .map(|&c| f64::from(c).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let dot = back
+                .iter()
+                .zip(&q)
+                .map(|(a, b)| f64::from(*a) * f64::from(*b));
+            let dot = dot.sum::<f64>().abs() / length;
+            let off = (length - 1.0).abs();
+            worst_length = worst_length.max(off);
+            worst_move = worst_move.max(2.0 * dot.min(1.0).acos() + 2.0 * off);
+            assert_eq!(rotation_to_i8(q.map(|c| -c)), rotation_to_i8(q).map(|c| -c));
+        }
+        assert!(worst_length <= 0.0075, "{worst_length}");
+        assert!(worst_move < 0.02, "{worst_move}");
     }
 }
