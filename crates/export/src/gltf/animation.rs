@@ -14,7 +14,7 @@ use json::accessor::Type;
 use json::animation::{Interpolation as GltfInterpolation, Property};
 use json::validation::Checked;
 use json::Index;
-use rigport_model::quantize::{component_to_i16, rotation_to_i16};
+use rigport_model::quantize::{component_to_i16, rotation_to_i16, rotation_to_i8};
 use rigport_model::{Asset, Clip, Interpolation, Track, TrackTarget, Transform, Warning};
 
 use super::buffer::{Bounds, Builder};
@@ -155,7 +155,12 @@ pub(crate) fn write_animations(
                     .copied()
                     .filter(|&k| k > 0)
                     .unwrap_or(16);
-                b.animation_rotations(&raw, bits, i16_rotations)
+                if bits < 16 && opts.compression == rigport_model::Compression::None {
+                    // Core glTF's one precision under 16 bits.
+                    b.animation_bytes(&i8_rotations(&raw))
+                } else {
+                    b.animation_rotations(&raw, bits, i16_rotations)
+                }
             } else {
                 b.animation_floats(&values, type_, Bounds::None)
             };
@@ -384,15 +389,26 @@ fn dropped(location: &str, why: String) -> Warning {
 /// made sign-continuous as [`sampler_values`] does (rounding is odd, so flipping after it
 /// equals flipping before).
 fn i16_rotations(values: &[f32]) -> Vec<i16> {
+    sign_continuous(values, rotation_to_i16)
+}
+
+/// [`i16_rotations`] as 8-bit normalized components ([`rotation_to_i8`]).
+fn i8_rotations(values: &[f32]) -> Vec<i8> {
+    sign_continuous(values, rotation_to_i8)
+}
+
+/// Rotation keys (flat xyzw) through an odd integer `encode`, each key's sign flipped when
+/// it opposes the previous one as encoded.
+fn sign_continuous<T>(values: &[f32], encode: fn([f32; 4]) -> [T; 4]) -> Vec<T>
+where
+    T: Copy + Into<i64> + std::ops::Neg<Output = T>,
+{
     let mut out = Vec::with_capacity(values.len());
-    let mut previous: Option<[i16; 4]> = None;
+    let mut previous: Option<[T; 4]> = None;
     for key in values.chunks_exact(4) {
-        let mut q = rotation_to_i16([key[0], key[1], key[2], key[3]]);
-        let dot = |p: [i16; 4], q: [i16; 4]| -> i64 {
-            p.iter()
-                .zip(&q)
-                .map(|(&a, &b)| i64::from(a) * i64::from(b))
-                .sum()
+        let mut q = encode([key[0], key[1], key[2], key[3]]);
+        let dot = |p: [T; 4], q: [T; 4]| -> i64 {
+            p.iter().zip(&q).map(|(&a, &b)| a.into() * b.into()).sum()
         };
         if previous.is_some_and(|p| dot(p, q) < 0) {
             q = q.map(|c| -c);

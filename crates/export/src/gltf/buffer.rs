@@ -467,6 +467,22 @@ impl Builder {
         index
     }
 
+    /// `VEC4` 8-bit normalized animation outputs (rotations; uncompressed exports): in the
+    /// grouped animation view when there is one (4 bytes a key keeps its offsets aligned).
+    pub(crate) fn animation_bytes(&mut self, data: &[i8]) -> Index<json::Accessor> {
+        let raw: Vec<u8> = data.iter().flat_map(|c| c.to_le_bytes()).collect();
+        let index = if self.group_animation {
+            self.grouped(&raw, 4, Filter::None, ComponentType::I8, Type::Vec4, None)
+        } else {
+            let view = self.view(None, |bin| bin.extend_from_slice(&raw));
+            self.accessor(view, data.len() / 4, ComponentType::I8, Type::Vec4, None)
+        };
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
+    }
+
     /// CUBICSPLINE rotation outputs (in-tangent, value, out-tangent per key, each xyzw) as
     /// 16-bit normalized components, rounded by the caller: compressed without a filter
     /// when the export is (the `QUATERNION` filter decodes unit quaternions, which tangents

@@ -86,9 +86,11 @@ pub struct GltfOptions {
     /// [`crate::meshopt_vector_as_written`] say what a reader gets), else exact floats.
     /// Default none.
     pub compression: Compression,
-    /// With [`Compression::Meshopt`] and `compact`: per clip (in the asset's order), per
-    /// track, the `QUATERNION` filter's bits for that LINEAR or STEP rotation track (4 to
-    /// 16, as [`crate::meshopt_rotations_as_written_bits`] measured it for the key reducer);
+    /// With `compact`: per clip (in the asset's order), per track, the bits of that LINEAR
+    /// or STEP rotation track's components, as the key reducer measured them: with
+    /// [`Compression::Meshopt`] the `QUATERNION` filter's bits (4 to 16,
+    /// [`crate::meshopt_rotations_as_written_bits`]); without, any value under 16 writes
+    /// 8-bit normalized components (`BYTE`, [`rigport_model::quantize::rotation_as_i8`]).
     /// 0, or a clip or track past the end: 16. Default empty (16 everywhere).
     pub rotation_bits: Vec<Vec<u8>>,
     /// With [`Compression::Meshopt`] and `compact`: the `EXPONENTIAL` filter's mantissa

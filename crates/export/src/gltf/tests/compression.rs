@@ -1,7 +1,7 @@
 //! Compact outputs: 16-bit rotation outputs, and `EXT_meshopt_compression` views that
 //! decode (with meshoptimizer's own decoder and filters) to what the plain file holds.
 
-use rigport_model::quantize::{rotation_from_i16, rotation_to_i16};
+use rigport_model::quantize::{rotation_from_i16, rotation_to_i16, rotation_to_i8};
 use rigport_model::{Compression, TrackTarget};
 
 use super::*;
@@ -68,6 +68,66 @@ fn rotation_outputs_are_normalized_shorts_rounded_as_the_reducer_measures() {
             }
         }
     }
+}
+
+/// Without compression, `rotation_bits` under 16 writes a LINEAR or STEP rotation track's
+/// keys as 8-bit normalized components (core glTF's one lower precision), each key rounded
+/// as the reducer measures it ([`rotation_to_i8`]); the file stays valid and smaller.
+#[test]
+fn rotation_bits_under_16_write_bytes_in_core_gltf() {
+    let asset = test_assets::rig();
+    let export = |rotation_bits: Vec<Vec<u8>>| {
+        let options = GltfOptions {
+            compact: true,
+            rotation_bits,
+            ..Default::default()
+        };
+        to_glb(&asset, &options).expect("export").glb
+    };
+    let eight: Vec<Vec<u8>> = asset
+        .clips
+        .iter()
+        .map(|c| vec![8; c.tracks.len()])
+        .collect();
+    let bytes = export(eight);
+    assert!(bytes.len() < export(Vec::new()).len());
+    assert_khronos_valid(&bytes);
+    let (doc, buffers) = import(&bytes);
+    let mut checked = 0;
+    for (animation, clip) in doc.animations().zip(&asset.clips) {
+        for channel in animation.channels() {
+            let node = channel.target().node().index();
+            let track = clip.tracks.iter().find(|t| {
+                t.target == TrackTarget::Rotation(rigport_model::JointIndex(node as u32))
+            });
+            let (Some(track), ReadOutputs::Rotations(rotations)) = (
+                track.filter(|t| t.interpolation != rigport_model::Interpolation::CubicSpline),
+                channel
+                    .reader(|b| Some(&buffers[b.index()]))
+                    .read_outputs()
+                    .expect("outputs"),
+            ) else {
+                continue;
+            };
+            let gltf::animation::util::Rotations::I8(keys) = rotations else {
+                panic!("rotation outputs are not BYTE normalized");
+            };
+            let keys: Vec<[i8; 4]> = keys.collect();
+            if keys.len() != track.times.len() {
+                continue; // a constant track written with two keys
+            }
+            for (k, key) in keys.iter().enumerate() {
+                let expected = rotation_to_i8(track.key_value(k).try_into().expect("xyzw"));
+                let flipped = expected.map(|c| -c);
+                assert!(
+                    *key == expected || *key == flipped,
+                    "key {k}: {key:?} vs {expected:?}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 0);
 }
 
 /// Decodes `count` elements of `stride` bytes (4, 8, 12, 16 or 64).
