@@ -26,7 +26,7 @@
 
 use std::path::PathBuf;
 
-use rigport_anim::reduce::{reduce_clip, Codec, ReduceOptions};
+use rigport_anim::reduce::{reduce_clip, Codec, ReduceOptions, RotationBits};
 use rigport_model::{Interpolation, Track, TrackTarget};
 
 /// Rotation keys as 8-bit normalized components read back (nearest rounding), whatever
@@ -76,7 +76,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("{} ({frames} frames), {tolerance} m", path.display());
     let bytes8 = ReduceOptions {
         codec: Some(Codec {
-            rotation_bits: Some(rotations_as_i8),
+            rotation_bits: Some(RotationBits {
+                written: rotations_as_i8,
+                choices: &[8],
+                key_bytes: |_| 4,
+            }),
             ..Codec::I16
         }),
         cubic: false,

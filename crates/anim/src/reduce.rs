@@ -41,7 +41,7 @@ pub mod metric;
 mod rate;
 mod simplify;
 
-pub use codec::{Codec, RotationAtBits};
+pub use codec::{Codec, RotationAtBits, RotationBits};
 pub use error::{ReduceError, TrackProblem};
 
 use channel::{collect_channels, Channel, Kind};

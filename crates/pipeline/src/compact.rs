@@ -10,7 +10,7 @@
 //! bind frame), so the bound covers the skinned mesh as ACL's metric does.
 
 use rigport_anim::reduce::metric::point_error_bits;
-use rigport_anim::reduce::{Codec, ReduceOptions, reduce_clip};
+use rigport_anim::reduce::{Codec, ReduceOptions, RotationBits, reduce_clip};
 use rigport_model::quantize::PositionGrid;
 use rigport_model::{Asset, Clip, Compression, Interpolation, JointIndex, Skeleton, TrackTarget};
 use serde::Serialize;
@@ -277,11 +277,18 @@ pub(crate) const MESHOPT_GRID_SHARE: f32 = 0.1;
 /// 0.9638 at 128 (the worst file the same).
 const MESHOPT_KEY_TIME_BYTES: usize = 64;
 
-/// How a glTF writer with `compression` stores key values: 16-bit rotations, or
+/// The `QUATERNION` filter's bits per component the reducer may pick for a rotation track
+/// (the filter takes 4 to 16; 16 is the default, and below 6 a key's rounding passes 0.03
+/// rad).
+const MESHOPT_ROTATION_BITS: [u8; 10] = [6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+
+/// How a glTF writer with `compression` stores key values: 16-bit rotations (and 8-bit
+/// ones for the tracks whose tolerance allows them, with `byte_rotations`), or
 /// meshoptimizer's quaternion and exponential filters (with 16 mantissa bits when
 /// `vector_bits` is 16, else 20).
-pub(crate) fn codec(compression: Compression, vector_bits: u8) -> Codec {
+pub(crate) fn codec(compression: Compression, vector_bits: u8, byte_rotations: bool) -> Codec {
     match compression {
+        Compression::None if byte_rotations => Codec::CORE,
         Compression::None => Codec::I16,
         Compression::Meshopt => Codec {
             rotation: rigport_export::meshopt_rotation_as_written,
@@ -289,7 +296,12 @@ pub(crate) fn codec(compression: Compression, vector_bits: u8) -> Codec {
                 16 => rigport_export::meshopt_vector_as_written_16,
                 _ => rigport_export::meshopt_vector_as_written,
             }),
-            rotation_bits: Some(rigport_export::meshopt_rotations_as_written_bits),
+            rotation_bits: Some(RotationBits {
+                written: rigport_export::meshopt_rotations_as_written_bits,
+                choices: &MESHOPT_ROTATION_BITS,
+                // 16-bit components, whatever the bits: the filter keeps their width.
+                key_bytes: |_| 8,
+            }),
             key_time_bytes: MESHOPT_KEY_TIME_BYTES,
         },
     }

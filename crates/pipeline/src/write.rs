@@ -202,9 +202,10 @@ pub fn write_output_report(
         )));
     }
     let mut compacted = None;
-    // With a coarser mesh grid (meshopt), the clips reduced for the finest grid too, at the
-    // same time on another thread: the smaller file is kept.
-    let mut fine_grid = None;
+    // A second reduction, at the same time on another thread, when another encoding may
+    // make a smaller file: the smaller file is kept. With meshopt and a coarser mesh grid,
+    // the clips reduced for the finest grid; in core glTF, with 16-bit rotations only.
+    let mut alternative = None;
     if output.reduces() {
         let tolerance = compact::tolerance_in_rig_units(&asset, output.reduce_tolerance);
         let position_error = compact::position_error(tolerance, output.options.compression);
@@ -212,16 +213,32 @@ pub fn write_output_report(
         let coarser = position_error > 0.0
             && compact::paid_grid_error(&asset, position_error, tolerance)
                 .is_some_and(|e| Some(e) > compact::mesh_grid_error(&asset, 0.0));
-        if coarser {
-            let mut fine = asset.clone();
-            let (coarse, other) = rayon::join(
-                || reduce_clips(&mut asset, output, position_error, progress),
-                || reduce_clips(&mut fine, output, 0.0, &crate::progress::Silent),
-            );
-            compacted = Some(coarse?);
-            fine_grid = Some((fine, other?));
+        let core_gltf = format.is_gltf() && output.options.compression == Compression::None;
+        let first = Encoding {
+            position_error,
+            byte_rotations: true,
+        };
+        let second = if coarser {
+            Some(Encoding {
+                position_error: 0.0,
+                ..first
+            })
         } else {
-            compacted = Some(reduce_clips(&mut asset, output, position_error, progress)?);
+            core_gltf.then_some(Encoding {
+                byte_rotations: false,
+                ..first
+            })
+        };
+        if let Some(second) = second {
+            let mut other_asset = asset.clone();
+            let (reduced, other) = rayon::join(
+                || reduce_clips(&mut asset, output, first, progress),
+                || reduce_clips(&mut other_asset, output, second, &crate::progress::Silent),
+            );
+            compacted = Some(reduced?);
+            alternative = Some((other_asset, other?));
+        } else {
+            compacted = Some(reduce_clips(&mut asset, output, first, progress)?);
         }
     }
     let opts = &output.options;
@@ -267,14 +284,16 @@ pub fn write_output_report(
         if let Some(skeleton) = reduction.skeleton.take() {
             unreduced.skeleton = skeleton;
         }
-        // A coarser position grid (meshopt) packs the mesh smaller but leaves the clips
-        // less of the bound: the smaller file is kept (on the corpus the Bandai dash and
-        // walk keep the coarse grid, the kick the fine one). The candidate takes the
-        // written asset's meshes and skins (influences fitted) and its own clips and rest.
-        if let Some((fine, other)) = fine_grid {
+        // A coarser position grid (meshopt) packs the mesh smaller, and 8-bit rotations
+        // (core glTF) pack keys smaller, but either leaves the clips less of the bound: the
+        // smaller file is kept (on the corpus the Bandai dash and walk keep the coarse
+        // grid, the kick the fine one; the Bandai clips keep 8-bit leaves, the 120 fps
+        // captures 16-bit rotations). The candidate takes the written asset's meshes and
+        // skins (influences fitted) and its own clips and rest.
+        if let Some((other_asset, other)) = alternative {
             let mut candidate_asset = asset.clone();
-            candidate_asset.clips = fine.clips;
-            candidate_asset.skeleton = fine.skeleton;
+            candidate_asset.clips = other_asset.clips;
+            candidate_asset.skeleton = other_asset.skeleton;
             let candidate = build(&candidate_asset, Some(&other))?;
             if candidate.byte_len() < prepared.byte_len() {
                 prepared = candidate;
@@ -327,18 +346,32 @@ struct Reduction {
     report: CompactReport,
 }
 
+/// How a reduction's file may encode what it holds: [`write_output_report`] tries two.
+#[derive(Clone, Copy)]
+struct Encoding {
+    /// The most the mesh grid may move a vertex (see [`compact::position_error`]).
+    position_error: f32,
+    /// Core glTF: rotation tracks may take 8-bit components
+    /// ([`rigport_anim::reduce::Codec::CORE`]).
+    byte_rotations: bool,
+}
+
 /// Reduces `asset`'s clips for `output` in place (and, for glTF, moves constant tracks and
 /// rest noise into the skeleton), paying out of the bound for a mesh grid whose rounding
-/// is at most `position_error` (when that is at most a tenth of the bound).
+/// is at most `encoding.position_error` (when that is at most a tenth of the bound).
 ///
 /// # Errors
 /// A clip that does not fit the skeleton, or a bad tolerance.
 fn reduce_clips(
     asset: &mut Asset,
     output: &Output,
-    position_error: f32,
+    encoding: Encoding,
     progress: &dyn Progress,
 ) -> Result<Reduction, PipelineError> {
+    let Encoding {
+        position_error,
+        byte_rotations,
+    } = encoding;
     let format = output.format()?;
     let tolerance = compact::tolerance_in_rig_units(asset, output.reduce_tolerance);
     // Quantized vertices (glTF) when their rounding takes at most a tenth of the bound.
@@ -351,7 +384,7 @@ fn reduce_clips(
     let vector_bits = compact::vector_bits(asset, tolerance);
     let codec = format
         .is_gltf()
-        .then(|| compact::codec(output.options.compression, vector_bits));
+        .then(|| compact::codec(output.options.compression, vector_bits, byte_rotations));
     // CUBICSPLINE fits are glTF's (USD time samples are linear); meshopt's delta coding
     // of LINEAR 16-bit rotations beats them on the corpus (07_05 walk 79,156 bytes
     // LINEAR, 79,720 with cubic tracks; 131_04 dance 113,432 against 139,444).

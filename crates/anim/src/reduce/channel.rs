@@ -4,7 +4,7 @@
 use glam::Quat;
 use rigport_model::{Clip, Interpolation, Skeleton, Track, TrackTarget};
 
-use super::codec::{cubic_as_written, rotations_at_bits, Codec};
+use super::codec::{cubic_as_written, rotations_at_bits, Codec, RotationBits};
 use super::curve::{quat_at, rotation_angle};
 use super::error::{ReduceError, TrackProblem};
 
@@ -74,6 +74,9 @@ impl Channel<'_> {
                 if self.default.is_none() {
                     self.default = Some((self.as_written.take(), std::mem::take(&mut self.quats)));
                 }
+                if let Some(codec) = self.codec.and_then(|c| c.rotation_bits) {
+                    self.value_bytes = (codec.key_bytes)(bits);
+                }
                 self.bits = Some(bits);
                 self.as_written = Some(written);
                 self.quats = quats;
@@ -88,7 +91,9 @@ impl Channel<'_> {
             self.as_written = written;
             self.quats = quats;
         }
-        self.bits = None;
+        if self.bits.take().is_some() {
+            self.value_bytes = DEFAULT_ROTATION_BYTES;
+        }
     }
 }
 
@@ -203,7 +208,11 @@ pub(super) fn collect_channels<'a>(
             decimate,
             cubic,
             codec: codec.copied(),
-            value_bytes: if rounded { 8 } else { 4 * comps },
+            value_bytes: if rounded {
+                DEFAULT_ROTATION_BYTES
+            } else {
+                4 * comps
+            },
             time_bytes: codec.map_or(4, |c| c.key_time_bytes),
             eps: 0.0,
             kept: None,
@@ -217,12 +226,15 @@ pub(super) fn collect_channels<'a>(
     Ok(out)
 }
 
-/// The fewest bits from [`MIN_BITS`] to [`MAX_BITS`] whose rounding of every key of `chan`
-/// (a reducible LINEAR rotation track) stays within `share` of its tolerance (its angle,
-/// plus twice the written length's distance to 1, which a reader's composition turns into
-/// a scale), and the keys as written with them; `None` when the codec has one precision, or the default is needed.
+/// The fewest of the codec's bits ([`RotationBits::choices`]) whose rounding of every key
+/// of `chan` (a reducible LINEAR rotation track) stays within `share` of its tolerance (its
+/// angle, plus twice the written length's distance to 1, which a reader's composition turns
+/// into a scale), and the keys as written with them; `None` when the codec has one
+/// precision, or the default is needed.
 pub(super) fn fewest_bits(chan: &Channel, share: f32) -> Option<(u8, Track, Vec<Quat>)> {
-    let written = chan.codec?.rotation_bits?;
+    let RotationBits {
+        written, choices, ..
+    } = chan.codec?.rotation_bits?;
     let track = chan.original;
     // Reducible tracks only: a track the tightening cannot reach keeps the default.
     if chan.kind != Kind::Rotation || !chan.reducible || !chan.eps.is_finite() {
@@ -234,7 +246,7 @@ pub(super) fn fewest_bits(chan: &Channel, share: f32) -> Option<(u8, Track, Vec<
         .chunks_exact(4)
         .map(|c| quat_at(c, 0))
         .collect();
-    (MIN_BITS..=MAX_BITS).find_map(|bits| {
+    choices.iter().find_map(|&bits| {
         let out = rotations_at_bits(track, written, bits);
         let mut quats = Vec::with_capacity(originals.len());
         for (w, q) in out.values.chunks_exact(4).zip(&originals) {
@@ -251,11 +263,8 @@ pub(super) fn fewest_bits(chan: &Channel, share: f32) -> Option<(u8, Track, Vec<
     })
 }
 
-/// The bits per component [`fewest_bits`] tries, from `MIN_BITS` up (the filter takes 4 to
-/// 16; 16 is the default, and below 6 a key's rounding passes 0.03 rad).
-const MIN_BITS: u8 = 6;
-/// See [`MIN_BITS`].
-const MAX_BITS: u8 = 15;
+/// The bytes of a rotation key at the codec's default precision (16-bit components).
+const DEFAULT_ROTATION_BYTES: usize = 8;
 
 /// A LINEAR or STEP track's values as `codec` stores them (`None`: stored exactly).
 pub(super) fn as_written(track: &Track, kind: Kind, codec: &Codec) -> Option<Track> {

@@ -7,6 +7,17 @@ use rigport_model::Track;
 /// component.
 pub type RotationAtBits = fn(&[[f32; 4]], u8) -> Vec<[f32; 4]>;
 
+/// The precisions besides its default in which a writer can store a rotation track.
+#[derive(Clone, Copy, Debug)]
+pub struct RotationBits {
+    /// The track's keys as read back at the given bits per component.
+    pub written: RotationAtBits,
+    /// The bits per component the reducer may pick, fewest first (all under the default).
+    pub choices: &'static [u8],
+    /// The bytes of one LINEAR key written at the given bits, before any compression.
+    pub key_bytes: fn(u8) -> usize,
+}
+
 /// How a writer stores key values, as functions from a value to what a reader gets back.
 #[derive(Clone, Copy, Debug)]
 pub struct Codec {
@@ -14,11 +25,11 @@ pub struct Codec {
     pub rotation: fn([f32; 4]) -> [f32; 4],
     /// A LINEAR or STEP translation or scale key as read back (`None`: exactly).
     pub vector: Option<fn([f32; 3]) -> [f32; 3]>,
-    /// A LINEAR or STEP rotation key as read back when written with the given bits per
-    /// component (4 to 15; `rotation` is the writer's default): the reducer then picks the
-    /// fewest bits per rotation track that its tolerance allows ([`super::ReduceStats`]
-    /// `rotation_bits`). `None`: one precision for every track.
-    pub rotation_bits: Option<RotationAtBits>,
+    /// Lower precisions for LINEAR and STEP rotation tracks (`rotation` is the writer's
+    /// default): the reducer then picks the fewest bits per rotation track that its
+    /// tolerance allows ([`super::ReduceStats`] `rotation_bits`). `None`: one precision
+    /// for every track.
+    pub rotation_bits: Option<RotationBits>,
     /// What a kept key's time of its own weighs, in bytes, against a key's value as written
     /// (8 for a 16-bit rotation), when the reducer weighs key removal (times of its own)
     /// against a uniform rate (times shared): 4 for a float as it is; more when a
@@ -35,6 +46,37 @@ impl Codec {
         rotation_bits: None,
         key_time_bytes: 4,
     };
+
+    /// [`Codec::I16`], and 8-bit normalized components (4 bytes a key instead of 8) for the
+    /// rotation tracks whose tolerance allows them: core glTF's two rotation precisions.
+    pub const CORE: Codec = Codec {
+        rotation_bits: Some(RotationBits {
+            written: core_rotations_at_bits,
+            choices: &[8],
+            key_bytes: core_key_bytes,
+        }),
+        ..Codec::I16
+    };
+}
+
+/// Rotation keys as core glTF stores them at `bits`: 8-bit normalized components under 16
+/// bits, 16-bit ones otherwise.
+fn core_rotations_at_bits(keys: &[[f32; 4]], bits: u8) -> Vec<[f32; 4]> {
+    let encode = if bits < 16 {
+        rigport_model::quantize::rotation_as_i8
+    } else {
+        rigport_model::quantize::rotation_as_i16
+    };
+    keys.iter().map(|&q| encode(q)).collect()
+}
+
+/// A core glTF rotation key's bytes at `bits` (see [`core_rotations_at_bits`]).
+fn core_key_bytes(bits: u8) -> usize {
+    if bits < 16 {
+        4
+    } else {
+        8
+    }
 }
 
 /// A LINEAR or STEP rotation track (xyzw keys) as `written` reads it back at `bits` per

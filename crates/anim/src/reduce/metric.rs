@@ -92,10 +92,10 @@ pub fn point_error_bits(
         let coded = codec.and_then(|codec| {
             if track.interpolation == Interpolation::CubicSpline {
                 cubic_as_written(track, chan.kind == Kind::Rotation, codec)
-            } else if let (Some(bits), Some(written), Kind::Rotation) =
+            } else if let (Some(bits), Some(lower), Kind::Rotation) =
                 (bits, codec.rotation_bits, chan.kind)
             {
-                Some(rotations_at_bits(track, written, bits))
+                Some(rotations_at_bits(track, lower.written, bits))
             } else {
                 as_written(track, chan.kind, codec)
             }

@@ -1080,7 +1080,11 @@ fn grid(keys: &[[f32; 4]], bits: u8) -> Vec<[f32; 4]> {
 const GRID: Codec = Codec {
     rotation: rigport_model::quantize::rotation_as_i16,
     vector: None,
-    rotation_bits: Some(grid),
+    rotation_bits: Some(RotationBits {
+        written: grid,
+        choices: &[6, 7, 8, 9, 10, 11, 12, 13, 14, 15],
+        key_bytes: |_| 8,
+    }),
     key_time_bytes: 4,
 };
 
@@ -1148,4 +1152,52 @@ fn rotation_bits_are_picked_per_track_within_the_bound() {
     };
     let (_, stats) = reduce_clip(&clip, &skeleton, &one).expect("reduces");
     assert!(stats.rotation_bits.is_empty());
+}
+
+/// Core glTF's codec offers 8-bit rotations: a leaf (3 cm points) takes them, the root
+/// (which moves the whole chain) keeps 16 bits, and the bound holds as written.
+#[test]
+fn core_codec_gives_leaves_8_bit_rotations_within_the_bound() {
+    let mut rng = Rng(0x0c0e_8b17);
+    let skeleton = random_skeleton(&mut rng, 12);
+    let clip = random_clip(&mut rng, &skeleton, 240);
+    let points = vec![0.03; skeleton.len()];
+    let options = ReduceOptions {
+        tolerance: 1e-3,
+        point_distance: points.clone(),
+        codec: Some(Codec::CORE),
+        uniform_rate: true,
+        cubic: false,
+    };
+    let (reduced, stats) = reduce_clip(&clip, &skeleton, &options).expect("reduces");
+    assert!(stats.coded && stats.max_error <= 1e-3, "{stats:?}");
+    let bits_of = |joint: usize| {
+        let k = reduced
+            .tracks
+            .iter()
+            .position(|t| t.target == TrackTarget::Rotation(JointIndex(joint as u32)))
+            .expect("a rotation track per joint");
+        stats.rotation_bits[k]
+    };
+    let parents: Vec<Option<JointIndex>> = skeleton.parents().collect();
+    let leaves: Vec<usize> = (0..skeleton.len())
+        .filter(|&j| !parents.contains(&Some(JointIndex(j as u32))))
+        .collect();
+    assert!(
+        leaves.iter().any(|&j| bits_of(j) == 8),
+        "{:?}",
+        stats.rotation_bits
+    );
+    assert_eq!(bits_of(0), 0, "{:?}", stats.rotation_bits);
+    assert!(stats.rotation_bits.iter().all(|&b| b == 0 || b == 8));
+    let measured = metric::point_error_bits(
+        &clip,
+        &reduced,
+        &skeleton,
+        &points,
+        Some(&Codec::CORE),
+        &stats.rotation_bits,
+    )
+    .expect("measures");
+    assert_eq!(measured.max, stats.max_error);
 }
