@@ -93,6 +93,10 @@ pub struct OutputArgs {
     /// skins) stay within D (rig units; without D, 1 mm) of the full clip at every key time.
     #[arg(long, value_name = "D", value_parser = distance)]
     pub reduce_tolerance: Option<Option<f32>>,
+    /// Reducing keys (core glTF), also fit CUBICSPLINE tracks where smaller. three.js and
+    /// Babylon.js play them; Blender's importer drops their tangents.
+    #[arg(long)]
+    pub reduce_cubic: bool,
     /// glTF compression: meshopt (EXT_meshopt_compression, required; reduces keys as above).
     #[arg(long, value_enum, value_name = "C", default_value_t = Compression::None)]
     pub compress: Compression,
@@ -127,6 +131,7 @@ impl OutputArgs {
             },
             reduce_tolerance: self.reduce_tolerance.flatten(),
             reduce: self.reduce_tolerance.is_some(),
+            cubic: self.reduce_cubic,
         }
     }
 }

@@ -184,6 +184,17 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
             assert!(clip["keys_after"].as_u64() <= clip["keys_before"].as_u64());
         }
         assert!(size(&reduced) <= size(&plain), "{label}: {report}");
+        // CUBICSPLINE fits when asked: the same bound as three.js plays them (it evaluates
+        // the tangents), valid, never bigger than the LINEAR file's plain one.
+        let cubic = at("cubic");
+        let report_cubic = convert(args, &cubic, &["--reduce-tolerance", "--reduce-cubic"]);
+        common::assert_valid(&cubic);
+        let played_cubic = three_error(&plain, &cubic);
+        assert!(
+            played_cubic["max"].as_f64().expect("max") <= bound + 1e-6,
+            "{label} cubic: {played_cubic}"
+        );
+        assert!(size(&cubic) <= size(&plain), "{label}: {report_cubic}");
         // No setting grows a file.
         for extra in [&["--reduce-tolerance=0"][..], &["--reduce-tolerance=1"]] {
             let other = at("other");
@@ -435,5 +446,34 @@ fn eval_reads_the_quantized_and_meshopt_compact_glb_within_the_bound() {
             .fold(0.0f64, f64::max);
         eprintln!("{label} {name}: eval is {worst:e} from the plain glb (bound {bound})");
         assert!(worst <= bound * 1.0001, "{label} {name}: {worst} > {bound}");
+    }
+}
+
+/// Cubic fits are core glTF's: asked for a USD file or with meshopt, the command says so,
+/// exits non-zero and writes nothing.
+#[test]
+fn cubic_fits_outside_core_gltf_are_refused() {
+    let dir = common::scratch();
+    let bvh = common::repo().join("fixtures/bvh/end_sites.bvh");
+    let bvh = bvh.to_str().expect("utf-8 path");
+    for (name, extra) in [("a.usda", &[][..]), ("b.glb", &["--compress", "meshopt"])] {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "convert",
+            bvh,
+            "-o",
+            out.to_str().expect("utf-8"),
+            "--reduce-cubic",
+        ];
+        args.extend(extra);
+        let run = common::rigport(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{name}: {stderr}");
+        assert!(
+            stderr.contains("cubic key fits are for core glTF"),
+            "{stderr}"
+        );
+        assert!(stderr.contains(name), "names the file: {stderr}");
+        assert!(!out.exists(), "{name} written");
     }
 }

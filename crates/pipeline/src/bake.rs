@@ -104,6 +104,7 @@ pub fn run(
         },
         reduce_tolerance: None,
         reduce: false,
+        cubic: false,
     };
     let (plan, imported) = input.load_single(progress, "reading input")?;
     let (mut asset, mut warnings) = (imported.asset, imported.warnings);

@@ -171,6 +171,7 @@ pub fn run(
         },
         reduce_tolerance: None,
         reduce: false,
+        cubic: false,
     };
     let mut done = Report::logged(write_output(
         asset,

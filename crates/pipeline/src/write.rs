@@ -81,6 +81,15 @@ pub struct Output {
     /// Reduce every clip's keys, within `reduce_tolerance` or by default 1 mm
     /// ([`crate::compact::DEFAULT_TOLERANCE_M`]).
     pub reduce: bool,
+    /// Reducing, also fit CUBICSPLINE tracks (glTF 2.0 Appendix C) where they take fewer
+    /// bytes than LINEAR keys; core glTF only (USD time samples interpolate linearly, and
+    /// meshopt's delta coding of LINEAR rotations beats them: on the 131_04 dance 113,432
+    /// bytes LINEAR against 139,444). three.js and Babylon.js play them as written, but
+    /// Blender's importer (4.5) keeps only their key values and drops the tangents: the
+    /// Bandai kick at 1 mm plays 16 mm off there, 0.3 mm with LINEAR keys. So they are off
+    /// by default; on fast, smooth motion they are far smaller (the dance 195,992 bytes
+    /// LINEAR, 149,368 with cubic tracks).
+    pub cubic: bool,
 }
 
 impl Output {
@@ -123,9 +132,11 @@ impl Output {
     /// assert!(!Output::new("a.glb").reduces());
     /// assert!(Output { reduce_tolerance: Some(0.01), ..Output::new("a.glb") }.reduces());
     /// assert!(Output { reduce: true, ..Output::new("a.glb") }.reduces());
+    /// assert!(Output { cubic: true, ..Output::new("a.glb") }.reduces());
     /// ```
     pub fn reduces(&self) -> bool {
         self.reduce
+            || self.cubic
             || self.reduce_tolerance.is_some()
             || self.options.compression != Compression::None
     }
@@ -199,6 +210,12 @@ pub fn write_output_report(
             "{}: compression is a glTF extension ({}); USD stores what the reduction keeps as time samples",
             path.display(),
             output.options.compression.extension().unwrap_or("none")
+        )));
+    }
+    if output.cubic && !(format.is_gltf() && output.options.compression == Compression::None) {
+        return Err(PipelineError::Invalid(format!(
+            "{}: cubic key fits are for core glTF (USD time samples interpolate linearly; with meshopt, LINEAR keys pack smaller)",
+            path.display()
         )));
     }
     let mut compacted = None;
@@ -385,10 +402,8 @@ fn reduce_clips(
     let codec = format
         .is_gltf()
         .then(|| compact::codec(output.options.compression, vector_bits, byte_rotations));
-    // CUBICSPLINE fits are glTF's (USD time samples are linear); meshopt's delta coding
-    // of LINEAR 16-bit rotations beats them on the corpus (07_05 walk 79,156 bytes
-    // LINEAR, 79,720 with cubic tracks; 131_04 dance 113,432 against 139,444).
-    let cubic = format.is_gltf() && output.options.compression == Compression::None;
+    // CUBICSPLINE fits only when asked, in core glTF (see `Output::cubic`).
+    let cubic = output.cubic;
     // glTF prints rest translations in its JSON: noise under a ten-thousandth of the
     // bound is written as 0, paid out of the bound as the mesh grid is.
     let noise_below = compact::REST_NOISE * tolerance;

@@ -260,7 +260,8 @@ impl Asset {
     /// with `json`, `Report.output` is the reduction's report as JSON. Returns the report.
     #[pyo3(signature = (
         path, *, max_influences=None, influences_fit=None, reduce_tolerance=None,
-        reduce=false, compress=None, skinning=None, up_axis=None, meters_per_unit=None,
+        reduce=false, reduce_cubic=false, compress=None, skinning=None, up_axis=None,
+        meters_per_unit=None,
         root_motion="keep", root_yaw=false, root_window=None, json=false
     ))]
     #[allow(clippy::too_many_arguments)] // one keyword argument per CLI option
@@ -272,6 +273,7 @@ impl Asset {
         influences_fit: Option<String>,
         reduce_tolerance: Option<f32>,
         reduce: bool,
+        reduce_cubic: bool,
         compress: Option<String>,
         skinning: Option<String>,
         up_axis: Option<String>,
@@ -288,6 +290,7 @@ impl Asset {
                 influences_fit,
                 reduce_tolerance,
                 reduce,
+                reduce_cubic,
                 compress,
                 skinning,
                 up_axis,

@@ -65,7 +65,7 @@ fn input_of(input: &Bound<'_, PyAny>) -> PyResult<Input> {
 }
 
 /// The writing options and root motion among a command's `**options`: the keys of
-/// `Asset.write` (max_influences, influences_fit, reduce_tolerance, reduce, compress,
+/// `Asset.write` (max_influences, influences_fit, reduce_tolerance, reduce, reduce_cubic, compress,
 /// skinning, up_axis,
 /// meters_per_unit; root_motion, root_yaw, root_window with `root`).
 ///
@@ -85,6 +85,7 @@ fn write_options(
             "influences_fit" => o.influences_fit = value.extract()?,
             "reduce_tolerance" => o.reduce_tolerance = value.extract()?,
             "reduce" => o.reduce = value.extract()?,
+            "reduce_cubic" => o.reduce_cubic = value.extract()?,
             "compress" => o.compress = value.extract()?,
             "skinning" => o.skinning = value.extract()?,
             "up_axis" => o.up_axis = value.extract()?,

@@ -109,6 +109,8 @@ pub struct OutputOptions {
     pub reduce_tolerance: Option<f32>,
     /// Reduce keys (within `reduce_tolerance`, or the default 1 mm).
     pub reduce: bool,
+    /// Also fit CUBICSPLINE tracks (core glTF).
+    pub reduce_cubic: bool,
     /// glTF compression: `"none"` or `"meshopt"`.
     pub compress: Option<String>,
     /// The skinning method a USD declares.
@@ -166,6 +168,7 @@ pub fn output(path: PathBuf, options: &OutputOptions) -> PyResult<Output> {
         },
         reduce_tolerance: options.reduce_tolerance,
         reduce: options.reduce || options.reduce_tolerance.is_some(),
+        cubic: options.reduce_cubic,
     })
 }
 

@@ -122,6 +122,8 @@ def test_evaluate_at_given_times(tmp_path):
          ["--reduce-tolerance", "--compress", "meshopt"]),
         ("bvh-reduced", lambda: [corpus(BVH)], "walk.glb", {"reduce_tolerance": 0.05},
          ["--reduce-tolerance", "0.05"]),
+        ("bvh-cubic", lambda: [corpus(BVH)], "walk.glb", {"reduce": True, "reduce_cubic": True},
+         ["--reduce-tolerance", "--reduce-cubic"]),
     ],
 )
 def test_write_equals_convert(tmp_path, cli, name, files, out, kwargs, flags):

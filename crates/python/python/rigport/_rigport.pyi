@@ -176,6 +176,7 @@ class Asset:
         influences_fit: Optional[Literal["truncate", "refit"]] = None,
         reduce_tolerance: Optional[float] = None,
         reduce: bool = False,
+        reduce_cubic: bool = False,
         compress: Optional[Literal["none", "meshopt"]] = None,
         skinning: Optional[Skinning] = None,
         up_axis: Optional[Literal["Y", "Z", "y", "z"]] = None,
@@ -186,8 +187,8 @@ class Asset:
         json: bool = False,
     ) -> Report:
         """Writes .glb, .gltf, .usda, .usdc or .usdz (by extension): `rigport convert`'s
-        bytes. `reduce` (or a `reduce_tolerance`) reduces the keys; `compress="meshopt"`
-        compresses a glTF; with `json`, `Report.output` is the reduction's JSON report."""
+        bytes. `reduce` (or a `reduce_tolerance`) reduces the keys (`reduce_cubic`: also
+        into CUBICSPLINE tracks, core glTF only); `compress="meshopt"` compresses a glTF; with `json`, `Report.output` is the reduction's JSON report."""
 
 def open(
     *paths: PathLike,
