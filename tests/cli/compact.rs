@@ -477,3 +477,40 @@ fn cubic_fits_outside_core_gltf_are_refused() {
         assert!(!out.exists(), "{name} written");
     }
 }
+
+/// Blender's glTF importer (4.5) plays the default compact files (LINEAR keys) within the
+/// bound of the plain ones: every bone's head and points 3 cm along its axes, at every
+/// source frame (Blender's scene at the clip's rate). It keeps only a CUBICSPLINE track's
+/// values, so cubic fits are asked for (`--reduce-cubic`), not made by default.
+#[test]
+fn corpus_clips_compact_play_in_blender_within_1_mm() {
+    let (Some(clips), Some(bpy)) = (corpus_clips(), crate::fbx_blender::blender_python()) else {
+        return;
+    };
+    let dir = common::scratch();
+    // The 30 fps Bandai captures and the shortest 120 fps one (Blender steps every frame).
+    let rates = [("dataset-1_", "30"), ("09_06", "120")];
+    for (label, args) in &clips {
+        let Some((_, fps)) = rates.iter().find(|(prefix, _)| label.starts_with(prefix)) else {
+            continue;
+        };
+        let plain = dir.path().join(format!("{label}_plain.glb"));
+        let reduced = dir.path().join(format!("{label}_reduced.glb"));
+        convert(args, &plain, &[]);
+        let report = convert(args, &reduced, &["--reduce-tolerance"]);
+        assert_eq!(report["reduced_written"], true, "{label}: {report}");
+        let path = |p: &Path| p.to_str().expect("utf-8 path").to_owned();
+        let out = crate::fbx_blender::run_script(
+            &bpy,
+            "gltf_bones.py",
+            &[&path(&plain), &path(&reduced), fps],
+        );
+        let played: serde_json::Value =
+            serde_json::from_str(out.lines().last().expect("a line")).expect("JSON");
+        assert!(played["compared"].as_u64() > Some(100), "{label}: {played}");
+        // The bound in metres (the default 1 mm), and Blender's f32 matrices.
+        let max = played["max"].as_f64().expect("max");
+        eprintln!("{label}: Blender plays the 1 mm file {:.3} mm off", max * 1000.0);
+        assert!(max <= 0.001 + 1e-5, "{label}: Blender plays {played}");
+    }
+}
