@@ -510,7 +510,10 @@ fn corpus_clips_compact_play_in_blender_within_1_mm() {
         assert!(played["compared"].as_u64() > Some(100), "{label}: {played}");
         // The bound in metres (the default 1 mm), and Blender's f32 matrices.
         let max = played["max"].as_f64().expect("max");
-        eprintln!("{label}: Blender plays the 1 mm file {:.3} mm off", max * 1000.0);
+        eprintln!(
+            "{label}: Blender plays the 1 mm file {:.3} mm off",
+            max * 1000.0
+        );
         assert!(max <= 0.001 + 1e-5, "{label}: Blender plays {played}");
     }
 }

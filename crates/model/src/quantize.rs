@@ -110,24 +110,34 @@ fn nearest_length(
     // as promised.
     let target = r.map(f64::abs);
     let base = target.map(f64::round);
+    // Each component's candidates: its rounding, and one step either way within [0, max]
+    // (an exact zero stays).
+    let options: [([f64; 3], usize); 4] = std::array::from_fn(|i| {
+        let (mut values, mut len) = ([base[i]; 3], 1);
+        if r[i] != 0.0 {
+            for v in [base[i] - 1.0, base[i] + 1.0] {
+                if (0.0..=max).contains(&v) {
+                    values[len] = v;
+                    len += 1;
+                }
+            }
+        }
+        (values, len)
+    });
     let mut best = base;
     let mut best_key = (f64::INFINITY, f64::INFINITY);
-    for k in 0..81u32 {
-        let mut c = base;
-        let mut valid = true;
-        for (i, ci) in c.iter_mut().enumerate() {
-            let step = f64::from((k / 3u32.pow(i as u32)) % 3) - 1.0;
-            if step != 0.0 && (r[i] == 0.0 || *ci + step < 0.0 || *ci + step > max) {
-                valid = false;
+    let [o0, o1, o2, o3] = options.map(|(values, len)| values.into_iter().take(len));
+    for c0 in o0 {
+        for c1 in o1.clone() {
+            for c2 in o2.clone() {
+                for c3 in o3.clone() {
+                    let c = [c0, c1, c2, c3];
+                    if let Some(k) = key(&c, &target).filter(|&k| k < best_key) {
+                        best_key = k;
+                        best = c;
+                    }
+                }
             }
-            *ci += step;
-        }
-        if !valid {
-            continue;
-        }
-        if let Some(k) = key(&c, &target).filter(|&k| k < best_key) {
-            best_key = k;
-            best = c;
         }
     }
     std::array::from_fn(|i| best[i].copysign(r[i]))
