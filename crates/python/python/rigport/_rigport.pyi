@@ -188,7 +188,8 @@ class Asset:
     ) -> Report:
         """Writes .glb, .gltf, .usda, .usdc or .usdz (by extension): `rigport convert`'s
         bytes. `reduce` (or a `reduce_tolerance`) reduces the keys (`reduce_cubic`: also
-        into CUBICSPLINE tracks, core glTF only); `compress="meshopt"` compresses a glTF; with `json`, `Report.output` is the reduction's JSON report."""
+        into CUBICSPLINE tracks, core glTF only); `compress="meshopt"` compresses a glTF;
+        with `json`, `Report.output` is the reduction's JSON report."""
 
 def open(
     *paths: PathLike,
