@@ -16,25 +16,33 @@
 //! cubic; plus 4 bytes of time per key unless its keys are at a uniform rate, whose times
 //! are shared), and the sums: the bytes, and the keys times 4 (every kept value as four
 //! bytes, the smallest rotation core glTF stores, with no time at all). It also runs each
-//! track with LINEAR keys as 8-bit normalized components (4 bytes a key, each component
-//! rounded to the nearest 1/127 and read back normalized, so the length error a reader
-//! would compose as a scale is not counted), as the reducer picks bits per track: where it
-//! takes them, a track may cost its 8-bit keys' bytes; where it keeps 16 bits, its keys need
-//! them. The last sum takes each track's smaller cost. Each sum is a floor on the
-//! animation bytes of a file within the bound only as far as errors of different tracks
-//! cannot cancel; it is an estimate, not a proof.
+//! track with LINEAR keys allowed 8-bit normalized components (4 bytes a key;
+//! `Codec::CORE`, as `rigport convert` writes them): where the reducer takes them, a track
+//! may cost its 8-bit keys' bytes; where it keeps 16 bits, its keys need them. That sum
+//! takes each track's smaller cost. And it runs each track as `--compress meshopt` does
+//! (LINEAR keys, the `QUATERNION` filter's bits per track), counting the bytes
+//! meshoptimizer's codec makes of its keys alone (and of its times unless they are at a
+//! uniform rate). Each sum is a floor on the animation bytes of a file within the bound
+//! only as far as errors of different tracks cannot cancel; it is an estimate, not a
+//! proof.
 
 use std::path::PathBuf;
 
 use rigport_anim::reduce::{reduce_clip, Codec, ReduceOptions, RotationBits};
 use rigport_model::{Interpolation, Track, TrackTarget};
 
-/// Rotation keys as 8-bit normalized components read back (nearest rounding), whatever
-/// the bits asked (the reducer asks for fewer than 16 only for the track it reduces).
-fn rotations_as_i8(keys: &[[f32; 4]], _bits: u8) -> Vec<[f32; 4]> {
-    keys.iter()
-        .map(|q| q.map(|c| (c.clamp(-1.0, 1.0) * 127.0).round() / 127.0))
-        .collect()
+/// The `QUATERNION` filter's bits the reducer may pick with meshopt (as `rigport convert
+/// --compress meshopt` does).
+const MESHOPT_BITS: [u8; 10] = [6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+
+/// Whether a reduced track's keys are at a uniform rate (their times shared).
+fn uniform(kept: &Track) -> bool {
+    let step = kept.times.get(1).map_or(0.0, |t| t - kept.times[0]);
+    kept.times
+        .windows(2)
+        .rev()
+        .skip(1)
+        .all(|w| ((w[1] - w[0]) - step).abs() <= 1e-4)
 }
 
 /// Bytes of a reduced track: its values, and its times unless they are at a uniform rate.
@@ -46,14 +54,7 @@ fn track_bytes(kept: &Track, linear_value: usize) -> usize {
         _ => linear_value,
     };
     // Keys at a uniform rate share their times with other tracks.
-    let step = kept.times.get(1).map_or(0.0, |t| t - kept.times[0]);
-    let uniform = kept
-        .times
-        .windows(2)
-        .rev()
-        .skip(1)
-        .all(|w| ((w[1] - w[0]) - step).abs() <= 1e-4);
-    n * value + if uniform { 0 } else { 4 * n }
+    n * value + if uniform(kept) { 0 } else { 4 * n }
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -75,20 +76,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     println!("{} ({frames} frames), {tolerance} m", path.display());
     let bytes8 = ReduceOptions {
+        codec: Some(Codec::CORE),
+        cubic: false,
+        ..options.clone()
+    };
+    let meshopt = ReduceOptions {
         codec: Some(Codec {
+            rotation: rigport_export::meshopt_rotation_as_written,
+            vector: Some(rigport_export::meshopt_vector_as_written),
             rotation_bits: Some(RotationBits {
-                written: rotations_as_i8,
-                choices: &[8],
-                key_bytes: |_| 4,
+                written: rigport_export::meshopt_rotations_as_written_bits,
+                choices: &MESHOPT_BITS,
+                key_bytes: |_| 8,
             }),
-            ..Codec::I16
+            key_time_bytes: 64,
         }),
         cubic: false,
         ..options.clone()
     };
-    println!("| joint | keys kept | bytes | 8-bit keys | 8-bit bytes |");
-    println!("|---|---:|---:|---:|---:|");
-    let (mut keys, mut bytes, mut tracks, mut least) = (0, 0, 0, 0);
+    println!(
+        "| joint | keys kept | bytes | 8-bit keys | 8-bit bytes | meshopt keys | meshopt bytes |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|");
+    let (mut keys, mut bytes, mut tracks, mut least, mut packed) = (0, 0, 0, 0, 0);
     for (ti, track) in clip.tracks.iter().enumerate() {
         let TrackTarget::Rotation(joint) = track.target else {
             continue;
@@ -115,19 +125,30 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 track_bytes(&reduced8.tracks[ti], 4),
             )
         });
+        // meshopt: the track's keys at the bits the reducer picks, through the writer's
+        // filter and codec on their own (and their times, unless at a uniform rate).
+        let (reduced_mo, stats_mo) = reduce_clip(&alone, &asset.skeleton, &meshopt)?;
+        let kept_mo = &reduced_mo.tracks[ti];
+        let bits = stats_mo.rotation_bits.get(ti).copied().unwrap_or(0);
+        let mut b_mo = rigport_export::meshopt_encoded_bytes(&kept_mo.values, 4, bits);
+        if !uniform(kept_mo) {
+            b_mo += rigport_export::meshopt_encoded_bytes(&kept_mo.times, 1, 0);
+        }
         let name = &asset.skeleton.joints()[joint.get()].name;
         let (n8, b8) = eight.map_or(("-".to_string(), "-".to_string()), |(n8, b8)| {
             (n8.to_string(), b8.to_string())
         });
-        println!("| {name} | {n} | {b} | {n8} | {b8} |");
+        let n_mo = kept_mo.times.len();
+        println!("| {name} | {n} | {b} | {n8} | {b8} | {n_mo} | {b_mo} |");
         keys += n;
         bytes += b;
         least += eight.map_or(b, |(_, b8)| b.min(b8));
+        packed += b_mo;
         tracks += 1;
     }
     println!(
         "{tracks} tracks: {keys} keys, {bytes} bytes; keys x 4 = {} bytes; each track's \
-         smaller of 16 and 8 bits: {least} bytes",
+         smaller of 16 and 8 bits: {least} bytes; meshopt: {packed} bytes",
         4 * keys
     );
     Ok(())

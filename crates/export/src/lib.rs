@@ -47,7 +47,7 @@ mod test_assets;
 
 pub use error::{ExportError, Problem};
 pub use gltf::meshopt::{
-    rotation_as_written as meshopt_rotation_as_written,
+    encoded_bytes as meshopt_encoded_bytes, rotation_as_written as meshopt_rotation_as_written,
     rotations_as_written_bits as meshopt_rotations_as_written_bits,
     vector_as_written as meshopt_vector_as_written,
     vector_as_written_16 as meshopt_vector_as_written_16,

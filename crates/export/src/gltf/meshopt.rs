@@ -283,6 +283,35 @@ pub(crate) fn octahedral(normals: &[[f32; 3]]) -> Vec<u8> {
         .collect()
 }
 
+/// The bytes meshoptimizer's vertex codec makes of one animation accessor on its own, as
+/// this writer encodes it: rotation keys (4 components, flat xyzw) through the `QUATERNION`
+/// filter at `bits` (0: 16), translations or scales (3) through the `EXPONENTIAL` filter at
+/// `bits` (0: 20 mantissa bits), key times (1) as they are; other component counts, 4
+/// bytes a value. A view of many accessors encodes to about the sum of theirs.
+///
+/// ```
+/// // 120 keys of a slow turn pack far smaller than their 960 filtered bytes.
+/// let keys: Vec<f32> = (0..120)
+///     .flat_map(|k| {
+///         let a = 0.01 * k as f32;
+///         [0.0, (0.5 * a).sin(), 0.0, (0.5 * a).cos()]
+///     })
+///     .collect();
+/// let bytes = rigport_export::meshopt_encoded_bytes(&keys, 4, 12);
+/// assert!(bytes > 0 && bytes < 400, "{bytes}");
+/// ```
+pub fn encoded_bytes(values: &[f32], components: usize, bits: u8) -> usize {
+    match components {
+        4 => encode(&quaternions(values, if bits == 0 { 16 } else { bits }), 8).len(),
+        3 => {
+            let bits = if bits == 0 { EXP_BITS } else { i32::from(bits) };
+            encode(&exponential(values, bits), 12).len()
+        }
+        1 => encode(&floats(values), 4).len(),
+        _ => 4 * values.len(),
+    }
+}
+
 /// Raw bytes of floats.
 pub(crate) fn floats(values: &[f32]) -> Vec<u8> {
     values.iter().flat_map(|v| v.to_le_bytes()).collect()
