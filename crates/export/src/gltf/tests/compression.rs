@@ -35,7 +35,32 @@ fn rotation_outputs_are_normalized_shorts_rounded_as_the_reducer_measures() {
     let short = export(true, Compression::None);
     assert!(short.len() < plain.len());
     let asset = test_assets::rig();
-    let (doc, buffers) = import(&short);
+    let mut checked = 0;
+    for (track, keys) in written_rotation_keys(&short, &asset) {
+        let WrittenKeys::Shorts(keys) = keys else {
+            panic!("rotation outputs are not SHORT normalized");
+        };
+        checked += assert_rounded(&keys, track, rotation_to_i16);
+    }
+    assert!(checked > 0);
+}
+
+/// Rotation outputs as written, by width.
+enum WrittenKeys {
+    Bytes(Vec<[i8; 4]>),
+    Shorts(Vec<[i16; 4]>),
+    Other,
+}
+
+/// The LINEAR and STEP rotation tracks of `asset` with their outputs in `glb`, the tracks
+/// written with all their keys (not constant ones, written with two).
+fn written_rotation_keys<'a>(
+    glb: &[u8],
+    asset: &'a rigport_model::Asset,
+) -> Vec<(&'a rigport_model::Track, WrittenKeys)> {
+    use gltf::animation::util::Rotations;
+    let (doc, buffers) = import(glb);
+    let mut out = Vec::new();
     for (animation, clip) in doc.animations().zip(&asset.clips) {
         for channel in animation.channels() {
             let node = channel.target().node().index();
@@ -51,23 +76,43 @@ fn rotation_outputs_are_normalized_shorts_rounded_as_the_reducer_measures() {
             ) else {
                 continue;
             };
-            let gltf::animation::util::Rotations::I16(keys) = rotations else {
-                panic!("rotation outputs are not SHORT normalized");
+            let keys = match rotations {
+                Rotations::I8(keys) => WrittenKeys::Bytes(keys.collect()),
+                Rotations::I16(keys) => WrittenKeys::Shorts(keys.collect()),
+                _ => WrittenKeys::Other,
             };
-            let keys: Vec<[i16; 4]> = keys.collect();
-            if keys.len() != track.times.len() {
-                continue; // a constant track written with two keys
-            }
-            for (k, key) in keys.iter().enumerate() {
-                let expected = rotation_to_i16(track.key_value(k).try_into().expect("xyzw"));
-                let flipped = expected.map(|c| -c);
-                assert!(
-                    *key == expected || *key == flipped,
-                    "key {k}: {key:?} vs {expected:?}"
-                );
+            let count = match &keys {
+                WrittenKeys::Bytes(k) => k.len(),
+                WrittenKeys::Shorts(k) => k.len(),
+                WrittenKeys::Other => 0,
+            };
+            if count == track.times.len() {
+                out.push((track, keys));
             }
         }
     }
+    out
+}
+
+/// Asserts that each of `keys` is `encode` of `track`'s key, or its negation (sign
+/// continuity); the number of keys checked.
+fn assert_rounded<T>(
+    keys: &[[T; 4]],
+    track: &rigport_model::Track,
+    encode: fn([f32; 4]) -> [T; 4],
+) -> usize
+where
+    T: Copy + PartialEq + std::fmt::Debug + std::ops::Neg<Output = T>,
+{
+    for (k, key) in keys.iter().enumerate() {
+        let expected = encode(track.key_value(k).try_into().expect("xyzw"));
+        let flipped = expected.map(|c| -c);
+        assert!(
+            *key == expected || *key == flipped,
+            "key {k}: {key:?} vs {expected:?}"
+        );
+    }
+    keys.len()
 }
 
 /// Without compression, `rotation_bits` under 16 writes a LINEAR or STEP rotation track's
@@ -92,40 +137,12 @@ fn rotation_bits_under_16_write_bytes_in_core_gltf() {
     let bytes = export(eight);
     assert!(bytes.len() < export(Vec::new()).len());
     assert_khronos_valid(&bytes);
-    let (doc, buffers) = import(&bytes);
     let mut checked = 0;
-    for (animation, clip) in doc.animations().zip(&asset.clips) {
-        for channel in animation.channels() {
-            let node = channel.target().node().index();
-            let track = clip.tracks.iter().find(|t| {
-                t.target == TrackTarget::Rotation(rigport_model::JointIndex(node as u32))
-            });
-            let (Some(track), ReadOutputs::Rotations(rotations)) = (
-                track.filter(|t| t.interpolation != rigport_model::Interpolation::CubicSpline),
-                channel
-                    .reader(|b| Some(&buffers[b.index()]))
-                    .read_outputs()
-                    .expect("outputs"),
-            ) else {
-                continue;
-            };
-            let gltf::animation::util::Rotations::I8(keys) = rotations else {
-                panic!("rotation outputs are not BYTE normalized");
-            };
-            let keys: Vec<[i8; 4]> = keys.collect();
-            if keys.len() != track.times.len() {
-                continue; // a constant track written with two keys
-            }
-            for (k, key) in keys.iter().enumerate() {
-                let expected = rotation_to_i8(track.key_value(k).try_into().expect("xyzw"));
-                let flipped = expected.map(|c| -c);
-                assert!(
-                    *key == expected || *key == flipped,
-                    "key {k}: {key:?} vs {expected:?}"
-                );
-                checked += 1;
-            }
-        }
+    for (track, keys) in written_rotation_keys(&bytes, &asset) {
+        let WrittenKeys::Bytes(keys) = keys else {
+            panic!("rotation outputs are not BYTE normalized");
+        };
+        checked += assert_rounded(&keys, track, rotation_to_i8);
     }
     assert!(checked > 0);
 }
