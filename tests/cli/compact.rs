@@ -184,17 +184,24 @@ fn corpus_clips_compact_within_1_mm_and_never_grow() {
             assert!(clip["keys_after"].as_u64() <= clip["keys_before"].as_u64());
         }
         assert!(size(&reduced) <= size(&plain), "{label}: {report}");
-        // CUBICSPLINE fits when asked: the same bound as three.js plays them (it evaluates
-        // the tangents), valid, never bigger than the LINEAR file's plain one.
-        let cubic = at("cubic");
-        let report_cubic = convert(args, &cubic, &["--reduce-tolerance", "--reduce-cubic"]);
-        common::assert_valid(&cubic);
-        let played_cubic = three_error(&plain, &cubic);
-        assert!(
-            played_cubic["max"].as_f64().expect("max") <= bound + 1e-6,
-            "{label} cubic: {played_cubic}"
-        );
-        assert!(size(&cubic) <= size(&plain), "{label}: {report_cubic}");
+        // CUBICSPLINE fits when asked (on the dance, where they win most, and a Bandai
+        // clip): the same bound as three.js plays them (it evaluates the tangents), valid,
+        // never bigger than the plain file.
+        if label.starts_with("131_04") || label.starts_with("dataset-1_kick") {
+            let cubic = at("cubic");
+            let report_cubic = convert(args, &cubic, &["--reduce-tolerance", "--reduce-cubic"]);
+            common::assert_valid(&cubic);
+            let played_cubic = three_error(&plain, &cubic);
+            assert!(
+                played_cubic["max"].as_f64().expect("max") <= bound + 1e-6,
+                "{label} cubic: {played_cubic}"
+            );
+            assert!(size(&cubic) <= size(&plain), "{label}: {report_cubic}");
+            assert!(
+                size(&cubic) < size(&reduced),
+                "{label}: cubic tracks win here"
+            );
+        }
         // No setting grows a file.
         for extra in [&["--reduce-tolerance=0"][..], &["--reduce-tolerance=1"]] {
             let other = at("other");
