@@ -222,6 +222,15 @@ impl Builder {
         })
     }
 
+    /// Marks accessor `index` `normalized: true` (integers read as fractions, glTF 2.0
+    /// §3.6.2.4), and returns it.
+    fn normalized(&mut self, index: Index<json::Accessor>) -> Index<json::Accessor> {
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
+    }
+
     /// A `SHORT` accessor with `normalized: true` (`data.len() / size` elements of `type_`),
     /// read as `max(c / 32767, -1)` (glTF 2.0 §3.11): animation outputs, no bounds needed.
     pub(crate) fn normalized_i16(&mut self, data: &[i16], type_: Type) -> Index<json::Accessor> {
@@ -237,10 +246,7 @@ impl Builder {
             type_,
             None,
         );
-        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-            accessor.normalized = true;
-        }
-        index
+        self.normalized(index)
     }
 
     /// A compressed view of `raw` (filtered bytes, elements of `stride` bytes) in the
@@ -445,10 +451,7 @@ impl Builder {
                 Type::Vec4,
                 None,
             );
-            if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-                accessor.normalized = true;
-            }
-            return index;
+            return self.normalized(index);
         }
         let keys = i16_keys(values);
         if self.group_animation {
@@ -461,10 +464,7 @@ impl Builder {
     fn grouped_shorts(&mut self, data: &[i16]) -> Index<json::Accessor> {
         let raw: Vec<u8> = data.iter().flat_map(|c| c.to_le_bytes()).collect();
         let index = self.grouped(&raw, 8, Filter::None, ComponentType::I16, Type::Vec4, None);
-        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-            accessor.normalized = true;
-        }
-        index
+        self.normalized(index)
     }
 
     /// `VEC4` 8-bit normalized animation outputs (rotations; uncompressed exports): in the
@@ -477,10 +477,7 @@ impl Builder {
             let view = self.view(None, |bin| bin.extend_from_slice(&raw));
             self.accessor(view, data.len() / 4, ComponentType::I8, Type::Vec4, None)
         };
-        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-            accessor.normalized = true;
-        }
-        index
+        self.normalized(index)
     }
 
     /// CUBICSPLINE rotation outputs (in-tangent, value, out-tangent per key, each xyzw) as
@@ -592,10 +589,7 @@ impl Builder {
         target: Option<Target>,
     ) -> Index<json::Accessor> {
         let index = self.ints(data, type_, target);
-        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-            accessor.normalized = true;
-        }
-        index
+        self.normalized(index)
     }
 
     /// An unsigned-integer accessor (`data.len() / size` elements of `type_`), of `T`'s
